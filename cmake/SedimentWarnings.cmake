@@ -1,0 +1,16 @@
+# sediment_set_warnings(target): the project's warning set; errors when
+# SEDIMENT_WARNINGS_AS_ERRORS is ON (CI), sanitizers when SEDIMENT_SANITIZE is ON.
+function(sediment_set_warnings target)
+  target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Wshadow -Wnon-virtual-dtor
+    -Wno-deprecated-declarations
+    # GCC 12 reports false -Wrestrict positives inside std::string at -O3 (GCC bug 105651).
+    $<$<CXX_COMPILER_ID:GNU>:-Wno-restrict>)
+  if(SEDIMENT_WARNINGS_AS_ERRORS)
+    target_compile_options(${target} PRIVATE -Werror)
+  endif()
+  if(SEDIMENT_SANITIZE)
+    target_compile_options(${target} PRIVATE -fsanitize=address,undefined -fno-omit-frame-pointer
+      -fno-sanitize-recover=undefined)
+    target_link_options(${target} PRIVATE -fsanitize=address,undefined)
+  endif()
+endfunction()

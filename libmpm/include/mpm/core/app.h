@@ -1,0 +1,20 @@
+#pragma once
+//! The entry point shared by every app: parses the command line, runs the scene, and turns
+//! errors into one message on stderr and an exit code:
+//!   0 success, 1 --check failed, 2 input error (nothing written), 3 numerical error (the
+//!   message names stage, particle and quantity), 4 I/O error.
+#include <mpm/core/command_line.h>
+
+#include <functional>
+#include <string>
+
+namespace mpm {
+
+int run_app(int argc, char** argv, const std::string& app_name, const std::string& description,
+            const std::function<int(const CommandLine&)>& body);
+
+//! Prints "check <name>: value (expected ..., tolerance ...) ok|FAILED" and returns whether
+//! |value - expected| <= tolerance.
+bool check_value(const std::string& name, double value, double expected, double tolerance);
+
+}  // namespace mpm

@@ -1,0 +1,203 @@
+#pragma once
+//! The two loop skeletons every transfer is built from (internal; used by libmpm and libfluid).
+//!
+//! scatter: per colour, buckets in parallel; each bucket accumulates Ch values per node into
+//! a (2B)^dim scratch patch and then adds the patch into the grid channels.
+//! gather:  buckets in parallel; each bucket copies the patch of Ch grid values per node into
+//! scratch, then visits its particles.
+//! The per-particle body sees a Stencil: 1D weights per axis and a patch-local node offset.
+//! The scalar type T of channels, patch and stencil is double for the library; the skeletons
+//! are scalar-generic so a single-precision path can reuse them (bench/bench_transfer.cpp).
+#include <mpm/core/kernels.h>
+#include <mpm/core/particle_buckets.h>
+#include <mpm/core/sparse_grid.h>
+
+#include <tbb/parallel_for.h>
+
+#include <array>
+
+namespace mpm::detail {
+
+//! One channel of grid storage: value of node k is data[k * stride + offset].
+template <class T>
+struct BasicChannelView {
+  T* data;
+  int stride;
+  int offset;
+};
+using ChannelView = BasicChannelView<double>;
+
+template <int dim>
+constexpr int patch_width = 2 * SparseGrid<dim>::block_size;
+template <int dim>
+constexpr int patch_nodes = ipow(patch_width<dim>, dim);
+
+//! Kernel weights of one particle relative to the patch of its bucket.
+template <int dim, int S, class T = double>
+struct Stencil {
+  using VecT = Eigen::Matrix<T, dim, 1>;
+  T w[dim][S];     //!< N(r) per axis
+  T dw[dim][S];    //!< dN/dxi per axis [1/cell]
+  T rel[dim][S];   //!< node minus particle position per axis [cells]
+  int patch_offset;  //!< patch index of the first stencil node
+
+  template <class K>
+  void compute(const K& kernel, const VecT& xi, const IVec<dim>& patch_origin) {
+    patch_offset = 0;
+    int stride = 1;
+    for (int a = 0; a < dim; ++a) {
+      int base;
+      double wa[S], dwa[S];
+      kernel(static_cast<double>(xi[a]), base, wa, dwa);
+      for (int k = 0; k < S; ++k) {
+        w[a][k] = static_cast<T>(wa[k]);
+        dw[a][k] = static_cast<T>(dwa[k]);
+        rel[a][k] = static_cast<T>(base + k) - xi[a];
+      }
+      patch_offset += (base - patch_origin[a]) * stride;
+      stride *= patch_width<dim>;
+    }
+  }
+
+  //! 1 / D_p per axis [1/cells^2], D_p = sum_i w_ip (x_i - x_p)^2 (APIC inertia, diagonal for
+  //! tensor-product kernels because of linear reproduction).
+  VecT inverse_inertia() const {
+    VecT d;
+    for (int a = 0; a < dim; ++a) {
+      T s = 0;
+      for (int k = 0; k < S; ++k) s += w[a][k] * rel[a][k] * rel[a][k];
+      d[a] = 1 / s;
+    }
+    return d;
+  }
+
+  //! Calls fn(patch index, weight, gradient [1/cell], node - particle [cells]) for S^dim nodes.
+  template <class Fn>
+  void for_each_node(Fn&& fn) const {
+    constexpr int W = patch_width<dim>;
+    if constexpr (dim == 2) {
+      for (int j = 0; j < S; ++j)
+        for (int i = 0; i < S; ++i) {
+          const VecT grad(dw[0][i] * w[1][j], w[0][i] * dw[1][j]);
+          fn(patch_offset + i + W * j, w[0][i] * w[1][j], grad, VecT(rel[0][i], rel[1][j]));
+        }
+    } else {
+      for (int k = 0; k < S; ++k)
+        for (int j = 0; j < S; ++j) {
+          const T wjk = w[1][j] * w[2][k];
+          for (int i = 0; i < S; ++i) {
+            const VecT grad(dw[0][i] * wjk, w[0][i] * dw[1][j] * w[2][k], w[0][i] * w[1][j] * dw[2][k]);
+            fn(patch_offset + i + W * (j + W * k), w[0][i] * wjk, grad,
+               VecT(rel[0][i], rel[1][j], rel[2][k]));
+          }
+        }
+    }
+  }
+};
+
+//! Patch index (relative to the patch's first node) of node l of a block: the block's
+//! lexicographic node order mapped onto the wider patch rows. A table, so the patch <-> grid
+//! copies do no index arithmetic per node.
+template <int dim>
+constexpr std::array<int, SparseGrid<dim>::nodes_per_block> block_to_patch = [] {
+  constexpr int B = SparseGrid<dim>::block_size;
+  std::array<int, SparseGrid<dim>::nodes_per_block> t{};
+  for (int l = 0; l < SparseGrid<dim>::nodes_per_block; ++l) {
+    int patch = 0, stride = 1, rest = l;
+    for (int a = 0; a < dim; ++a) {
+      patch += (rest % B) * stride;
+      rest /= B;
+      stride *= patch_width<dim>;
+    }
+    t[l] = patch;
+  }
+  return t;
+}();
+
+//! Calls fn(patch index, storage index) for every node of the 2^dim blocks under the patch of
+//! the bucket whose first block is `block`.
+template <int dim, class Fn>
+void for_each_patch_node(const SparseGrid<dim>& grid, int block, Fn&& fn) {
+  constexpr int B = SparseGrid<dim>::block_size;
+  constexpr int W = patch_width<dim>;
+  const IVec<dim> origin = grid.block_coord(block) * B;
+  for (int corner = 0; corner < (1 << dim); ++corner) {
+    IVec<dim> corner_node = origin;
+    int corner_patch = 0;
+    for (int a = 0, stride = 1; a < dim; ++a, stride *= W) {
+      const int c = ((corner >> a) & 1) * B;
+      corner_node[a] += c;
+      corner_patch += c * stride;
+    }
+    const std::size_t first =
+        static_cast<std::size_t>(grid.slot(grid.block_id(corner_node))) * SparseGrid<dim>::nodes_per_block;
+    for (int l = 0; l < SparseGrid<dim>::nodes_per_block; ++l)
+      fn(corner_patch + block_to_patch<dim>[l], first + l);
+  }
+}
+
+//! Particle coordinate in cells (CellMap) and the first node of the bucket's patch.
+template <int dim>
+struct PatchFrame {
+  IVec<dim> origin;
+  CellMap<dim> map;
+  PatchFrame(const SparseGrid<dim>& grid, int block)
+      : origin(grid.block_coord(block) * SparseGrid<dim>::block_size), map(grid) {}
+  template <class T>
+  Eigen::Matrix<T, dim, 1> cells(const Eigen::Matrix<T, dim, 1>& x) const { return map(x); }
+};
+
+//! body(particle index p, const PatchFrame&, T* patch) adds Ch values per node into
+//! patch[node * Ch + c]; the sums are added into `channels` afterwards.
+template <int dim, int Ch, class T, class Body>
+void scatter(const SparseGrid<dim>& grid, const ParticleBuckets<dim>& buckets,
+             const std::array<BasicChannelView<T>, Ch>& channels, Body&& body) {
+  for (const std::vector<int>& same_color : buckets.by_color) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, same_color.size(), 4),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+      alignas(64) std::array<T, patch_nodes<dim> * Ch> patch;
+      for (std::size_t r = range.begin(); r != range.end(); ++r) {
+        const int b = same_color[r];
+        patch.fill(T(0));
+        const PatchFrame<dim> frame(grid, buckets.block[b]);
+        for (std::uint32_t p = buckets.begin[b]; p < buckets.begin[b + 1]; ++p) body(p, frame, patch.data());
+        for_each_patch_node(grid, buckets.block[b], [&](int node, std::size_t k) {
+          for (int c = 0; c < Ch; ++c)
+            channels[c].data[k * channels[c].stride + channels[c].offset] += patch[node * Ch + c];
+        });
+      }
+    });
+  }
+}
+
+//! body(particle index p, const PatchFrame&, const T* patch) reads Ch values per node.
+template <int dim, int Ch, class T, class Body>
+void gather(const SparseGrid<dim>& grid, const ParticleBuckets<dim>& buckets,
+            const std::array<BasicChannelView<T>, Ch>& channels, Body&& body) {
+  tbb::parallel_for(tbb::blocked_range<int>(0, buckets.count(), 4),
+                    [&](const tbb::blocked_range<int>& range) {
+    alignas(64) std::array<T, patch_nodes<dim> * Ch> patch;
+    for (int b = range.begin(); b != range.end(); ++b) {
+      for_each_patch_node(grid, buckets.block[b], [&](int node, std::size_t k) {
+        for (int c = 0; c < Ch; ++c)
+          patch[node * Ch + c] = channels[c].data[k * channels[c].stride + channels[c].offset];
+      });
+      const PatchFrame<dim> frame(grid, buckets.block[b]);
+      for (std::uint32_t p = buckets.begin[b]; p < buckets.begin[b + 1]; ++p) body(p, frame, patch.data());
+    }
+  });
+}
+
+//! Views of a scalar channel and of the components of a vector channel.
+template <class T>
+BasicChannelView<T> scalar_view(std::vector<T>& c) { return {c.data(), 1, 0}; }
+template <int dim, class T>
+BasicChannelView<T> component_view(std::vector<Eigen::Matrix<T, dim, 1>>& c, int a) {
+  return {reinterpret_cast<T*>(c.data()), dim, a};
+}
+template <int dim, class T>
+BasicChannelView<T> component_view(const std::vector<Eigen::Matrix<T, dim, 1>>& c, int a) {
+  return component_view<dim, T>(const_cast<std::vector<Eigen::Matrix<T, dim, 1>>&>(c), a);
+}
+
+}  // namespace mpm::detail

@@ -1,0 +1,82 @@
+#pragma once
+//! Interpolation weights w_ip = prod_a N(r_a), r_a = (x_p - x_i)_a / dx (tensor products of 1D
+//! kernels). Each kernel maps a particle coordinate in cell units, xi = (x_p - origin)/dx, to
+//! the first stencil node `base` and the 1D weights and derivatives dN/dr of its `support`
+//! nodes base, base+1, ... All satisfy partition of unity, non-negativity, linear
+//! reproduction sum_i N_i (i - xi) = 0, and C1 continuity (tests/unit/test_kernels.cpp).
+#include <cmath>
+#include <string>
+#include <variant>
+
+namespace mpm {
+
+//! Quadratic B-spline N2 (support 3). Identical to uGIMP with particle size dx (paper sec. 3.3).
+struct QuadraticBSpline {
+  static constexpr int support = 3;
+  static const char* name() { return "quadratic"; }
+  void operator()(double xi, int& base, double* w, double* dw) const {
+    base = static_cast<int>(std::floor(xi - 0.5));
+    const double f = xi - base;  // in [0.5, 1.5): distance to the first node
+    const double a = 1.5 - f, b = f - 1.0, c = f - 0.5;
+    w[0] = 0.5 * a * a;
+    w[1] = 0.75 - b * b;
+    w[2] = 0.5 * c * c;
+    dw[0] = -a;
+    dw[1] = -2.0 * b;
+    dw[2] = c;
+  }
+};
+
+//! Cubic B-spline N3 (support 4).
+struct CubicBSpline {
+  static constexpr int support = 4;
+  static const char* name() { return "cubic"; }
+  void operator()(double xi, int& base, double* w, double* dw) const {
+    base = static_cast<int>(std::floor(xi)) - 1;
+    const double t = xi - base - 1.0;  // in [0, 1): offset from node base+1
+    const double s = 1.0 - t;
+    w[0] = s * s * s / 6.0;
+    w[1] = 0.5 * t * t * t - t * t + 2.0 / 3.0;
+    w[2] = 0.5 * s * s * s - s * s + 2.0 / 3.0;
+    w[3] = t * t * t / 6.0;
+    dw[0] = -0.5 * s * s;
+    dw[1] = 1.5 * t * t - 2.0 * t;
+    dw[2] = -(1.5 * s * s - 2.0 * s);
+    dw[3] = 0.5 * t * t;
+  }
+};
+
+//! uGIMP (paper eq. 5-6): the linear hat N1 averaged over an axis-aligned particle box of side
+//! L_p = 2 h dx, with 0 < h <= 1/2 so the support stays within 3 nodes:
+//!   w(r) = (H(r + h) - H(r - h)) / (2h),  dw/dr = (N1(r + h) - N1(r - h)) / (2h),
+//! where H is the antiderivative of N1. With h = 1/2 this is the quadratic B-spline.
+struct UGimp {
+  static constexpr int support = 3;
+  double h = 0.5;  //!< particle half-size in cells, (0, 0.5]
+  static const char* name() { return "ugimp"; }
+
+  static double hat(double r) { return std::fmax(0.0, 1.0 - std::fabs(r)); }
+  static double hat_integral(double s) {  // H(s) = int_{-inf}^{s} N1
+    if (s <= -1.0) return 0.0;
+    if (s <= 0.0) return 0.5 * (1.0 + s) * (1.0 + s);
+    if (s <= 1.0) return 1.0 - 0.5 * (1.0 - s) * (1.0 - s);
+    return 1.0;
+  }
+  void operator()(double xi, int& base, double* w, double* dw) const {
+    base = static_cast<int>(std::floor(xi - 0.5));
+    const double inv = 0.5 / h;
+    for (int k = 0; k < support; ++k) {
+      const double r = xi - (base + k);
+      w[k] = (hat_integral(r + h) - hat_integral(r - h)) * inv;
+      dw[k] = (hat(r + h) - hat(r - h)) * inv;
+    }
+  }
+};
+
+using Kernel = std::variant<QuadraticBSpline, CubicBSpline, UGimp>;
+
+inline std::string kernel_name(const Kernel& k) {
+  return std::visit([](const auto& kernel) { return std::string(kernel.name()); }, k);
+}
+
+}  // namespace mpm

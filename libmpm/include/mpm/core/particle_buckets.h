@@ -1,0 +1,65 @@
+#pragma once
+//! Particles ordered by the grid block that holds their first stencil node.
+//!
+//! Transfers walk one bucket (the particles of one block) at a time and accumulate into a
+//! small scratch patch of (2B)^dim nodes that stays in L1 cache, then add the patch into the
+//! 2^dim blocks it overlaps. Buckets whose blocks differ in parity ("colour") never touch the
+//! same nodes, so each colour runs in parallel without atomics and the result does not depend
+//! on the thread count.
+#include <mpm/core/kernels.h>
+#include <mpm/core/particles.h>
+#include <mpm/core/sparse_grid.h>
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace mpm {
+
+template <int dim>
+struct ParticleBuckets {
+  static constexpr int colors = 1 << dim;
+  std::vector<std::uint32_t> begin;  //!< bucket b holds particles [begin[b], begin[b+1])
+  std::vector<int> block;            //!< block id (dense table) of bucket b
+  std::array<std::vector<int>, colors> by_color;
+
+  int count() const { return static_cast<int>(block.size()); }
+};
+
+//! Position in cell units, xi = (x - origin) / dx, evaluated in the precision of x. The sort
+//! and the transfers share this one expression, so both find the same stencil base even for
+//! a particle exactly on a cell boundary.
+template <int dim>
+struct CellMap {
+  Vec<dim> origin;  //!< [m]
+  double inv_dx;    //!< [1/m]
+  explicit CellMap(const SparseGrid<dim>& grid) : origin(grid.origin()), inv_dx(1.0 / grid.dx()) {}
+  template <class T>
+  Eigen::Matrix<T, dim, 1> operator()(const Eigen::Matrix<T, dim, 1>& x) const {
+    return (x - origin.template cast<T>()) * static_cast<T>(inv_dx);
+  }
+};
+
+//! First stencil node of a particle at x for `kernel` (floor of the kernel's base).
+template <int dim>
+IVec<dim> stencil_base(const SparseGrid<dim>& grid, const Kernel& kernel, const Vec<dim>& x);
+
+//! Sorts `particles` by block (counting sort, skipped when already ordered), fills `buckets`
+//! and allocates the grid blocks their stencils touch. Throws NumericalError naming `stage`,
+//! the particle and its position if a particle is not finite or its stencil leaves the grid.
+//! Returns true when the particles were reordered.
+template <int dim>
+bool sort_into_buckets(Particles<dim>& particles, const Kernel& kernel, SparseGrid<dim>& grid,
+                       ParticleBuckets<dim>& buckets, const std::string& stage = "sort");
+
+//! The sort of sort_into_buckets for positions in any storage and precision (T = double or
+//! float): fills `buckets` for the particles in block order, allocates the grid blocks and
+//! returns the permutation into that order (new index i holds old index order[i]), empty when
+//! the particles are already in order. The caller applies the permutation to its channels.
+template <int dim, class T>
+std::vector<std::uint32_t> bucket_order(const std::vector<Eigen::Matrix<T, dim, 1>>& x,
+                                        const Kernel& kernel, SparseGrid<dim>& grid,
+                                        ParticleBuckets<dim>& buckets, const std::string& stage = "sort");
+
+}  // namespace mpm

@@ -1,0 +1,69 @@
+#pragma once
+//! Runs a pipeline frame by frame and writes everything a run leaves in its output folder:
+//! particles_NNNN.h5 + .xdmf (and particles.xdmf, the time series), preview_NNNN.png,
+//! diagnostics.csv (one row per frame, a seconds column per stage), checkpoint_NNNN.h5,
+//! summary.json; a progress line with ETA on stderr and, at the end, the per-stage time
+//! table and the memory held per field.
+#include <mpm/core/command_line.h>
+#include <mpm/core/config.h>
+#include <mpm/core/pipeline.h>
+#include <mpm/core/scene_settings.h>
+#include <mpm/core/state.h>
+
+#include <chrono>
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace mpm {
+
+template <int dim>
+class Runner {
+public:
+  using State = MpmState<dim>;
+  using Column = std::function<double(const State&)>;
+
+  Runner(std::string app_name, CommandLine command_line, const Config& scene,
+         const SceneSettings<dim>& settings);
+
+  //! Elastic energy of the state [J] (the solid supplies it; 0 without).
+  void set_elastic_energy(Column energy) { elastic_energy_ = std::move(energy); }
+  //! An extra diagnostics column, evaluated once per frame.
+  void add_column(std::string name, Column value) { extra_.emplace_back(std::move(name), std::move(value)); }
+  //! Called after every frame (and for the initial state, frame 0).
+  void on_frame(std::function<void(const State&, int frame)> hook) { hooks_.push_back(std::move(hook)); }
+
+  //! Creates the output folder (or continues from --restart) and runs all frames.
+  void run(State& state, Pipeline<State>& pipeline);
+
+  //! Writes summary.json: results, the resolved scene parameters and run information.
+  void write_summary(const std::vector<std::pair<std::string, double>>& results) const;
+
+  const std::filesystem::path& out_dir() const { return out_; }
+
+private:
+  std::vector<std::string> columns(const Pipeline<State>& pipeline) const;
+  void write_frame(const State& state, int frame, Pipeline<State>& pipeline);
+  void progress(const State& state, int frame, bool last) const;
+
+  std::string app_;
+  CommandLine cl_;
+  const Config& scene_;
+  SceneSettings<dim> settings_;
+  std::filesystem::path out_;
+  Column elastic_energy_;
+  std::vector<std::pair<std::string, Column>> extra_;
+  std::vector<std::function<void(const State&, int)>> hooks_;
+  std::vector<std::pair<int, double>> frames_written_;
+  std::vector<double> stage_seconds_at_last_frame_;
+  Index steps_at_last_frame_ = 0;
+  std::chrono::steady_clock::time_point start_;
+  std::string stage_table_;
+  std::vector<std::pair<std::string, std::size_t>> memory_;
+  std::vector<std::string> stage_names_;
+  double wall_seconds_ = 0.0;
+};
+
+}  // namespace mpm

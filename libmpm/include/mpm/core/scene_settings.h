@@ -1,0 +1,55 @@
+#pragma once
+//! The keys every scene shares: dimension, domain, grid, transfer, time, gravity and output.
+//! See docs/scene_reference.md for units, defaults and ranges.
+#include <mpm/core/config.h>
+#include <mpm/core/kernels.h>
+#include <mpm/core/transfer.h>
+
+#include <optional>
+#include <string>
+
+namespace mpm {
+
+struct OutputSettings {
+  bool particles = true;          //!< particles_NNNN.h5 + .xdmf per frame
+  bool png = true;                //!< preview_NNNN.png per frame
+  std::string color_by = "speed"; //!< attribute coloured in previews
+  int png_width = 640;            //!< [px]
+  int checkpoint_every = 0;       //!< frames between checkpoints, 0 = only the last frame
+};
+
+template <int dim>
+struct SceneSettings {
+  Vec<dim> domain_lo, domain_hi;  //!< [m]
+  double dx = 0.0;                //!< grid spacing [m]
+  Kernel kernel;
+  TransferScheme transfer;
+  double end_time = 1.0;          //!< [s]
+  double frame_dt = 0.02;         //!< output interval [s]
+  double cfl = 0.4;               //!< particle CFL number
+  double wave_cfl = 0.5;          //!< elastic-wave Courant number
+  double max_dt = 1e300;          //!< user upper bound on dt [s]
+  int max_steps_per_frame = 1000000;  //!< stops a run whose step collapsed instead of hanging
+  Vec<dim> gravity;               //!< [m/s^2]
+  OutputSettings output;
+
+  int frame_count() const;
+};
+
+//! Reads the top-level "dim" key (2 or 3) that selects the template instantiation.
+int scene_dimension(const Config& scene);
+
+//! The box and spacing of a scene that an app derives from its own keys.
+template <int dim>
+struct DerivedDomain {
+  Vec<dim> lo, hi;
+  double dx;
+};
+
+//! Reads the shared keys. With `derived`, the domain and grid.dx come from the app and the
+//! keys 'domain' and 'grid.dx' are not read (so a scene that sets them gets "unknown key").
+template <int dim>
+SceneSettings<dim> parse_scene_settings(const Config& scene,
+                                        const std::optional<DerivedDomain<dim>>& derived = std::nullopt);
+
+}  // namespace mpm

@@ -1,0 +1,83 @@
+#pragma once
+//! A sparse background grid: nodes are grouped in blocks of B^dim (B = 4 in 3D, 8 in 2D, 64
+//! nodes either way) and only blocks touched by a particle stencil are allocated. A dense
+//! table of one int32 per block (1/64 of a node's worth) maps block coordinates to storage,
+//! so lookups are one load (SPGrid's idea without the virtual-memory tricks). The adaptive
+//! grid of a later stage is a stack of these, one per level with dx_n = dx_0 / 2^n
+//! (paper sec. 6.1).
+//!
+//! Node channels are structure-of-arrays over all allocated nodes: node n of block b is at
+//! b * nodes_per_block + n. Channels a scene does not use stay empty (lean scenes).
+#include <mpm/core/types.h>
+
+#include <cstddef>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace mpm {
+
+template <int dim>
+class SparseGrid {
+public:
+  static constexpr int block_bits = dim == 3 ? 2 : 3;
+  static constexpr int block_size = 1 << block_bits;          //!< B nodes per axis
+  static constexpr int nodes_per_block = ipow(block_size, dim);
+
+  SparseGrid() = default;
+  //! Grid covering the box [lo, hi] with spacing dx [m]; nodes at lo + i dx.
+  SparseGrid(const Vec<dim>& lo, const Vec<dim>& hi, double dx);
+
+  double dx() const { return dx_; }
+  const Vec<dim>& origin() const { return origin_; }
+  const IVec<dim>& node_counts() const { return node_counts_; }  //!< nodes per axis
+  const IVec<dim>& block_counts() const { return block_counts_; }
+
+  //! Linear id of the block containing node `node` in the dense block table.
+  int block_id(const IVec<dim>& node) const {
+    int id = 0;
+    for (int a = dim - 1; a >= 0; --a) id = id * block_counts_[a] + (node[a] >> block_bits);
+    return id;
+  }
+  IVec<dim> block_coord(int id) const {
+    IVec<dim> c;
+    for (int a = 0; a < dim; ++a) { c[a] = id % block_counts_[a]; id /= block_counts_[a]; }
+    return c;
+  }
+  int table_size() const { return static_cast<int>(slot_.size()); }
+
+  //! Replaces the allocated set by the given block ids (sorted, unique) and zeroes mass and
+  //! velocity; other channels are (re)allocated on request.
+  void activate(const std::vector<int>& block_ids);
+  //! Storage slot of block `id`, or -1 when it is not allocated.
+  int slot(int id) const { return slot_[id]; }
+  int block_count() const { return static_cast<int>(active_.size()); }
+  int active_block_id(int s) const { return active_[s]; }
+  std::size_t node_storage() const { return mass.size(); }
+
+  //! Integer coordinate and position of storage node k.
+  IVec<dim> node_coord(std::size_t k) const;
+  Vec<dim> node_position(std::size_t k) const {
+    return origin_ + dx_ * node_coord(k).template cast<double>();
+  }
+  //! Storage index of integer node `node`, or -1 if its block is not allocated.
+  Index node_index(const IVec<dim>& node) const;
+
+  std::vector<std::pair<std::string, std::size_t>> memory_per_field() const;
+
+  // Node channels.
+  std::vector<double> mass;             //!< [kg]
+  std::vector<Vec<dim>> velocity;       //!< momentum after P2G, velocity after normalisation [m/s]
+  std::vector<Vec<dim>> velocity_old;   //!< velocity before forces (FLIP only)
+  std::vector<Vec<dim>> force;          //!< internal force [N] (solid only)
+
+private:
+  double dx_ = 1.0;
+  Vec<dim> origin_ = Vec<dim>::Zero();
+  IVec<dim> node_counts_ = IVec<dim>::Zero();
+  IVec<dim> block_counts_ = IVec<dim>::Zero();
+  std::vector<int> slot_;    // dense table: block id -> storage slot or -1
+  std::vector<int> active_;  // storage slot -> block id
+};
+
+}  // namespace mpm

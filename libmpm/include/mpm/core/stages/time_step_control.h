@@ -1,0 +1,31 @@
+#pragma once
+#include <mpm/core/stage.h>
+#include <mpm/core/state.h>
+
+namespace mpm::stages {
+
+//! Chooses dt from the CFL condition on particle speed and on a wave speed, clipped to the
+//! next frame boundary (state.dt_limit) and to an optional user maximum.
+template <int dim>
+class TimeStepControl final : public Stage<MpmState<dim>> {
+public:
+  struct Settings {
+    double cfl = 0.5;          //!< fraction of a cell a particle may cross per step, (0, 1]
+    double wave_speed = 0.0;   //!< fastest elastic wave speed of the scene [m/s] (0: none)
+    double wave_cfl = 0.5;     //!< dt <= wave_cfl dx / wave_speed
+    double max_dt = 1e300;     //!< user upper bound [s]
+  };
+  explicit TimeStepControl(Settings settings) : settings_(settings) {}
+  std::string name() const override { return "time_step"; }
+  std::vector<std::string> reads() const override { return {"particle.v"}; }
+  std::vector<std::string> writes() const override { return {"dt"}; }
+  void run(MpmState<dim>& s) override;
+
+  //! The stable step for the current particle velocities, before clipping to frame ends.
+  double stable_dt(const MpmState<dim>& s) const;
+
+private:
+  Settings settings_;
+};
+
+}  // namespace mpm::stages

@@ -1,0 +1,47 @@
+#pragma once
+//! Particle <-> grid transfers (paper sec. 3.2; APIC of Jiang et al. 2015).
+//!
+//! P2G:  m_i = sum_p w_ip m_p
+//!       (m v)_i = sum_p w_ip m_p (v_p + C_p (x_i - x_p))          (C_p = 0 for PIC/FLIP)
+//! G2P:  v_i^PIC = sum_i w_ip v_i,   B_p = sum_i w_ip v_i (x_i - x_p)^T,  C_p = B_p D_p^-1
+//!       APIC:  v_p = v^PIC, C_p as above
+//!       FLIP:  v_p = a (v_p + sum_i w_ip (v_i - v_i^old)) + (1 - a) v^PIC,  C_p = 0
+//!       x_p += dt v^PIC
+//! Preconditions: particles sorted into `buckets` against `grid` (sort_into_buckets).
+#include <mpm/core/kernels.h>
+#include <mpm/core/particle_buckets.h>
+
+#include <string>
+
+namespace mpm {
+
+struct TransferScheme {
+  enum class Type { apic, flip };
+  Type type = Type::apic;
+  double flip_ratio = 0.95;  //!< a in [0, 1] for Type::flip; 0 is PIC
+  bool uses_old_velocity() const { return type == Type::flip; }
+};
+
+//! Accumulates node mass and momentum (into grid.velocity); zeroes both first.
+template <int dim>
+void particles_to_grid(const Particles<dim>& particles, const ParticleBuckets<dim>& buckets,
+                       const Kernel& kernel, const TransferScheme& scheme, SparseGrid<dim>& grid);
+
+//! Divides momentum by mass (nodes without mass get zero velocity); keeps a copy in
+//! grid.velocity_old when the scheme needs it.
+template <int dim>
+void momentum_to_velocity(SparseGrid<dim>& grid, const TransferScheme& scheme);
+
+//! Updates v_p, C_p from grid.velocity (and velocity_old for FLIP) and advects x_p by dt.
+template <int dim>
+void grid_to_particles(Particles<dim>& particles, const ParticleBuckets<dim>& buckets,
+                       const Kernel& kernel, const TransferScheme& scheme,
+                       const SparseGrid<dim>& grid, double dt);
+
+//! Velocity gradient grad v_p = sum_i v_i (grad w_ip)^T [1/s] for every particle.
+template <int dim>
+void velocity_gradient(const Particles<dim>& particles, const ParticleBuckets<dim>& buckets,
+                       const Kernel& kernel, const SparseGrid<dim>& grid,
+                       std::vector<Mat<dim>>& grad_v);
+
+}  // namespace mpm

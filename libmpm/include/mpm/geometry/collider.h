@@ -1,0 +1,96 @@
+#pragma once
+//! Collision objects of the grid velocity update (Gao et al. 2017, sec. 3.2 step 4): after the
+//! grid velocity update, every node inside an obstacle gets the obstacle's contact condition on
+//! its velocity relative to the obstacle.
+//!
+//!   Collider     one obstacle: a shape moving at a constant velocity, phi(x, t) = phi0(x - v t)
+//!   DomainWalls  the faces of the simulation box, each with a boundary layer of nodes
+//!   ColliderSet  all obstacles of a scene, applied in order, the walls last
+#include <mpm/core/types.h>
+#include <mpm/geometry/contact.h>
+#include <mpm/geometry/level_set.h>
+#include <mpm/geometry/signed_distance.h>
+
+#include <array>
+#include <optional>
+#include <utility>
+#include <variant>
+#include <vector>
+
+namespace mpm::geometry {
+
+template <int dim>
+using Shape = std::variant<HalfSpace<dim>, Box<dim>, Sphere<dim>, Cylinder<dim>, LevelSetShape<dim>>;
+
+template <int dim>
+class Collider {
+public:
+  //! `velocity` [m/s] translates the shape: it is at x + velocity * t at time t [s].
+  //! Throws InputError when the friction coefficient is negative or not finite.
+  Collider(Shape<dim> shape, const Contact& contact, const Vec<dim>& velocity = Vec<dim>::Zero());
+
+  double phi(const Vec<dim>& x, double t) const;       //!< [m], negative inside the obstacle
+  Vec<dim> normal(const Vec<dim>& x, double t) const;  //!< unit, out of the obstacle
+  //! When phi(x, t) <= 0, replaces the node velocity v [m/s] by v_c + contact.apply(v - v_c, n).
+  void project(const Vec<dim>& x, double t, Vec<dim>& v) const;
+
+  const Shape<dim>& shape() const { return shape_; }
+  const Contact& contact() const { return contact_; }
+  const Vec<dim>& velocity() const { return velocity_; }
+  bool is_level_set() const { return std::holds_alternative<LevelSetShape<dim>>(shape_); }
+
+private:
+  Shape<dim> shape_;
+  Contact contact_;
+  Vec<dim> velocity_;
+};
+
+enum class Side { lower, upper };
+
+//! The 2 dim faces of the domain box [lo, hi] as fixed walls. A node whose distance to a closed
+//! wall is <= thickness gets that wall's contact with the normal pointing into the domain;
+//! an open wall (std::nullopt) lets material leave the domain.
+template <int dim>
+class DomainWalls {
+public:
+  //! Every wall closed with `contact`; `thickness` [m] > 0 is the depth of the boundary layer.
+  DomainWalls(const Vec<dim>& lo, const Vec<dim>& hi, double thickness, const Contact& contact);
+
+  void set_wall(int axis, Side side, const std::optional<Contact>& contact);
+  const std::optional<Contact>& wall(int axis, Side side) const { return walls_[index(axis, side)]; }
+
+  void project(const Vec<dim>& x, Vec<dim>& v) const;
+
+  const Vec<dim>& lo() const { return lo_; }
+  const Vec<dim>& hi() const { return hi_; }
+  double thickness() const { return thickness_; }
+
+private:
+  static int index(int axis, Side side) { return 2 * axis + (side == Side::upper ? 1 : 0); }
+  Vec<dim> lo_;
+  Vec<dim> hi_;
+  double thickness_;
+  std::array<std::optional<Contact>, 2 * dim> walls_;
+};
+
+template <int dim>
+class ColliderSet {
+public:
+  void add(Collider<dim> collider) { colliders_.push_back(std::move(collider)); }
+  void set_walls(const DomainWalls<dim>& walls) { walls_ = walls; }
+
+  //! Applies every collider in the order added, then the walls, so that no node velocity
+  //! leaves the domain through a closed wall.
+  void project(const Vec<dim>& x, double t, Vec<dim>& v) const;
+  bool uses_level_sets() const;
+  bool empty() const { return colliders_.empty() && !walls_; }
+
+  const std::vector<Collider<dim>>& colliders() const { return colliders_; }
+  const std::optional<DomainWalls<dim>>& walls() const { return walls_; }
+
+private:
+  std::vector<Collider<dim>> colliders_;
+  std::optional<DomainWalls<dim>> walls_;
+};
+
+}  // namespace mpm::geometry

@@ -1,0 +1,48 @@
+#pragma once
+//! Per-frame diagnostics (energies, momentum, mass, ...) as a CSV table: a header line, then
+//! one row per frame, every value with 17 significant digits so that it reads back to the same
+//! double.
+//!
+//! This is the one output file that is not replaced atomically: it grows during the run, and
+//! rewriting it whole each frame would cost O(frames^2). Instead every row is flushed as it is
+//! appended, so a crashed run keeps all its complete rows; a row cut short by the crash is
+//! dropped by open_for_restart.
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace mpm::io {
+
+class DiagnosticsCsv {
+public:
+  //! Creates (or truncates) the file and writes the header. Column names must be non-empty
+  //! and free of commas, quotes and line breaks (InputError otherwise).
+  void open(const std::filesystem::path& path, std::vector<std::string> columns);
+
+  //! Reopens the file of an earlier run for appending, keeping only the rows whose "frame"
+  //! column is <= last_frame_kept: a restart from that frame's checkpoint writes the later
+  //! rows again. `columns` must contain "frame" and equal the file's header (IoError otherwise).
+  void open_for_restart(const std::filesystem::path& path, std::vector<std::string> columns,
+                        int last_frame_kept);
+
+  //! Appends one row and flushes it; throws IoError when the row's length differs from the
+  //! header or the write fails.
+  void append(const std::vector<double>& row);
+
+  bool is_open() const { return file_ != nullptr; }
+  const std::vector<std::string>& columns() const { return columns_; }
+
+private:
+  struct Close {
+    void operator()(std::FILE* file) const { std::fclose(file); }
+  };
+  void open_file(const char* mode);
+
+  std::filesystem::path path_;
+  std::vector<std::string> columns_;
+  std::unique_ptr<std::FILE, Close> file_;
+};
+
+}  // namespace mpm::io

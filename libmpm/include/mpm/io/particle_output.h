@@ -1,0 +1,33 @@
+#pragma once
+//! Per-frame particle output for ParaView: one HDF5 file per frame, described by XDMF 3.
+//!
+//! particles_0007.h5 holds, for N particles (SI units):
+//!   position [m] and velocity [m/s] as N x 3 (2D padded with z = 0 so that ParaView shows it),
+//!   mass [kg], volume0 [m^dim], material (int32 index), speed = |v| [m/s], and, when the
+//!   particles carry deformation, J = det F^E and plastic (log det F^P);
+//! and the root attributes time [s], frame and dim. particles_0007.xdmf next to it describes the
+//! frame as a Polyvertex grid, and particles.xdmf gathers the frames as a time series.
+//! All files are replaced atomically (io/atomic_file.h).
+#include <mpm/core/particles.h>
+
+#include <filesystem>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace mpm::io {
+
+//! "particles_0007.h5": the file name of a frame, as write_time_series_xdmf expects it.
+std::string particle_file_name(int frame);
+
+//! Writes h5_path and its sidecar (same stem, .xdmf); time in [s].
+template <int dim>
+void write_particles(const std::filesystem::path& h5_path, const Particles<dim>& p, double time,
+                     int frame);
+
+//! Writes dir/particles.xdmf, a temporal collection of `frames` (frame number, time [s]). Each
+//! frame's grid is described from dir/particle_file_name(frame), which must exist.
+void write_time_series_xdmf(const std::filesystem::path& dir,
+                            const std::vector<std::pair<int, double>>& frames);
+
+}  // namespace mpm::io

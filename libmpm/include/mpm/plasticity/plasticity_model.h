@@ -1,0 +1,42 @@
+#pragma once
+//! The plastic return maps a scene can choose, as one closed std::variant (visited outside the
+//! particle loop, like constitutive::ElasticModel). Each alternative offers
+//!   bool project(Mat<dim>& Fe, double& plastic) const;   // true when Fe changed
+//!   double yield_function(const Mat<dim>& Fe) const;     // [Pa], <= 0 admissible
+//! where `plastic` is the per-particle scalar state (Particles::plastic).
+#include <mpm/core/types.h>
+#include <mpm/plasticity/drucker_prager.h>
+#include <mpm/plasticity/von_mises.h>
+
+#include <limits>
+#include <string>
+#include <string_view>
+#include <variant>
+#include <vector>
+
+namespace mpm::plasticity {
+
+//! Purely elastic material: every state is admissible.
+struct NoPlasticity {
+  static constexpr std::string_view name = "none";
+
+  template <int dim>
+  bool project(Mat<dim>& /*Fe*/, double& /*plastic*/) const {
+    return false;
+  }
+  template <int dim>
+  double yield_function(const Mat<dim>& /*Fe*/) const {
+    return -std::numeric_limits<double>::infinity();
+  }
+};
+
+template <int dim>
+using PlasticityModel = std::variant<NoPlasticity, DruckerPrager<dim>, VonMises<dim>>;
+
+//! Scene-file names of the alternatives, in variant order.
+inline std::vector<std::string> plasticity_model_names() {
+  return {std::string(NoPlasticity::name), std::string(DruckerPrager<3>::name),
+          std::string(VonMises<3>::name)};
+}
+
+}  // namespace mpm::plasticity

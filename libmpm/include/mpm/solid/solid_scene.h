@@ -1,0 +1,64 @@
+#pragma once
+//! Assembles an explicit elastoplastic MPM scene from a scene file: materials, bodies
+//! (seeded particles), colliders and the staged pipeline (DESIGN.md):
+//!   time_step -> sort -> p2g -> stress_forces -> grid_update -> boundary -> deformation
+//!   -> plasticity (only when a material is plastic) -> g2p (and advection)
+#include <mpm/core/config.h>
+#include <mpm/core/pipeline.h>
+#include <mpm/core/scene_settings.h>
+#include <mpm/core/state.h>
+#include <mpm/geometry/collider.h>
+#include <mpm/solid/material.h>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace mpm::solid {
+
+template <int dim>
+struct SolidScene {
+  SceneSettings<dim> settings;
+  std::vector<Material<dim>> materials;
+  geometry::ColliderSet<dim> colliders;
+  MpmState<dim> state;  //!< particles seeded, grid sized to the domain
+};
+
+//! The "materials" list (at least one entry; names unique).
+template <int dim>
+std::vector<Material<dim>> parse_materials(const Config& scene);
+
+//! Index of the material called `name`; InputError at `cfg`'s `key` when none is.
+template <int dim>
+std::uint16_t material_index(const std::vector<Material<dim>>& materials, const std::string& name,
+                             const Config& cfg, const std::string& key);
+
+//! Appends particles at `positions`, each of volume `volume` [m^dim] of material `m`, moving
+//! with `velocity`. Every particle must lie inside the domain (InputError naming `where`).
+template <int dim>
+void add_particles(SolidScene<dim>& scene, const std::vector<Vec<dim>>& positions, double volume,
+                   std::uint16_t m, const Vec<dim>& velocity, const std::string& where);
+
+//! A scene with an empty particle set and the grid sized to the settings' domain.
+template <int dim>
+SolidScene<dim> make_solid_scene(SceneSettings<dim> settings, std::vector<Material<dim>> materials,
+                                 geometry::ColliderSet<dim> colliders);
+
+//! Seeds the optional "bodies" list of `scene` (box, sphere or mesh shapes).
+template <int dim>
+void seed_bodies(SolidScene<dim>& solid, const Config& scene);
+
+//! Reads settings, materials, colliders and bodies. Apps with their own body keys build the
+//! scene with make_solid_scene and add_particles instead.
+template <int dim>
+SolidScene<dim> load_solid_scene(const Config& scene);
+
+//! The explicit symplectic-Euler pipeline for `scene`.
+template <int dim>
+Pipeline<MpmState<dim>> make_explicit_pipeline(const SolidScene<dim>& scene);
+
+//! Total elastic energy sum_p V_p^0 psi(F_p^E) [J].
+template <int dim>
+double elastic_energy(const MpmState<dim>& state, const std::vector<Material<dim>>& materials);
+
+}  // namespace mpm::solid

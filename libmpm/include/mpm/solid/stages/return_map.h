@@ -1,0 +1,27 @@
+#pragma once
+#include <mpm/core/stage.h>
+#include <mpm/core/state.h>
+#include <mpm/solid/material.h>
+
+namespace mpm::stages {
+
+//! Projects the trial elastic deformation of plastic materials back onto their yield surface.
+//! A scene whose materials are all elastic does not add this stage.
+template <int dim>
+class ReturnMap final : public Stage<MpmState<dim>> {
+public:
+  explicit ReturnMap(std::vector<Material<dim>> materials) : materials_(std::move(materials)) {}
+  std::string name() const override { return "plasticity"; }
+  std::vector<std::string> reads() const override { return {"particle.F"}; }
+  std::vector<std::string> writes() const override { return {"particle.F", "particle.plastic"}; }
+  void run(MpmState<dim>& s) override;
+
+private:
+  std::vector<Material<dim>> materials_;
+};
+
+//! True when some material has a plasticity model other than none.
+template <int dim>
+bool any_plastic(const std::vector<Material<dim>>& materials);
+
+}  // namespace mpm::stages

@@ -1,0 +1,37 @@
+#include <mpm/core/app.h>
+#include <mpm/core/error.h>
+
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+
+namespace mpm {
+
+int run_app(int argc, char** argv, const std::string& app_name, const std::string& description,
+            const std::function<int(const CommandLine&)>& body) {
+  const CommandLine cl = parse_command_line(argc, argv, app_name, description);
+  try {
+    return body(cl);
+  } catch (const InputError& e) {
+    std::cerr << app_name << ": input error: " << e.what() << "\n";
+    return 2;
+  } catch (const NumericalError& e) {
+    std::cerr << "\n" << app_name << ": numerical error: " << e.what() << "\n";
+    return 3;
+  } catch (const IoError& e) {
+    std::cerr << "\n" << app_name << ": I/O error: " << e.what() << "\n";
+    return 4;
+  } catch (const std::exception& e) {
+    std::cerr << "\n" << app_name << ": error: " << e.what() << "\n";
+    return 4;
+  }
+}
+
+bool check_value(const std::string& name, double value, double expected, double tolerance) {
+  const bool ok = std::fabs(value - expected) <= tolerance;
+  std::fprintf(stderr, "check %s: %.6g (expected %.6g, tolerance %.3g) %s\n", name.c_str(), value,
+               expected, tolerance, ok ? "ok" : "FAILED");
+  return ok;
+}
+
+}  // namespace mpm

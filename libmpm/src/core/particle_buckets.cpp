@@ -1,0 +1,164 @@
+#include <mpm/core/error.h>
+#include <mpm/core/particle_buckets.h>
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <sstream>
+
+namespace mpm {
+
+namespace {
+template <int dim, class T>
+std::string describe(const Eigen::Matrix<T, dim, 1>& x) {
+  std::ostringstream s;
+  s.precision(9);
+  s << '(';
+  for (int a = 0; a < dim; ++a) s << (a ? ", " : "") << x[a];
+  s << ')';
+  return s.str();
+}
+
+// First stencil node of a particle at cell coordinate xi; false when xi is not finite or the
+// stencil leaves the grid (then `axis` is the offending axis, -1 for a non-finite position).
+template <int dim, class T, class K>
+bool stencil_base_in_grid(const K& kernel, const Eigen::Matrix<T, dim, 1>& xi,
+                          const IVec<dim>& node_counts, IVec<dim>& base, int& axis) {
+  axis = -1;
+  if (!xi.allFinite()) return false;
+  for (int a = 0; a < dim; ++a) {
+    axis = a;
+    // The bound keeps the floor inside int range before the kernel converts it.
+    if (!(std::abs(static_cast<double>(xi[a])) < 1e9)) return false;
+    double w[K::support], dw[K::support];
+    kernel(static_cast<double>(xi[a]), base[a], w, dw);
+    if (base[a] < 0 || base[a] + K::support > node_counts[a]) return false;
+  }
+  return true;
+}
+}  // namespace
+
+template <int dim>
+IVec<dim> stencil_base(const SparseGrid<dim>& grid, const Kernel& kernel, const Vec<dim>& x) {
+  const Vec<dim> xi = CellMap<dim>(grid)(x);
+  return std::visit(
+      [&](const auto& k) {
+        IVec<dim> base;
+        double w[4], dw[4];
+        for (int a = 0; a < dim; ++a) k(xi[a], base[a], w, dw);
+        return base;
+      },
+      kernel);
+}
+
+template <int dim, class T>
+std::vector<std::uint32_t> bucket_order(const std::vector<Eigen::Matrix<T, dim, 1>>& x,
+                                        const Kernel& kernel, SparseGrid<dim>& grid,
+                                        ParticleBuckets<dim>& buckets, const std::string& stage) {
+  const std::size_t n = x.size();
+  const CellMap<dim> map(grid);
+
+  // Block keys in parallel; an invalid particle is reported after the loop, the one with the
+  // lowest index so that the message does not depend on the thread count.
+  std::vector<int> key(n);
+  std::atomic<std::size_t> first_bad{n};
+  std::visit([&](const auto& k) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1 << 14), [&](const auto& r) {
+      for (std::size_t p = r.begin(); p != r.end(); ++p) {
+        IVec<dim> base;
+        int axis;
+        if (stencil_base_in_grid<dim, T>(k, map(x[p]), grid.node_counts(), base, axis)) {
+          key[p] = grid.block_id(base);
+        } else {
+          std::size_t seen = first_bad.load();
+          while (p < seen && !first_bad.compare_exchange_weak(seen, p)) {}
+          key[p] = 0;
+        }
+      }
+    });
+    if (const std::size_t p = first_bad.load(); p < n) {
+      IVec<dim> base;
+      int axis;
+      stencil_base_in_grid<dim, T>(k, map(x[p]), grid.node_counts(), base, axis);
+      if (axis < 0)
+        throw NumericalError("stage '" + stage + "': particle " + std::to_string(p) +
+                             " has a non-finite position " + describe<dim, T>(x[p]));
+      throw NumericalError("stage '" + stage + "': particle " + std::to_string(p) + " at " +
+                           describe<dim, T>(x[p]) + " left the grid domain (axis " +
+                           std::to_string(axis) + "); keep particles inside the walls");
+    }
+  }, kernel);
+
+  // Counting sort by block id: O(n + table size), stable. The sorted keys are written in the
+  // same pass as the permutation (same target position, so no extra random access).
+  std::vector<std::uint32_t> order;
+  if (!std::is_sorted(key.begin(), key.end())) {
+    std::vector<std::uint32_t> offset(grid.table_size() + 1, 0);
+    for (int k : key) ++offset[k + 1];
+    for (int b = 0; b < grid.table_size(); ++b) offset[b + 1] += offset[b];
+    order.resize(n);
+    std::vector<int> sorted_key(n);
+    for (std::size_t p = 0; p < n; ++p) {
+      const std::uint32_t i = offset[key[p]]++;
+      order[i] = static_cast<std::uint32_t>(p);
+      sorted_key[i] = key[p];
+    }
+    key.swap(sorted_key);
+  }
+
+  buckets.begin.clear();
+  buckets.block.clear();
+  for (auto& c : buckets.by_color) c.clear();
+  for (std::size_t p = 0; p < n; ++p) {
+    if (p == 0 || key[p] != key[p - 1]) {
+      buckets.begin.push_back(static_cast<std::uint32_t>(p));
+      buckets.block.push_back(key[p]);
+    }
+  }
+  buckets.begin.push_back(static_cast<std::uint32_t>(n));
+
+  // Every bucket touches its own block and the +1 neighbours on each axis.
+  std::vector<int> blocks;
+  blocks.reserve(buckets.block.size() * ParticleBuckets<dim>::colors);
+  for (int b = 0; b < buckets.count(); ++b) {
+    const IVec<dim> c = grid.block_coord(buckets.block[b]);
+    int color = 0;
+    for (int a = 0; a < dim; ++a) color |= (c[a] & 1) << a;
+    buckets.by_color[color].push_back(b);
+    for (int corner = 0; corner < ParticleBuckets<dim>::colors; ++corner) {
+      IVec<dim> nb = c;
+      for (int a = 0; a < dim; ++a) nb[a] += (corner >> a) & 1;
+      blocks.push_back(grid.block_id(nb * SparseGrid<dim>::block_size));
+    }
+  }
+  std::sort(blocks.begin(), blocks.end());
+  blocks.erase(std::unique(blocks.begin(), blocks.end()), blocks.end());
+  grid.activate(blocks);
+  return order;
+}
+
+template <int dim>
+bool sort_into_buckets(Particles<dim>& particles, const Kernel& kernel, SparseGrid<dim>& grid,
+                       ParticleBuckets<dim>& buckets, const std::string& stage) {
+  const std::vector<std::uint32_t> order = bucket_order<dim, double>(particles.x, kernel, grid, buckets, stage);
+  if (order.empty()) return false;
+  particles.permute(order);
+  return true;
+}
+
+#define MPM_INSTANTIATE(dim)                                                                      \
+  template IVec<dim> stencil_base(const SparseGrid<dim>&, const Kernel&, const Vec<dim>&);        \
+  template bool sort_into_buckets(Particles<dim>&, const Kernel&, SparseGrid<dim>&,               \
+                                  ParticleBuckets<dim>&, const std::string&);                     \
+  template std::vector<std::uint32_t> bucket_order(const std::vector<Eigen::Matrix<double, dim, 1>>&, \
+                                                   const Kernel&, SparseGrid<dim>&,               \
+                                                   ParticleBuckets<dim>&, const std::string&);    \
+  template std::vector<std::uint32_t> bucket_order(const std::vector<Eigen::Matrix<float, dim, 1>>&, \
+                                                   const Kernel&, SparseGrid<dim>&,               \
+                                                   ParticleBuckets<dim>&, const std::string&);
+MPM_INSTANTIATE(2)
+MPM_INSTANTIATE(3)
+
+}  // namespace mpm

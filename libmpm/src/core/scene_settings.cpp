@@ -1,0 +1,70 @@
+#include <mpm/core/scene_settings.h>
+
+#include <cmath>
+
+namespace mpm {
+
+template <int dim>
+int SceneSettings<dim>::frame_count() const {
+  return static_cast<int>(std::llround(std::ceil(end_time / frame_dt - 1e-9)));
+}
+
+int scene_dimension(const Config& scene) { return scene.integer("dim", 2, 2, 3); }
+
+template <int dim>
+SceneSettings<dim> parse_scene_settings(const Config& scene, const std::optional<DerivedDomain<dim>>& derived) {
+  SceneSettings<dim> s;
+  if (derived) {
+    s.domain_lo = derived->lo;
+    s.domain_hi = derived->hi;
+    s.dx = derived->dx;
+  } else {
+    const Config domain = scene.child("domain");
+    s.domain_lo = domain.vector<dim>("lo");
+    s.domain_hi = domain.vector<dim>("hi");
+    for (int a = 0; a < dim; ++a)
+      if (s.domain_hi[a] <= s.domain_lo[a]) domain.fail("hi", "must exceed domain.lo on every axis");
+    s.dx = scene.child("grid").number("dx", Range::positive());
+  }
+  const std::optional<Config> grid_keys = scene.optional_child("grid");
+  const Config grid = grid_keys ? *grid_keys : Config::parse("{}", scene.file());
+  const std::string kernel = grid.choice("kernel", "quadratic", {"quadratic", "cubic", "ugimp"});
+  if (kernel == "quadratic") s.kernel = QuadraticBSpline{};
+  else if (kernel == "cubic") s.kernel = CubicBSpline{};
+  else s.kernel = UGimp{0.5 * grid.number("particle_size", 1.0, Range{0.0, 1.0, true, false})};
+
+  if (auto transfer = scene.optional_child("transfer")) {
+    const std::string scheme = transfer->choice("scheme", "apic", {"apic", "flip"});
+    s.transfer.type = scheme == "apic" ? TransferScheme::Type::apic : TransferScheme::Type::flip;
+    if (s.transfer.type == TransferScheme::Type::flip)
+      s.transfer.flip_ratio = transfer->number("flip_ratio", 0.95, Range::closed(0.0, 1.0));
+  }
+
+  const Config time = scene.child("time");
+  s.end_time = time.number("end", Range::positive());
+  s.frame_dt = time.number("frame_dt", 0.02, Range::positive());
+  s.cfl = time.number("cfl", 0.4, Range{0.0, 1.0, true, false});
+  s.wave_cfl = time.number("wave_cfl", 0.5, Range{0.0, 1.0, true, false});
+  s.max_dt = time.number("max_dt", 1e300, Range::positive());
+  s.max_steps_per_frame = time.integer("max_steps_per_frame", 1000000, 1, 1000000000);
+
+  Vec<dim> g = Vec<dim>::Zero();
+  g[dim - 1] = -9.81;
+  s.gravity = scene.vector<dim>("gravity", g);
+
+  if (auto out = scene.optional_child("output")) {
+    s.output.particles = out->flag("particles", true);
+    s.output.png = out->flag("png", true);
+    s.output.color_by = out->choice("color_by", "speed", {"speed", "material", "J", "plastic", "height"});
+    s.output.png_width = out->integer("png_width", 640, 16, 8192);
+    s.output.checkpoint_every = out->integer("checkpoint_every", 0, 0, 1000000);
+  }
+  return s;
+}
+
+template struct SceneSettings<2>;
+template struct SceneSettings<3>;
+template SceneSettings<2> parse_scene_settings<2>(const Config&, const std::optional<DerivedDomain<2>>&);
+template SceneSettings<3> parse_scene_settings<3>(const Config&, const std::optional<DerivedDomain<3>>&);
+
+}  // namespace mpm

@@ -1,0 +1,71 @@
+#include <mpm/core/error.h>
+#include <mpm/core/sparse_grid.h>
+
+#include <cmath>
+#include <limits>
+
+namespace mpm {
+
+template <int dim>
+SparseGrid<dim>::SparseGrid(const Vec<dim>& lo, const Vec<dim>& hi, double dx)
+    : dx_(dx), origin_(lo) {
+  verify<InputError>(dx > 0.0 && std::isfinite(dx), "grid spacing dx must be > 0");
+  double blocks = 1.0;
+  for (int a = 0; a < dim; ++a) {
+    verify<InputError>(hi[a] > lo[a], "grid domain must have hi > lo on every axis");
+    node_counts_[a] = static_cast<int>(std::ceil((hi[a] - lo[a]) / dx - 1e-9)) + 1;
+    block_counts_[a] = (node_counts_[a] + block_size - 1) / block_size + 1;
+    blocks *= block_counts_[a];
+  }
+  verify<InputError>(blocks < std::numeric_limits<int>::max() / 2,
+                     "grid too large: " + std::to_string(blocks) + " blocks (domain / dx)");
+  slot_.assign(static_cast<std::size_t>(blocks), -1);
+}
+
+template <int dim>
+void SparseGrid<dim>::activate(const std::vector<int>& block_ids) {
+  for (int id : active_) slot_[id] = -1;
+  active_ = block_ids;
+  for (std::size_t s = 0; s < active_.size(); ++s) slot_[active_[s]] = static_cast<int>(s);
+  const std::size_t n = active_.size() * nodes_per_block;
+  mass.assign(n, 0.0);
+  velocity.assign(n, Vec<dim>::Zero());
+}
+
+template <int dim>
+IVec<dim> SparseGrid<dim>::node_coord(std::size_t k) const {
+  const IVec<dim> block = block_coord(active_[k / nodes_per_block]);
+  int local = static_cast<int>(k % nodes_per_block);
+  IVec<dim> c;
+  for (int a = 0; a < dim; ++a) {
+    c[a] = (block[a] << block_bits) + (local & (block_size - 1));
+    local >>= block_bits;
+  }
+  return c;
+}
+
+template <int dim>
+Index SparseGrid<dim>::node_index(const IVec<dim>& node) const {
+  for (int a = 0; a < dim; ++a)
+    if (node[a] < 0 || (node[a] >> block_bits) >= block_counts_[a]) return -1;
+  const int s = slot_[block_id(node)];
+  if (s < 0) return -1;
+  int local = 0;
+  for (int a = dim - 1; a >= 0; --a) local = (local << block_bits) | (node[a] & (block_size - 1));
+  return static_cast<Index>(s) * nodes_per_block + local;
+}
+
+template <int dim>
+std::vector<std::pair<std::string, std::size_t>> SparseGrid<dim>::memory_per_field() const {
+  auto bytes = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
+  return {{"grid.block_table", slot_.capacity() * sizeof(int) + active_.capacity() * sizeof(int)},
+          {"grid.mass", bytes(mass)},
+          {"grid.velocity", bytes(velocity)},
+          {"grid.velocity_old", bytes(velocity_old)},
+          {"grid.force", bytes(force)}};
+}
+
+template class SparseGrid<2>;
+template class SparseGrid<3>;
+
+}  // namespace mpm

@@ -1,0 +1,31 @@
+// Symplectic Euler on the grid (paper sec. 3.2):
+//   v_i^n     = (m v)_i / m_i                    (kept as v_i^old for FLIP)
+//   v_i^{n+1} = v_i^n + dt (f_i / m_i + g)
+// Nodes without mass keep zero velocity. Non-finite results stop the run naming the node.
+#include <mpm/core/finite_guard.h>
+#include <mpm/core/stages/grid_velocity_update.h>
+
+#include <tbb/parallel_for.h>
+
+namespace mpm::stages {
+
+template <int dim>
+void GridVelocityUpdate<dim>::run(MpmState<dim>& s) {
+  SparseGrid<dim>& g = s.grid;
+  momentum_to_velocity(g, s.transfer);
+  const double dt = s.dt;
+  const Vec<dim> dv_gravity = dt * s.gravity;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, g.node_storage(), 4096), [&](const auto& r) {
+    for (std::size_t k = r.begin(); k != r.end(); ++k) {
+      if (g.mass[k] <= 0.0) continue;
+      if (with_forces_) g.velocity[k] += (dt / g.mass[k]) * g.force[k];
+      g.velocity[k] += dv_gravity;
+    }
+  });
+  check_finite(g.velocity, name(), "grid node (storage index)", "velocity");
+}
+
+template class GridVelocityUpdate<2>;
+template class GridVelocityUpdate<3>;
+
+}  // namespace mpm::stages

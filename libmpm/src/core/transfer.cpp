@@ -1,0 +1,97 @@
+#include <mpm/core/detail/transfer_loops.h>
+#include <mpm/core/transfer.h>
+
+namespace mpm {
+
+using detail::ChannelView;
+using detail::component_view;
+using detail::PatchFrame;
+using detail::scalar_view;
+using detail::Stencil;
+
+template <int dim>
+std::array<ChannelView, dim> vector_views(const std::vector<Vec<dim>>& v) {
+  std::array<ChannelView, dim> views;
+  for (int a = 0; a < dim; ++a) views[a] = component_view<dim>(v, a);
+  return views;
+}
+
+template <int dim>
+void particles_to_grid(const Particles<dim>& particles, const ParticleBuckets<dim>& buckets,
+                       const Kernel& kernel, const TransferScheme& scheme, SparseGrid<dim>& grid) {
+  std::fill(grid.mass.begin(), grid.mass.end(), 0.0);
+  std::fill(grid.velocity.begin(), grid.velocity.end(), Vec<dim>::Zero());
+  std::array<ChannelView, dim + 1> channels;
+  channels[0] = scalar_view(grid.mass);
+  for (int a = 0; a < dim; ++a) channels[a + 1] = component_view<dim>(grid.velocity, a);
+  std::visit([&](const auto& k) {
+    using K = std::decay_t<decltype(k)>;
+    if (scheme.type == TransferScheme::Type::apic)
+      detail::p2g<dim, K, true>(particles, buckets, k, grid, channels);
+    else
+      detail::p2g<dim, K, false>(particles, buckets, k, grid, channels);
+  }, kernel);
+}
+
+template <int dim>
+void momentum_to_velocity(SparseGrid<dim>& grid, const TransferScheme& scheme) {
+  const std::size_t n = grid.node_storage();
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const auto& r) {
+    for (std::size_t k = r.begin(); k != r.end(); ++k)
+      grid.velocity[k] = grid.mass[k] > 0.0 ? Vec<dim>(grid.velocity[k] / grid.mass[k]) : Vec<dim>::Zero();
+  });
+  if (scheme.uses_old_velocity()) grid.velocity_old = grid.velocity;
+  else grid.velocity_old.clear();
+}
+
+template <int dim>
+void grid_to_particles(Particles<dim>& particles, const ParticleBuckets<dim>& buckets,
+                       const Kernel& kernel, const TransferScheme& scheme,
+                       const SparseGrid<dim>& grid, double dt) {
+  const std::array<ChannelView, dim> velocity = vector_views<dim>(grid.velocity);
+  std::visit([&](const auto& k) {
+    using K = std::decay_t<decltype(k)>;
+    if (scheme.type == TransferScheme::Type::apic) {
+      detail::g2p<dim, K, false>(particles, buckets, k, grid, velocity, 0.0, dt);
+    } else {
+      std::array<ChannelView, 2 * dim> both;
+      const std::array<ChannelView, dim> old = vector_views<dim>(grid.velocity_old);
+      std::copy(velocity.begin(), velocity.end(), both.begin());
+      std::copy(old.begin(), old.end(), both.begin() + dim);
+      detail::g2p<dim, K, true>(particles, buckets, k, grid, both, scheme.flip_ratio, dt);
+    }
+  }, kernel);
+}
+
+template <int dim>
+void velocity_gradient(const Particles<dim>& P, const ParticleBuckets<dim>& buckets,
+                       const Kernel& kernel, const SparseGrid<dim>& grid, std::vector<Mat<dim>>& grad_v) {
+  grad_v.resize(P.size());
+  const double inv_dx = 1.0 / grid.dx();
+  std::visit([&](const auto& k) {
+    using K = std::decay_t<decltype(k)>;
+    detail::gather<dim, dim>(grid, buckets, vector_views<dim>(grid.velocity),
+                             [&](std::uint32_t p, const PatchFrame<dim>& f, const double* patch) {
+      Stencil<dim, K::support> st;
+      st.compute(k, f.cells(P.x[p]), f.origin);
+      Mat<dim> g = Mat<dim>::Zero();
+      st.for_each_node([&](int node, double, const Vec<dim>& grad, const Vec<dim>&) {
+        g.noalias() += Eigen::Map<const Vec<dim>>(patch + node * dim) * grad.transpose();
+      });
+      grad_v[p] = g * inv_dx;
+    });
+  }, kernel);
+}
+
+#define MPM_INSTANTIATE(dim)                                                                      \
+  template void particles_to_grid(const Particles<dim>&, const ParticleBuckets<dim>&,            \
+                                  const Kernel&, const TransferScheme&, SparseGrid<dim>&);         \
+  template void momentum_to_velocity(SparseGrid<dim>&, const TransferScheme&);                    \
+  template void grid_to_particles(Particles<dim>&, const ParticleBuckets<dim>&, const Kernel&,    \
+                                  const TransferScheme&, const SparseGrid<dim>&, double);          \
+  template void velocity_gradient(const Particles<dim>&, const ParticleBuckets<dim>&,             \
+                                  const Kernel&, const SparseGrid<dim>&, std::vector<Mat<dim>>&);
+MPM_INSTANTIATE(2)
+MPM_INSTANTIATE(3)
+
+}  // namespace mpm

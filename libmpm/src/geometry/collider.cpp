@@ -1,0 +1,98 @@
+//! Grid-node collision treatment (Gao et al. 2017, sec. 3.2 step 4), for a node x_i with
+//! updated velocity v_i inside an obstacle moving at v_c:
+//!   phi(x_i, t) = phi0(x_i - v_c t) <= 0
+//!   v_i <- v_c + contact(v_i - v_c, n(x_i, t))      (contact.h: sticky, slip, separate + Coulomb)
+#include <mpm/geometry/collider.h>
+
+#include <mpm/core/error.h>
+
+#include "number_text.h"
+
+#include <cmath>
+#include <string>
+
+namespace mpm::geometry {
+
+namespace {
+
+void verify_friction(const Contact& contact) {
+  verify<InputError>(std::isfinite(contact.friction) && contact.friction >= 0.0,
+                     "collider: the friction coefficient must be >= 0, got " + detail::number_text(contact.friction));
+}
+
+}  // namespace
+
+template <int dim>
+Collider<dim>::Collider(Shape<dim> shape, const Contact& contact, const Vec<dim>& velocity)
+    : shape_(std::move(shape)), contact_(contact), velocity_(velocity) {
+  verify_friction(contact);
+}
+
+template <int dim>
+double Collider<dim>::phi(const Vec<dim>& x, double t) const {
+  const Vec<dim> x0 = x - t * velocity_;
+  return std::visit([&](const auto& shape) { return shape.phi(x0); }, shape_);
+}
+
+template <int dim>
+Vec<dim> Collider<dim>::normal(const Vec<dim>& x, double t) const {
+  const Vec<dim> x0 = x - t * velocity_;
+  return std::visit([&](const auto& shape) { return shape.normal(x0); }, shape_);
+}
+
+template <int dim>
+void Collider<dim>::project(const Vec<dim>& x, double t, Vec<dim>& v) const {
+  if (phi(x, t) > 0.0) return;
+  // A sticky node needs no normal, and the normal of a level set costs 2 dim samples.
+  const Vec<dim> n = contact_.type == ContactType::sticky ? Vec<dim>::Zero() : normal(x, t);
+  v = velocity_ + contact_.apply<dim>(Vec<dim>(v - velocity_), n);
+}
+
+template <int dim>
+DomainWalls<dim>::DomainWalls(const Vec<dim>& lo, const Vec<dim>& hi, double thickness, const Contact& contact)
+    : lo_(lo), hi_(hi), thickness_(thickness) {
+  verify<InputError>((hi.array() > lo.array()).all(), "domain walls: hi must exceed lo in every component");
+  verify<InputError>(std::isfinite(thickness) && thickness > 0.0,
+                     "domain walls: the thickness must be > 0, got " + detail::number_text(thickness));
+  verify_friction(contact);
+  walls_.fill(contact);
+}
+
+template <int dim>
+void DomainWalls<dim>::set_wall(int axis, Side side, const std::optional<Contact>& contact) {
+  verify<InputError>(0 <= axis && axis < dim, "domain walls: axis " + std::to_string(axis) + " out of range");
+  if (contact) verify_friction(*contact);
+  walls_[index(axis, side)] = contact;
+}
+
+template <int dim>
+void DomainWalls<dim>::project(const Vec<dim>& x, Vec<dim>& v) const {
+  for (int axis = 0; axis < dim; ++axis) {
+    const std::optional<Contact>& lower = walls_[index(axis, Side::lower)];
+    const std::optional<Contact>& upper = walls_[index(axis, Side::upper)];
+    if (lower && x[axis] - lo_[axis] <= thickness_) v = lower->apply<dim>(v, Vec<dim>::Unit(axis));
+    if (upper && hi_[axis] - x[axis] <= thickness_) v = upper->apply<dim>(v, Vec<dim>(-Vec<dim>::Unit(axis)));
+  }
+}
+
+template <int dim>
+void ColliderSet<dim>::project(const Vec<dim>& x, double t, Vec<dim>& v) const {
+  for (const Collider<dim>& collider : colliders_) collider.project(x, t, v);
+  if (walls_) walls_->project(x, v);
+}
+
+template <int dim>
+bool ColliderSet<dim>::uses_level_sets() const {
+  for (const Collider<dim>& collider : colliders_)
+    if (collider.is_level_set()) return true;
+  return false;
+}
+
+template class Collider<2>;
+template class Collider<3>;
+template class DomainWalls<2>;
+template class DomainWalls<3>;
+template class ColliderSet<2>;
+template class ColliderSet<3>;
+
+}  // namespace mpm::geometry

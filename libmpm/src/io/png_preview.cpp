@@ -1,0 +1,215 @@
+#include <mpm/io/png_preview.h>
+
+#include <mpm/core/error.h>
+#include <mpm/io/atomic_file.h>
+
+#include "channel_sizes.h"
+
+#include <Eigen/LU>  // determinant()
+#include <png.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+namespace mpm::io {
+namespace {
+
+using Rgb = std::array<std::uint8_t, 3>;
+
+//! viridis (van der Walt & Smith, matplotlib 2015) at 9 equally spaced stops: perceptually
+//! uniform and readable in grey scale and by colour-blind viewers.
+constexpr Rgb kViridis[9] = {{68, 1, 84},    {71, 45, 123},  {59, 82, 139},
+                             {44, 114, 142}, {33, 144, 140}, {39, 173, 129},
+                             {93, 200, 99},  {170, 220, 50}, {253, 231, 37}};
+constexpr Rgb kMagenta{255, 0, 255};
+constexpr Rgb kFrame{64, 64, 64};
+constexpr int kMaxPixels = 16384;  // per side; guards against a typo allocating gigabytes
+
+//! Linear interpolation between the stops; t is clamped to [0, 1].
+Rgb viridis(double t) {
+  const double s = std::clamp(t, 0.0, 1.0) * 8.0;
+  const int i = std::min(7, static_cast<int>(s));
+  const double f = s - i;
+  Rgb c;
+  for (int k = 0; k < 3; ++k)
+    c[k] =
+        static_cast<std::uint8_t>(std::lround((1.0 - f) * kViridis[i][k] + f * kViridis[i + 1][k]));
+  return c;
+}
+
+enum class ColorBy { speed, material, J, plastic, height };
+
+ColorBy parse_color_by(const std::string& name) {
+  constexpr std::pair<const char*, ColorBy> kNames[] = {{"speed", ColorBy::speed},
+                                                        {"material", ColorBy::material},
+                                                        {"J", ColorBy::J},
+                                                        {"plastic", ColorBy::plastic},
+                                                        {"height", ColorBy::height}};
+  for (const auto& [text, by] : kNames)
+    if (name == text) return by;
+  throw InputError("png preview: color_by '" + name +
+                   "' is not one of speed, material, J, plastic, height");
+}
+
+//! The attribute named by color_by, one value per particle.
+template <int dim>
+std::vector<double> attribute(const Particles<dim>& p, const std::string& color_by) {
+  const ColorBy by = parse_color_by(color_by);
+  verify<InputError>((by != ColorBy::J && by != ColorBy::plastic) || p.has_deformation(),
+                     "png preview: color_by '" + color_by + "' needs particles with deformation");
+  std::vector<double> values(p.size());
+  const auto fill = [&](auto value_of) {
+    for (std::size_t i = 0; i < values.size(); ++i) values[i] = value_of(i);
+  };
+  switch (by) {
+    case ColorBy::speed:
+      fill([&](std::size_t i) { return p.v[i].norm(); });
+      break;
+    case ColorBy::material:
+      fill([&](std::size_t i) { return double(p.material[i]); });
+      break;
+    case ColorBy::J:
+      fill([&](std::size_t i) { return p.F[i].determinant(); });
+      break;
+    case ColorBy::plastic:
+      fill([&](std::size_t i) { return p.plastic[i]; });
+      break;
+    case ColorBy::height:
+      fill([&](std::size_t i) { return p.x[i][1]; });
+      break;
+  }
+  return values;
+}
+
+//! The values mapped to the ends of the colour map.
+std::array<double, 2> color_range(const std::vector<double>& values,
+                                  const PreviewOptions& options) {
+  if (options.color_range) {
+    const auto [lo, hi] = *options.color_range;
+    verify<InputError>(std::isfinite(lo) && std::isfinite(hi) && lo < hi,
+                       "png preview: color_range must be finite with min < max");
+    return {lo, hi};
+  }
+  std::array<double, 2> range{INFINITY, -INFINITY};
+  for (const double v : values) {
+    if (!std::isfinite(v)) continue;
+    range[0] = std::min(range[0], v);
+    range[1] = std::max(range[1], v);
+  }
+  return range;
+}
+
+class Image {
+public:
+  Image(int width, int height)
+      : width_(width), height_(height), rgb_(3 * std::size_t(width) * height, 255) {}
+
+  //! A disc of `radius` pixels centred at (px, py) (pixel units, y down), covering at least
+  //! the pixel that holds the centre so that no particle vanishes.
+  void splat(double px, double py, double radius, const Rgb& colour) {
+    if (px + radius < 0 || px - radius > width_ || py + radius < 0 || py - radius > height_) return;
+    const int i0 = std::max(0, static_cast<int>(std::floor(px - radius)));
+    const int i1 = std::min(width_ - 1, static_cast<int>(std::floor(px + radius)));
+    const int j0 = std::max(0, static_cast<int>(std::floor(py - radius)));
+    const int j1 = std::min(height_ - 1, static_cast<int>(std::floor(py + radius)));
+    for (int j = j0; j <= j1; ++j)
+      for (int i = i0; i <= i1; ++i) {
+        const double dx = i + 0.5 - px, dy = j + 0.5 - py;
+        const bool holds_centre =
+            i == static_cast<int>(std::floor(px)) && j == static_cast<int>(std::floor(py));
+        if (dx * dx + dy * dy <= radius * radius || holds_centre) set(i, j, colour);
+      }
+  }
+
+  void frame(const Rgb& colour) {
+    for (int i = 0; i < width_; ++i) {
+      set(i, 0, colour);
+      set(i, height_ - 1, colour);
+    }
+    for (int j = 0; j < height_; ++j) {
+      set(0, j, colour);
+      set(width_ - 1, j, colour);
+    }
+  }
+
+  //! Writes an 8-bit RGB PNG through libpng's simplified API, atomically.
+  void write(const std::filesystem::path& path) const {
+    AtomicFile out(path);
+    png_image image{};
+    image.version = PNG_IMAGE_VERSION;
+    image.width = static_cast<png_uint_32>(width_);
+    image.height = static_cast<png_uint_32>(height_);
+    image.format = PNG_FORMAT_RGB;
+    if (!png_image_write_to_file(&image, out.temp_path().c_str(), 0, rgb_.data(), 0, nullptr)) {
+      const std::string reason = image.message;
+      png_image_free(&image);
+      throw IoError("cannot write '" + path.string() + "': libpng: " + reason);
+    }
+    out.commit();
+  }
+
+private:
+  void set(int i, int j, const Rgb& colour) {
+    std::copy(colour.begin(), colour.end(), rgb_.begin() + 3 * (std::size_t(j) * width_ + i));
+  }
+
+  int width_, height_;
+  std::vector<std::uint8_t> rgb_;
+};
+
+}  // namespace
+
+template <int dim>
+void write_png_preview(const std::filesystem::path& path, const Particles<dim>& p,
+                       const PreviewOptions& options) {
+  detail::verify_channel_sizes(p, path);
+  const auto& lo = options.domain_lo;
+  const auto& hi = options.domain_hi;
+  const double extent_x = hi[0] - lo[0], extent_y = hi[1] - lo[1];
+  verify<InputError>(
+      std::isfinite(extent_x) && std::isfinite(extent_y) && extent_x > 0 && extent_y > 0,
+      "png preview: the domain must have hi > lo in x and y");
+  verify<InputError>(options.width_px >= 1 && options.width_px <= kMaxPixels,
+                     "png preview: width_px must be in [1, " + std::to_string(kMaxPixels) + "]");
+  verify<InputError>(std::isfinite(options.point_radius_px) && options.point_radius_px >= 0,
+                     "png preview: point_radius_px must be finite and >= 0");
+  const int width = options.width_px;
+  const double height_exact = width * extent_y / extent_x;
+  verify<InputError>(height_exact <= kMaxPixels,
+                     "png preview: the domain's aspect ratio gives an image taller than " +
+                         std::to_string(kMaxPixels) + " px");
+  const int height = std::max(1, static_cast<int>(std::lround(height_exact)));
+
+  const std::vector<double> values = attribute(p, options.color_by);
+  const auto [value_lo, value_hi] = color_range(values, options);
+
+  // Painter's order: a particle with a non-finite position has no place in the image (and
+  // would break the sort), so it is left out.
+  std::vector<std::size_t> order;
+  for (std::size_t i = 0; i < p.size(); ++i)
+    if (p.x[i].allFinite()) order.push_back(i);
+  if constexpr (dim == 3)
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::size_t a, std::size_t b) { return p.x[a][2] < p.x[b][2]; });
+
+  Image image(width, height);
+  const double scale_x = width / extent_x, scale_y = height / extent_y;
+  for (const std::size_t i : order) {
+    const double v = values[i];
+    const double t = value_hi > value_lo ? (v - value_lo) / (value_hi - value_lo) : 0.5;
+    image.splat((p.x[i][0] - lo[0]) * scale_x, (hi[1] - p.x[i][1]) * scale_y,
+                options.point_radius_px, std::isfinite(v) ? viridis(t) : kMagenta);
+  }
+  image.frame(kFrame);
+  image.write(path);
+}
+
+template void write_png_preview<2>(const std::filesystem::path&, const Particles<2>&,
+                                   const PreviewOptions&);
+template void write_png_preview<3>(const std::filesystem::path&, const Particles<3>&,
+                                   const PreviewOptions&);
+
+}  // namespace mpm::io

@@ -1,0 +1,67 @@
+#include <mpm/solid/material.h>
+
+#include <cmath>
+#include <optional>
+#include <string>
+#include <variant>
+
+namespace mpm {
+
+template <int dim>
+double Material<dim>::wave_speed() const {
+  return std::sqrt(lame.p_wave_modulus() / density);
+}
+
+template <int dim>
+double Material<dim>::energy(const Mat<dim>& F) const {
+  return std::visit([&](const auto& model) { return model.energy(F); }, elastic);
+}
+
+template <int dim>
+Mat<dim> Material<dim>::kirchhoff(const Mat<dim>& F) const {
+  return std::visit(
+      [&](const auto& model) -> Mat<dim> { return model.first_piola(F) * F.transpose(); }, elastic);
+}
+
+template <int dim>
+Material<dim> parse_material(const Config& cfg) {
+  Material<dim> material;
+  material.name = cfg.text("name", "material");
+  material.density = cfg.number("density", Range::positive());
+  const double E = cfg.number("youngs_modulus", Range::positive());
+  const double nu = cfg.number("poisson_ratio", Range::open(-1.0, 0.5));
+  material.lame = constitutive::Lame::from_youngs_poisson(E, nu);
+  const std::string elasticity =
+      cfg.choice("elasticity", std::string(constitutive::FixedCorotated<dim>::name),
+                 constitutive::elastic_model_names());
+  material.elastic = constitutive::make_elastic_model<dim>(elasticity, material.lame);
+
+  const std::optional<Config> plastic = cfg.optional_child("plasticity");
+  if (!plastic) return material;
+  const std::string model = plastic->choice("model", std::string(plasticity::NoPlasticity::name),
+                                            plasticity::plasticity_model_names());
+  if (model == plasticity::NoPlasticity::name) return material;
+  if (elasticity != constitutive::HenckyStVK<dim>::name) {
+    plastic->fail("model", model + " plasticity needs 'elasticity: " +
+                               std::string(constitutive::HenckyStVK<dim>::name) +
+                               "' (its return map is closed-form in Hencky strain, Gao et al. 2017 "
+                               "sec. 4.2), but the material has '" + elasticity + "'");
+  }
+  if (model == plasticity::DruckerPrager<dim>::name) {
+    const double friction_angle =
+        plastic->number("friction_angle", 30.0, Range::half_open(0.0, 90.0));
+    const double cohesion = plastic->number("cohesion", 0.0, Range::non_negative());
+    material.plasticity = plasticity::DruckerPrager<dim>(friction_angle, cohesion, material.lame);
+  } else {
+    const double yield_stress = plastic->number("yield_stress", Range::positive());
+    material.plasticity = plasticity::VonMises<dim>(yield_stress, material.lame);
+  }
+  return material;
+}
+
+template struct Material<2>;
+template struct Material<3>;
+template Material<2> parse_material<2>(const Config&);
+template Material<3> parse_material<3>(const Config&);
+
+}  // namespace mpm

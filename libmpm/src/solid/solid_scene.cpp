@@ -1,0 +1,158 @@
+#include <mpm/core/error.h>
+#include <mpm/core/stages/grid_boundary.h>
+#include <mpm/core/stages/grid_to_particles.h>
+#include <mpm/core/stages/grid_velocity_update.h>
+#include <mpm/core/stages/particles_to_grid.h>
+#include <mpm/core/stages/sort_particles.h>
+#include <mpm/core/stages/time_step_control.h>
+#include <mpm/geometry/collider_config.h>
+#include <mpm/geometry/seeding.h>
+#include <mpm/solid/solid_scene.h>
+#include <mpm/solid/stages/deformation_update.h>
+#include <mpm/solid/stages/return_map.h>
+#include <mpm/solid/stages/stress_forces.h>
+
+#include <sstream>
+
+namespace mpm::solid {
+
+template <int dim>
+std::vector<Material<dim>> parse_materials(const Config& scene) {
+  std::vector<Material<dim>> materials;
+  const std::vector<Config> list = scene.list("materials");
+  if (list.empty()) scene.fail("materials", "at least one material is required");
+  for (const Config& entry : list) {
+    materials.push_back(parse_material<dim>(entry));
+    for (std::size_t m = 0; m + 1 < materials.size(); ++m)
+      if (materials[m].name == materials.back().name)
+        entry.fail("name", "material names must be unique ('" + materials.back().name + "' repeats)");
+  }
+  return materials;
+}
+
+template <int dim>
+std::uint16_t material_index(const std::vector<Material<dim>>& materials, const std::string& name,
+                             const Config& cfg, const std::string& key) {
+  std::string known;
+  for (std::size_t m = 0; m < materials.size(); ++m) {
+    if (materials[m].name == name) return static_cast<std::uint16_t>(m);
+    known += (m ? ", " : "") + materials[m].name;
+  }
+  cfg.fail(key, "no material named '" + name + "' (materials: " + known + ")");
+}
+
+template <int dim>
+void add_particles(SolidScene<dim>& scene, const std::vector<Vec<dim>>& positions, double volume,
+                   std::uint16_t m, const Vec<dim>& velocity, const std::string& where) {
+  Particles<dim>& P = scene.state.particles;
+  P.enable_deformation();
+  const double mass = scene.materials.at(m).density * volume;
+  for (const Vec<dim>& x : positions) {
+    for (int a = 0; a < dim; ++a)
+      if (!(x[a] >= scene.settings.domain_lo[a] && x[a] <= scene.settings.domain_hi[a])) {
+        std::ostringstream s;
+        s << where << ": a particle at (" << x.transpose() << ") lies outside the domain ["
+          << scene.settings.domain_lo.transpose() << "] - [" << scene.settings.domain_hi.transpose() << "]";
+        throw InputError(s.str());
+      }
+    P.push_back(x, velocity, mass, volume, m);
+  }
+}
+
+namespace {
+template <int dim>
+void seed_body(SolidScene<dim>& scene, const Config& body) {
+  const double dx = scene.settings.dx;
+  const int ppc = body.integer("particles_per_cell", dim == 2 ? 4 : 8, 1, 1000);
+  const double jitter = body.number("jitter", 0.0, Range::half_open(0.0, 1.0));
+  const auto seed = static_cast<std::uint64_t>(body.integer("seed", 1, 0, 1 << 30));
+  const std::uint16_t m = material_index(scene.materials, body.text("material"), body, "material");
+  const Vec<dim> velocity = body.vector<dim>("velocity", Vec<dim>::Zero());
+  const std::string shape = body.choice("shape", "box", {"box", "sphere", "mesh"});
+  std::vector<Vec<dim>> x;
+  if (shape == "box") {
+    x = geometry::seed_box<dim>(body.vector<dim>("lo"), body.vector<dim>("hi"), dx, ppc, jitter, seed);
+  } else if (shape == "sphere") {
+    x = geometry::seed_sphere<dim>(body.vector<dim>("center"), body.number("radius", Range::positive()), dx,
+                                   ppc, jitter, seed);
+  } else {
+    const auto level_set = geometry::LevelSet::from_mesh(body.text("file"),
+                                                         body.number("voxel_size", 0.5 * dx, Range::positive()));
+    x = geometry::seed_level_set<dim>(geometry::LevelSetShape<dim>(level_set, body.number("slice_z", 0.0, Range::any())),
+                                      dx, ppc, jitter, seed);
+  }
+  if (x.empty()) body.fail("shape", "the body contains no particle at this resolution");
+  add_particles(scene, x, geometry::particle_volume<dim>(dx, ppc), m, velocity, body.path());
+}
+}  // namespace
+
+template <int dim>
+SolidScene<dim> make_solid_scene(SceneSettings<dim> settings, std::vector<Material<dim>> materials,
+                                 geometry::ColliderSet<dim> colliders) {
+  SolidScene<dim> s{std::move(settings), std::move(materials), std::move(colliders), {}};
+  s.state.grid = SparseGrid<dim>(s.settings.domain_lo, s.settings.domain_hi, s.settings.dx);
+  s.state.kernel = s.settings.kernel;
+  s.state.transfer = s.settings.transfer;
+  s.state.gravity = s.settings.gravity;
+  return s;
+}
+
+template <int dim>
+void seed_bodies(SolidScene<dim>& solid, const Config& scene) {
+  for (const Config& body : scene.list("bodies")) seed_body(solid, body);
+}
+
+template <int dim>
+SolidScene<dim> load_solid_scene(const Config& scene) {
+  SceneSettings<dim> settings = parse_scene_settings<dim>(scene);
+  auto colliders = geometry::parse_colliders<dim>(scene, settings.domain_lo, settings.domain_hi, settings.dx);
+  SolidScene<dim> s = make_solid_scene(std::move(settings), parse_materials<dim>(scene), std::move(colliders));
+  seed_bodies(s, scene);
+  return s;
+}
+
+template <int dim>
+Pipeline<MpmState<dim>> make_explicit_pipeline(const SolidScene<dim>& scene) {
+  typename stages::TimeStepControl<dim>::Settings dt;
+  dt.cfl = scene.settings.cfl;
+  dt.wave_cfl = scene.settings.wave_cfl;
+  dt.max_dt = scene.settings.max_dt;
+  for (const auto& m : scene.materials) dt.wave_speed = std::max(dt.wave_speed, m.wave_speed());
+
+  Pipeline<MpmState<dim>> p({"particle.x", "particle.v", "particle.C", "particle.mass", "particle.F"});
+  p.add(std::make_unique<stages::TimeStepControl<dim>>(dt));
+  p.add(std::make_unique<stages::SortParticles<dim>>());
+  p.add(std::make_unique<stages::ParticlesToGrid<dim>>());
+  p.add(std::make_unique<stages::StressForces<dim>>(scene.materials));
+  p.add(std::make_unique<stages::GridVelocityUpdate<dim>>(true));
+  p.add(std::make_unique<stages::GridBoundary<dim>>(scene.colliders));
+  p.add(std::make_unique<stages::DeformationUpdate<dim>>());
+  if (stages::any_plastic(scene.materials)) p.add(std::make_unique<stages::ReturnMap<dim>>(scene.materials));
+  p.add(std::make_unique<stages::GridToParticles<dim>>());
+  return p;
+}
+
+template <int dim>
+double elastic_energy(const MpmState<dim>& state, const std::vector<Material<dim>>& materials) {
+  const Particles<dim>& P = state.particles;
+  double e = 0.0;
+  for (std::size_t p = 0; p < P.size(); ++p) e += P.volume0[p] * materials[P.material[p]].energy(P.F[p]);
+  return e;
+}
+
+#define MPM_SOLID_SCENE(dim)                                                                       \
+  template std::vector<Material<dim>> parse_materials<dim>(const Config&);                        \
+  template std::uint16_t material_index(const std::vector<Material<dim>>&, const std::string&,    \
+                                        const Config&, const std::string&);                       \
+  template void add_particles(SolidScene<dim>&, const std::vector<Vec<dim>>&, double, std::uint16_t, \
+                              const Vec<dim>&, const std::string&);                               \
+  template SolidScene<dim> make_solid_scene(SceneSettings<dim>, std::vector<Material<dim>>,          \
+                                           geometry::ColliderSet<dim>);                           \
+  template void seed_bodies(SolidScene<dim>&, const Config&);                                     \
+  template SolidScene<dim> load_solid_scene<dim>(const Config&);                                  \
+  template Pipeline<MpmState<dim>> make_explicit_pipeline(const SolidScene<dim>&);                \
+  template double elastic_energy(const MpmState<dim>&, const std::vector<Material<dim>>&);
+MPM_SOLID_SCENE(2)
+MPM_SOLID_SCENE(3)
+
+}  // namespace mpm::solid

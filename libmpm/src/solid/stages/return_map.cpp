@@ -1,0 +1,41 @@
+// Return mapping in principal (SVD) space (paper sec. 4.2): F^E_trial = U Sigma V^T,
+// project log(Sigma) onto the Drucker-Prager cone (Klar et al. 2016, with the volume
+// correction of Tampubolon et al. 2017) or the von Mises cylinder (paper sec. 4.2.2),
+// F^E = U exp(H) V^T. Elastic materials are skipped; the model is chosen outside the loop.
+#include <mpm/core/finite_guard.h>
+#include <mpm/solid/stages/return_map.h>
+
+#include <tbb/parallel_for.h>
+
+namespace mpm::stages {
+
+template <int dim>
+bool any_plastic(const std::vector<Material<dim>>& materials) {
+  for (const auto& m : materials)
+    if (!std::holds_alternative<plasticity::NoPlasticity>(m.plasticity)) return true;
+  return false;
+}
+
+template <int dim>
+void ReturnMap<dim>::run(MpmState<dim>& s) {
+  Particles<dim>& P = s.particles;
+  for (std::size_t m = 0; m < materials_.size(); ++m) {
+    std::visit([&](const auto& model) {
+      using Model = std::decay_t<decltype(model)>;
+      if constexpr (!std::is_same_v<Model, plasticity::NoPlasticity>) {
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.size(), 4096), [&](const auto& r) {
+          for (std::size_t p = r.begin(); p != r.end(); ++p)
+            if (P.material[p] == m) model.project(P.F[p], P.plastic[p]);
+        });
+      }
+    }, materials_[m].plasticity);
+  }
+  check_finite(P.F, name(), "particle", "elastic deformation gradient F^E");
+}
+
+template bool any_plastic(const std::vector<Material<2>>&);
+template bool any_plastic(const std::vector<Material<3>>&);
+template class ReturnMap<2>;
+template class ReturnMap<3>;
+
+}  // namespace mpm::stages

@@ -1,0 +1,51 @@
+// Grid forces of the explicit step (paper sec. 3.2, eq. 1-2):
+//   f_i = - sum_p V_p^0 P(F_p^E) (F_p^E)^T grad w_ip = - sum_p V_p^0 tau_p grad w_ip,
+// with tau = P F^T the Kirchhoff stress of the elastic part (multiplicative plasticity keeps
+// all stress in F^E). The constitutive model is chosen per material by std::visit outside
+// the particle loop. Precondition: particles sorted into buckets (stage 'sort').
+#include <mpm/core/detail/bucket_loops.h>
+#include <mpm/core/finite_guard.h>
+#include <mpm/solid/stages/stress_forces.h>
+
+#include <tbb/parallel_for.h>
+
+namespace mpm::stages {
+
+template <int dim>
+void StressForces<dim>::run(MpmState<dim>& s) {
+  Particles<dim>& P = s.particles;
+  weighted_stress_.resize(P.size());
+  for (std::size_t m = 0; m < materials_.size(); ++m) {
+    std::visit([&](const auto& model) {
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.size(), 4096), [&](const auto& r) {
+        for (std::size_t p = r.begin(); p != r.end(); ++p)
+          if (P.material[p] == m)
+            weighted_stress_[p] = P.volume0[p] * model.first_piola(P.F[p]) * P.F[p].transpose();
+      });
+    }, materials_[m].elastic);
+  }
+  check_finite(weighted_stress_, name(), "particle", "Kirchhoff stress");
+
+  SparseGrid<dim>& g = s.grid;
+  g.force.assign(g.node_storage(), Vec<dim>::Zero());
+  std::array<detail::ChannelView, dim> channels;
+  for (int a = 0; a < dim; ++a) channels[a] = detail::component_view<dim>(g.force, a);
+  const double inv_dx = 1.0 / g.dx();
+  std::visit([&](const auto& kernel) {
+    using K = std::decay_t<decltype(kernel)>;
+    detail::scatter<dim, dim>(g, s.buckets, channels, [&](std::uint32_t p, const detail::PatchFrame<dim>& f, double* patch) {
+      detail::Stencil<dim, K::support> st;
+      st.compute(kernel, f.cells(P.x[p]), f.origin);
+      const Mat<dim> A = -inv_dx * weighted_stress_[p];
+      st.for_each_node([&](int node, double, const Vec<dim>& grad, const Vec<dim>&) {
+        const Vec<dim> fi = A * grad;
+        for (int a = 0; a < dim; ++a) patch[node * dim + a] += fi[a];
+      });
+    });
+  }, s.kernel);
+}
+
+template class StressForces<2>;
+template class StressForces<3>;
+
+}  // namespace mpm::stages

@@ -1,0 +1,383 @@
+// Constitutive models, return maps and the SVD under them.
+//
+// One generic test runs over every alternative of constitutive::ElasticModel in 2D and 3D
+// (adding a model to the variant adds it here): P = dpsi/dF and dP by central differences,
+// the rest state, rotation invariance. The return maps are checked the same way: a projected
+// state lies on the yield surface, projecting twice changes nothing, admissible states are left
+// alone; then the Drucker-Prager volume correction and cohesion on their own.
+#include <doctest/doctest.h>
+
+#include <mpm/constitutive/elastic_model.h>
+#include <mpm/core/config.h>
+#include <mpm/core/error.h>
+#include <mpm/math/svd.h>
+#include <mpm/plasticity/plasticity_model.h>
+#include <mpm/solid/material.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <numbers>
+#include <random>
+#include <string>
+#include <tuple>
+#include <type_traits>
+#include <utility>
+#include <variant>
+#include <vector>
+
+using namespace mpm;
+
+namespace {
+
+template <class Model>
+struct DimOf;
+template <template <int> class Model, int dim>
+struct DimOf<Model<dim>> {
+  static constexpr int value = dim;
+};
+
+template <class Variant>
+struct AsTuple;
+template <class... Types>
+struct AsTuple<std::variant<Types...>> {
+  using type = std::tuple<Types...>;
+};
+
+using AllElasticModels = decltype(std::tuple_cat(
+    std::declval<AsTuple<constitutive::ElasticModel<2>>::type>(),
+    std::declval<AsTuple<constitutive::ElasticModel<3>>::type>()));
+
+const constitutive::Lame kLame = constitutive::Lame::from_youngs_poisson(1e6, 0.3);
+
+double uniform(std::mt19937& rng, double lo, double hi) {
+  return std::uniform_real_distribution<double>(lo, hi)(rng);
+}
+
+// Rotations built without the SVD under test.
+template <int dim>
+Mat<dim> random_rotation(std::mt19937& rng) {
+  const double angle = uniform(rng, -std::numbers::pi, std::numbers::pi);
+  if constexpr (dim == 2) {
+    return Eigen::Rotation2Dd(angle).toRotationMatrix();
+  } else {
+    const Vec<3> axis = Vec<3>::NullaryExpr([&] { return uniform(rng, -1.0, 1.0); }).normalized();
+    return Eigen::AngleAxisd(angle, axis).toRotationMatrix();
+  }
+}
+
+template <int dim>
+Mat<dim> random_matrix(std::mt19937& rng) {
+  return Mat<dim>::NullaryExpr([&] { return uniform(rng, -1.0, 1.0); });
+}
+
+// R1 diag(stretch) R2 with random rotations.
+template <int dim>
+Mat<dim> with_stretches(std::mt19937& rng, const Vec<dim>& stretch) {
+  return random_rotation<dim>(rng) * stretch.asDiagonal() * random_rotation<dim>(rng);
+}
+
+template <int dim>
+Vec<dim> random_stretches(std::mt19937& rng, double lo, double hi) {
+  return Vec<dim>::NullaryExpr([&] { return uniform(rng, lo, hi); });
+}
+
+template <class Model, int dim>
+Mat<dim> finite_difference_gradient(const Model& model, const Mat<dim>& F, double h) {
+  Mat<dim> P;
+  for (int i = 0; i < dim; ++i) {
+    for (int j = 0; j < dim; ++j) {
+      Mat<dim> E = Mat<dim>::Zero();
+      E(i, j) = h;
+      P(i, j) = (model.energy(F + E) - model.energy(F - E)) / (2 * h);
+    }
+  }
+  return P;
+}
+
+double relative_error(const auto& approx, const auto& exact) {
+  return (approx - exact).norm() / exact.norm();
+}
+
+}  // namespace
+
+TEST_CASE_TEMPLATE_DEFINE("elastic model: P = dpsi/dF, dP, rest state, rotation invariance", Model,
+                          elastic_models) {
+  constexpr int dim = DimOf<Model>::value;
+  INFO(std::string(Model::name), " in ", dim, "D");
+  const Model model{kLame.mu, kLame.lambda};
+  const double stress_scale = kLame.p_wave_modulus();
+  std::mt19937 rng(20170);
+
+  CHECK(std::abs(model.energy(Mat<dim>::Identity())) <= 1e-12 * stress_scale);
+  CHECK(model.first_piola(Mat<dim>::Identity()).norm() <= 1e-12 * stress_scale);
+
+  std::vector<Mat<dim>> samples;
+  for (int n = 0; n < 6; ++n)
+    samples.push_back(with_stretches<dim>(rng, random_stretches<dim>(rng, 0.6, 1.5)));
+  // Repeated singular values: the divided differences of the differential meet 0/0.
+  Vec<dim> repeated = Vec<dim>::Constant(1.2);
+  repeated(dim - 1) = 0.8;
+  samples.push_back(with_stretches<dim>(rng, repeated));
+  samples.push_back(random_rotation<dim>(rng) * 1.1);
+  // Inverted F: the Neo-Hookean energy is infinite there (its clamped stress is checked below).
+  if constexpr (!std::is_same_v<Model, constitutive::NeoHookean<dim>>) {
+    for (int n = 0; n < 3; ++n) {
+      Vec<dim> stretch = random_stretches<dim>(rng, 0.9, 1.5);
+      stretch(dim - 1) = -uniform(rng, 0.4, 0.6);
+      samples.push_back(with_stretches<dim>(rng, stretch));
+    }
+  }
+
+  for (const Mat<dim>& F : samples) {
+    CAPTURE(F);
+    const Mat<dim> P = model.first_piola(F);
+    CHECK(relative_error(finite_difference_gradient(model, F, 1e-6), P) < 1e-6);
+
+    const Mat<dim> dF = random_matrix<dim>(rng);
+    const double h = 1e-6;
+    const Mat<dim> dP_fd =
+        (model.first_piola(F + h * dF) - model.first_piola(F - h * dF)) / (2 * h);
+    CHECK(relative_error(dP_fd, model.first_piola_differential(F, dF)) < 1e-6);
+
+    const Mat<dim> R = random_rotation<dim>(rng);
+    CHECK(model.energy(R * F) == doctest::Approx(model.energy(F)).epsilon(1e-11));
+    CHECK(relative_error(model.first_piola(R * F), R * P) < 1e-11);
+  }
+}
+TEST_CASE_TEMPLATE_APPLY(elastic_models, AllElasticModels);
+
+TEST_CASE("Neo-Hookean stress stays finite and restoring for inverted F") {
+  const constitutive::NeoHookean<3> model{kLame.mu, kLame.lambda};
+  const Mat<3> F = Vec<3>(1.1, 0.9, -0.3).asDiagonal();
+  const Mat<3> P = model.first_piola(F);
+  CHECK(P.allFinite());
+  // -P is the force on F; along cof(F) = dJ/dF it must increase J.
+  CHECK((P.array() * constitutive::detail::cofactor(F).array()).sum() < 0.0);
+}
+
+TEST_CASE_TEMPLATE("rotation-variant SVD and polar decomposition", Matrix, Mat<2>, Mat<3>) {
+  constexpr int dim = Matrix::RowsAtCompileTime;
+  std::mt19937 rng(42);
+  std::vector<Mat<dim>> samples = {Mat<dim>::Identity(), -Mat<dim>::Identity(), Mat<dim>::Zero(),
+                                   2.0 * Mat<dim>::Identity(), random_rotation<dim>(rng)};
+  Mat<dim> rank_one = random_matrix<dim>(rng).col(0) * random_matrix<dim>(rng).row(0);
+  samples.push_back(rank_one);
+  Mat<dim> reflection = Mat<dim>::Identity();
+  reflection(0, 0) = -1;
+  samples.push_back(random_rotation<dim>(rng) * reflection);
+  samples.push_back(random_rotation<dim>(rng) * Vec<dim>::Constant(1e-9).asDiagonal());
+  for (int n = 0; n < 20; ++n) samples.push_back(random_matrix<dim>(rng));
+
+  for (const Mat<dim>& F : samples) {
+    CAPTURE(F);
+    const math::Svd<dim> f = math::svd(F);
+    CHECK((f.U * f.sigma.asDiagonal() * f.V.transpose() - F).norm() <= 1e-14 * F.norm());
+    CHECK((f.U.transpose() * f.U - Mat<dim>::Identity()).norm() < 1e-14);
+    CHECK((f.V.transpose() * f.V - Mat<dim>::Identity()).norm() < 1e-14);
+    CHECK(f.U.determinant() == doctest::Approx(1.0));
+    CHECK(f.V.determinant() == doctest::Approx(1.0));
+    for (int i = 0; i + 1 < dim; ++i) {
+      CHECK(f.sigma(i) >= 0.0);
+      CHECK(f.sigma(i) >= std::abs(f.sigma(i + 1)));
+    }
+    if (std::abs(F.determinant()) > 1e-12) CHECK((f.sigma(dim - 1) < 0) == (F.determinant() < 0));
+
+    const math::Polar<dim> p = math::polar(F);
+    CHECK((p.R * p.S - F).norm() <= 1e-14 * F.norm());
+    CHECK((p.R.transpose() * p.R - Mat<dim>::Identity()).norm() < 1e-14);
+    CHECK(p.R.determinant() == doctest::Approx(1.0));
+    CHECK((p.S - p.S.transpose()).norm() <= 1e-14 * F.norm());
+  }
+}
+
+namespace {
+
+// Return maps under test, each in a few parameter sets.
+template <class Model>
+std::vector<Model> return_maps();
+template <>
+std::vector<plasticity::DruckerPrager<2>> return_maps() {
+  return {{30.0, 0.0, kLame}, {40.0, 2e4, kLame}, {0.0, 1e4, kLame}};
+}
+template <>
+std::vector<plasticity::DruckerPrager<3>> return_maps() {
+  return {{30.0, 0.0, kLame}, {40.0, 2e4, kLame}, {0.0, 1e4, kLame}};
+}
+template <>
+std::vector<plasticity::VonMises<2>> return_maps() {
+  return {{2e4, kLame}};
+}
+template <>
+std::vector<plasticity::VonMises<3>> return_maps() {
+  return {{2e4, kLame}};
+}
+
+}  // namespace
+
+TEST_CASE_TEMPLATE("return map: lands on the yield surface, idempotent, admissible states untouched",
+                   Model, plasticity::DruckerPrager<2>, plasticity::DruckerPrager<3>,
+                   plasticity::VonMises<2>, plasticity::VonMises<3>) {
+  constexpr int dim = DimOf<Model>::value;
+  const constitutive::HenckyStVK<dim> elastic{kLame.mu, kLame.lambda};
+  std::mt19937 rng(2016);
+  for (const Model& model : return_maps<Model>()) {
+    int outside = 0, inside = 0;
+    for (int n = 0; n < 200; ++n) {
+      // Every other trial is mildly compressed with little shear, mostly admissible.
+      const Vec<dim> stretch = n % 2 ? random_stretches<dim>(rng, 0.97, 0.995)
+                                     : random_stretches<dim>(rng, 0.9, 1.1);
+      const Mat<dim> trial = with_stretches<dim>(rng, stretch);
+      CAPTURE(trial);
+      Mat<dim> Fe = trial;
+      double plastic = 0.0;
+      if (model.yield_function(trial) <= 0.0) {
+        ++inside;
+        CHECK_FALSE(model.project(Fe, plastic));
+        CHECK(Fe == trial);
+        CHECK(plastic == 0.0);
+        continue;
+      }
+      ++outside;
+      const double stress_scale = (elastic.first_piola(trial) * trial.transpose()).norm();
+      REQUIRE(model.project(Fe, plastic));
+      CHECK(std::abs(model.yield_function(Fe)) <= 1e-10 * stress_scale);
+      CHECK(Fe.determinant() > 0.0);
+
+      Mat<dim> again = Fe;
+      double plastic_again = plastic;
+      model.project(again, plastic_again);
+      CHECK((again - Fe).norm() <= 1e-12 * Fe.norm());
+      CHECK(plastic_again == doctest::Approx(plastic).epsilon(1e-12));
+    }
+    CHECK(outside > 20);
+    CHECK(inside > 20);
+  }
+}
+
+TEST_CASE_TEMPLATE("von Mises flow is isochoric", Matrix, Mat<2>, Mat<3>) {
+  constexpr int dim = Matrix::RowsAtCompileTime;
+  const plasticity::VonMises<dim> model(2e4, kLame);
+  std::mt19937 rng(3);
+  Vec<dim> stretch = Vec<dim>::Constant(1.0);
+  stretch(0) = 1.3;
+  Mat<dim> Fe = with_stretches<dim>(rng, stretch);
+  const double J = Fe.determinant();
+  double plastic = 0.0;
+  REQUIRE(model.project(Fe, plastic));
+  CHECK(Fe.determinant() == doctest::Approx(J).epsilon(1e-13));
+  CHECK(plastic == 0.0);
+}
+
+TEST_CASE_TEMPLATE("Drucker-Prager volume correction: no volume gain", Matrix, Mat<2>, Mat<3>) {
+  constexpr int dim = Matrix::RowsAtCompileTime;
+  const plasticity::DruckerPrager<dim> sand(30.0, 0.0, kLame);
+
+  // Expand by 2 % per step for 10 steps, then compress back. Each expansion step is projected
+  // to the apex (stress free); with the correction the material is back at its original volume
+  // and stress free, without it the elastic state ends compressed by 1.02^-10 per axis and
+  // would push the material out to the expanded volume.
+  const auto expand_and_return = [&](bool correct) {
+    Mat<dim> Fe = Mat<dim>::Identity();
+    double plastic = 0.0;
+    for (int step = 0; step < 20; ++step) {
+      Fe *= step < 10 ? 1.02 : 1.0 / 1.02;
+      if (!correct) plastic = 0.0;
+      sand.project(Fe, plastic);
+    }
+    return Fe;
+  };
+  const Mat<dim> corrected = expand_and_return(true);
+  CHECK((corrected - Mat<dim>::Identity()).norm() < 1e-12);
+  CHECK(expand_and_return(false).determinant() == doctest::Approx(std::pow(1.02, -10 * dim)));
+
+  // In general: log det Fe + plastic is the log of the total volume change, for any sequence
+  // of dilations, compressions and shears, with or without cohesion.
+  std::mt19937 rng(17);
+  for (const auto& model : {sand, plasticity::DruckerPrager<dim>(35.0, 5e3, kLame)}) {
+    Mat<dim> Fe = Mat<dim>::Identity();
+    double plastic = 0.0;
+    double log_J_total = 0.0;
+    for (int step = 0; step < 100; ++step) {
+      const Mat<dim> increment = with_stretches<dim>(rng, random_stretches<dim>(rng, 0.97, 1.03));
+      log_J_total += std::log(increment.determinant());
+      Fe = increment * Fe;
+      model.project(Fe, plastic);
+      CHECK(plastic >= 0.0);
+      CHECK(std::log(Fe.determinant()) + plastic ==
+            doctest::Approx(log_J_total).scale(1.0).epsilon(1e-12));
+    }
+  }
+}
+
+TEST_CASE_TEMPLATE("Drucker-Prager cohesion moves the apex to tr tau = 3 c cot(phi)", Matrix,
+                   Mat<2>, Mat<3>) {
+  constexpr int dim = Matrix::RowsAtCompileTime;
+  const double phi = 35.0, cohesion = 5e3;
+  const plasticity::DruckerPrager<dim> cohesive(phi, cohesion, kLame);
+  const plasticity::DruckerPrager<dim> dry(phi, 0.0, kLame);
+  const constitutive::HenckyStVK<dim> elastic{kLame.mu, kLame.lambda};
+  const auto trace_tau = [&](const Mat<dim>& F) {
+    return (elastic.first_piola(F) * F.transpose()).trace();
+  };
+  const double apex = 3.0 * cohesion / std::tan(phi * std::numbers::pi / 180.0);
+
+  // Far beyond the apex in tension: both project to their apex.
+  Mat<dim> Fe = 1.2 * Mat<dim>::Identity();
+  double plastic = 0.0;
+  REQUIRE(cohesive.project(Fe, plastic));
+  CHECK(trace_tau(Fe) == doctest::Approx(apex).epsilon(1e-10));
+  CHECK(cohesive.yield_function(Fe) == doctest::Approx(0.0).scale(apex).epsilon(1e-12));
+  Fe = 1.2 * Mat<dim>::Identity();
+  plastic = 0.0;
+  REQUIRE(dry.project(Fe, plastic));
+  CHECK((Fe - Mat<dim>::Identity()).norm() < 1e-14);
+
+  // A hydrostatic tension below the cohesive apex: admissible only with cohesion.
+  const double log_stretch = 0.5 * apex / (dim * (dim * kLame.lambda + 2 * kLame.mu));
+  const Mat<dim> tension = std::exp(log_stretch) * Mat<dim>::Identity();
+  CHECK(trace_tau(tension) == doctest::Approx(0.5 * apex));
+  Fe = tension;
+  plastic = 0.0;
+  CHECK_FALSE(cohesive.project(Fe, plastic));
+  CHECK(dry.project(Fe, plastic));
+}
+
+TEST_CASE("parse_material: models, moduli, wave speed and rejected pairings") {
+  const Config sand = Config::parse(R"(
+name: sand
+density: 1600
+youngs_modulus: 1.0e6
+poisson_ratio: 0.3
+elasticity: hencky_stvk
+plasticity:
+  model: drucker_prager
+  friction_angle: 35
+  cohesion: 100
+)");
+  const Material<3> m = parse_material<3>(sand);
+  CHECK(m.name == "sand");
+  CHECK(std::holds_alternative<constitutive::HenckyStVK<3>>(m.elastic));
+  CHECK(std::holds_alternative<plasticity::DruckerPrager<3>>(m.plasticity));
+  CHECK(m.lame.mu == doctest::Approx(kLame.mu));
+  CHECK(m.lame.lambda == doctest::Approx(kLame.lambda));
+  CHECK(m.wave_speed() == doctest::Approx(std::sqrt((kLame.lambda + 2 * kLame.mu) / 1600)));
+  const Mat<3> F = Vec<3>(1.1, 0.95, 1.02).asDiagonal();
+  const constitutive::HenckyStVK<3> hencky{kLame.mu, kLame.lambda};
+  CHECK(m.energy(F) == doctest::Approx(hencky.energy(F)));
+  CHECK(relative_error(m.kirchhoff(F), Mat<3>(hencky.first_piola(F) * F.transpose())) < 1e-14);
+
+  const Material<2> jelly = parse_material<2>(
+      Config::parse("density: 1000\nyoungs_modulus: 1e5\npoisson_ratio: 0.4\n"));
+  CHECK(jelly.name == "material");
+  CHECK(std::holds_alternative<constitutive::FixedCorotated<2>>(jelly.elastic));
+  CHECK(std::holds_alternative<plasticity::NoPlasticity>(jelly.plasticity));
+
+  const std::string base = "density: 1000\nyoungs_modulus: 1e5\n";
+  const std::string von_mises = "plasticity: {model: von_mises, yield_stress: 1e3}\n";
+  CHECK_THROWS_WITH_AS(parse_material<3>(Config::parse(base + "poisson_ratio: 0.3\n" + von_mises)),
+                       doctest::Contains("hencky_stvk"), InputError);
+  CHECK_THROWS_AS(parse_material<3>(Config::parse(base + "poisson_ratio: 0.5\n")), InputError);
+  const std::string no_yield_stress = "elasticity: hencky_stvk\nplasticity: {model: von_mises}\n";
+  CHECK_THROWS_AS(parse_material<3>(Config::parse(base + "poisson_ratio: 0.3\n" + no_yield_stress)),
+                  InputError);
+}
