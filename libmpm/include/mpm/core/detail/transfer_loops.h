@@ -14,55 +14,70 @@
 
 namespace mpm::detail {
 
-template <int dim>
-constexpr int patch_stride(int axis) { return ipow(patch_width<dim>, axis); }
-
-//! Adds w (c[0] + sum_{a <= axis} rel_a c[a+1]) (without the rel terms unless `affine`) for
-//! the stencil nodes of axes 0..axis, starting at patch index `offset`, into the patch.
-template <int axis, bool affine, int dim, int S, class T, class Node>
-void spread(const Stencil<dim, S, T>& st, int offset, const Node (&c)[axis + 2], T* patch) {
+//! Adds w (c[0] + sum_a rel_a c[a+1]) for every stencil node into the patch (Ch values per
+//! node); the rel terms only when `affine`.
+template <bool affine, int dim, int S, class T, class Node>
+[[gnu::always_inline]] inline void spread(const Stencil<dim, S, T>& st, const Node (&c)[dim + 1], T* patch) {
   constexpr int Ch = Node::RowsAtCompileTime;
-  if constexpr (axis == 0) {
+  constexpr int W = patch_width<dim>;
+  const auto row = [&](int offset, const Node& q, const Node& e) {  // nodes along axis 0
     for (int i = 0; i < S; ++i) {
       Eigen::Map<Node> out(patch + (offset + i) * Ch);
-      if constexpr (affine) out += st.w[0][i] * c[0] + (st.w[0][i] * st.rel[0][i]) * c[1];
-      else out += st.w[0][i] * c[0];
+      if constexpr (affine) out += st.w[0][i] * q + (st.w[0][i] * st.rel[0][i]) * e;
+      else out += st.w[0][i] * q;
     }
+  };
+  if constexpr (dim == 2) {
+    for (int j = 0; j < S; ++j)
+      row(st.patch_offset + W * j, st.w[1][j] * (c[0] + st.rel[1][j] * c[2]), st.w[1][j] * c[1]);
   } else {
     for (int k = 0; k < S; ++k) {
-      const T w = st.w[axis][k];
-      Node inner[axis + 1];
-      if constexpr (affine) {
-        inner[0] = w * (c[0] + st.rel[axis][k] * c[axis + 1]);
-        for (int a = 1; a <= axis; ++a) inner[a] = w * c[a];
-      } else {
-        inner[0] = w * c[0];
-      }
-      spread<axis - 1, affine>(st, offset + k * patch_stride<dim>(axis), inner, patch);
+      const T wk = st.w[2][k];
+      const Node qk = wk * (c[0] + st.rel[2][k] * c[3]), bk = wk * c[2], ek = wk * c[1];
+      for (int j = 0; j < S; ++j)
+        row(st.patch_offset + W * (j + W * k), st.w[1][j] * (qk + st.rel[1][j] * bk), st.w[1][j] * ek);
     }
   }
 }
 
-//! Moments of the node values v (Ch values apart in the patch) over the stencil nodes of axes
-//! 0..axis starting at patch index `offset`: s = sum w v, t[a] = sum w rel_a v for a <= axis.
-template <int axis, int Ch, int dim, int S, class T, class VecT>
-void collect(const Stencil<dim, S, T>& st, int offset, const T* patch, VecT& s, VecT (&t)[axis + 1]) {
-  s.setZero();
-  for (VecT& ta : t) ta.setZero();
-  if constexpr (axis == 0) {
+//! Moments of the node values v (Ch values apart in the patch) over the stencil:
+//! s = sum w v and t[a] = sum w rel_a v.
+template <int Ch, int dim, int S, class T, class VecT>
+[[gnu::always_inline]] inline void collect(const Stencil<dim, S, T>& st, const T* patch, VecT& s, VecT (&t)[dim]) {
+  constexpr int W = patch_width<dim>;
+  const auto row = [&](int offset, VecT& rs, VecT& rt) {  // nodes along axis 0
+    rs.setZero();
+    rt.setZero();
     for (int i = 0; i < S; ++i) {
       const Eigen::Map<const VecT> v(patch + (offset + i) * Ch);
-      s.noalias() += st.w[0][i] * v;
-      t[0].noalias() += (st.w[0][i] * st.rel[0][i]) * v;
+      rs.noalias() += st.w[0][i] * v;
+      rt.noalias() += (st.w[0][i] * st.rel[0][i]) * v;
+    }
+  };
+  s.setZero();
+  for (VecT& ta : t) ta.setZero();
+  VecT rs, rt;
+  if constexpr (dim == 2) {
+    for (int j = 0; j < S; ++j) {
+      row(st.patch_offset + W * j, rs, rt);
+      s.noalias() += st.w[1][j] * rs;
+      t[0].noalias() += st.w[1][j] * rt;
+      t[1].noalias() += (st.w[1][j] * st.rel[1][j]) * rs;
     }
   } else {
     for (int k = 0; k < S; ++k) {
-      VecT sk, tk[axis];
-      collect<axis - 1, Ch>(st, offset + k * patch_stride<dim>(axis), patch, sk, tk);
-      const T w = st.w[axis][k];
-      s.noalias() += w * sk;
-      t[axis].noalias() += (w * st.rel[axis][k]) * sk;
-      for (int a = 0; a < axis; ++a) t[a].noalias() += w * tk[a];
+      VecT sk = VecT::Zero(), t0k = VecT::Zero(), t1k = VecT::Zero();
+      for (int j = 0; j < S; ++j) {
+        row(st.patch_offset + W * (j + W * k), rs, rt);
+        sk.noalias() += st.w[1][j] * rs;
+        t0k.noalias() += st.w[1][j] * rt;
+        t1k.noalias() += (st.w[1][j] * st.rel[1][j]) * rs;
+      }
+      const T wk = st.w[2][k];
+      s.noalias() += wk * sk;
+      t[0].noalias() += wk * t0k;
+      t[1].noalias() += wk * t1k;
+      t[2].noalias() += (wk * st.rel[2][k]) * sk;
     }
   }
 }
@@ -81,7 +96,7 @@ void p2g(const PS& P, const ParticleBuckets<dim>& buckets, const K& kernel,
     Node c[dim + 1];
     c[0] << m, m * P.v[p];
     for (int a = 0; a < dim; ++a) c[a + 1] << T(0), (m * dx) * P.C[p].col(a);
-    spread<dim - 1, affine>(st, st.patch_offset, c, patch);
+    spread<affine>(st, c, patch);
   });
 }
 
@@ -109,7 +124,7 @@ void g2p(PS& P, const ParticleBuckets<dim>& buckets, const K& kernel, const Spar
       P.v[p] = flip_ratio * (P.v[p] + dv) + (1 - flip_ratio) * v_pic;
     } else {
       VecT t[dim];  // column a of B_p = sum w v (x_i - x_p)^T, in cells
-      collect<dim - 1, int(Ch)>(st, st.patch_offset, patch, v_pic, t);
+      collect<int(Ch)>(st, patch, v_pic, t);
       const VecT inv_D = st.inverse_inertia() * inv_dx;
       for (int a = 0; a < dim; ++a) P.C[p].col(a) = t[a] * inv_D[a];
       P.v[p] = v_pic;
