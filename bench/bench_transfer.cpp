@@ -5,14 +5,21 @@
 //   bench_transfer                                     (the paper's sizes, double and float)
 //   bench_transfer --particles-spacing 0.0078125 --dx 0.015625 --repeat 1   (quick run)
 //
-// For each precision, input order (sorted by grid block / randomly shuffled) and thread count
-// it prints the median seconds of the solver's transfers and of a textbook reference run in
-// the same process: a dense uniform grid of (mass, momentum) and a plain loop over the
-// particles in input order (single-threaded). The solver orders its own particles, so its
-// timings include sort_into_buckets, reported separately ("sort") and summed ("step").
-// Node normalisation v_i = (m v)_i / m_i is untimed on both sides. Before timing, the grids
-// after P2G and the particles after G2P of both implementations are compared; the program
-// exits 1 when they differ by more than round-off.
+// For each precision, input order and thread count it prints the median seconds of the
+// solver's transfers and of a textbook reference run in the same process: a dense uniform
+// grid of (mass, momentum) and a plain loop over the particles in input order (one thread).
+//   sorted:   particles stored in the solver's bucket order (as after a solver's first sort);
+//   shuffled: the same particles stored in random order.
+// The solver orders its own particles (sort_into_buckets: block keys and a counting sort of
+// an index), so its "sort" column is part of its cost and is also summed into "sort+P2G" and
+// "step" (sort + P2G + G2P). P2G includes zeroing the grid on both sides; the normalisation
+// v_i = (m v)_i / m_i between P2G and G2P is untimed on both sides.
+// Double precision runs the library (mpm::particles_to_grid / grid_to_particles); the library
+// is double only, so single precision runs the library's scalar-generic loops
+// (detail/transfer_loops.h) on a float copy of the particles and float grid channels.
+// Before timing, the grids after P2G and the particles after G2P of both implementations are
+// compared; the program exits 1 when they differ by more than round-off.
+#include <mpm/core/detail/transfer_loops.h>
 #include <mpm/core/transfer.h>
 
 #include <CLI/CLI.hpp>
@@ -39,8 +46,11 @@ struct Options {
   std::string precision = "both";
 };
 
+constexpr double dt = 1e-4;  // [s]; G2P advects x by dt v
+
 // 1. The benchmark particles: a lattice over [1/8, 7/8]^3 with reproducible pseudo-random
-//    velocities and affine matrices (a transfer of a uniform field would hide errors).
+//    velocities and affine matrices (a uniform field would hide transfer errors), stored in
+//    the solver's bucket order, and a shuffled copy.
 Particles<3> lattice(const Options& o) {
   const int n = static_cast<int>(std::lround(0.75 / o.spacing)) + 1;
   const double mass = 1000.0 * o.spacing * o.spacing * o.spacing;  // water density [kg/m^3]
@@ -54,6 +64,9 @@ Particles<3> lattice(const Options& o) {
         P.push_back(x, Vec<3>(u(rng), u(rng), u(rng)), mass, mass / 1000.0, 0);
         for (int a = 0; a < 9; ++a) P.C.back().data()[a] = 10.0 * u(rng);
       }
+  SparseGrid<3> grid(Vec<3>::Zero(), Vec<3>::Ones(), o.dx);
+  ParticleBuckets<3> buckets;
+  P.permute(bucket_order<3, double>(P.x, Kernel{QuadraticBSpline{}}, grid, buckets));
   return P;
 }
 
@@ -66,10 +79,9 @@ Particles<3> shuffled(const Particles<3>& P) {
   return out;
 }
 
-// 2. The reference: the textbook APIC transfer (Jiang et al. 2015) on a dense grid, one plain
-//    loop over the particles in their input order, quadratic weights computed per particle.
+// The transfer state of the reference and of the single-precision solver.
 template <class T>
-struct ReferenceParticles {
+struct ParticleArrays {
   std::vector<V3<T>> x, v;
   std::vector<M3<T>> C;
   std::vector<T> mass;
@@ -88,104 +100,236 @@ struct ReferenceParticles {
   }
 };
 
+// 2. The reference: the textbook APIC transfer (Jiang et al. 2015) on a dense grid, one plain
+//    loop over the particles in their input order, quadratic weights computed per particle.
 template <class T>
-struct DenseGrid {
+class Reference {
+public:
+  explicit Reference(const Options& o)
+      : n_(static_cast<int>(std::lround(1.0 / o.dx)) + 1), dx_(static_cast<T>(o.dx)),
+        nodes_(static_cast<std::size_t>(n_) * n_ * n_) {}
+
+  void load(const Particles<3>& input) { P_.assign(input); }
+
+  void p2g() {
+    std::fill(nodes_.begin(), nodes_.end(), Node{});
+    const T inv_dx = 1 / dx_;
+    for (std::size_t p = 0; p < P_.x.size(); ++p) {
+      const Weights q(P_.x[p], inv_dx);
+      const T m = P_.mass[p];
+      const V3<T> mv = m * P_.v[p];
+      const M3<T> affine = m * P_.C[p];
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+          for (int k = 0; k < 3; ++k) {
+            const V3<T> dpos = (V3<T>(i, j, k) - q.fx) * dx_;
+            const T weight = q.w[i][0] * q.w[j][1] * q.w[k][2];
+            Node& node = at(q.base[0] + i, q.base[1] + j, q.base[2] + k);
+            node.mass += weight * m;
+            node.momentum += weight * (mv + affine * dpos);
+          }
+    }
+  }
+
+  void normalise() {
+    for (Node& g : nodes_) g.momentum = g.mass > 0 ? V3<T>(g.momentum / g.mass) : V3<T>::Zero();
+  }
+
+  void g2p() {
+    const T inv_dx = 1 / dx_;
+    const T inv_D = 4 * inv_dx * inv_dx;  // APIC D_p^-1 for quadratic weights
+    for (std::size_t p = 0; p < P_.x.size(); ++p) {
+      const Weights q(P_.x[p], inv_dx);
+      V3<T> v = V3<T>::Zero();
+      M3<T> B = M3<T>::Zero();
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+          for (int k = 0; k < 3; ++k) {
+            const V3<T> dpos = (V3<T>(i, j, k) - q.fx) * dx_;
+            const T weight = q.w[i][0] * q.w[j][1] * q.w[k][2];
+            const V3<T>& vi = at(q.base[0] + i, q.base[1] + j, q.base[2] + k).momentum;
+            v += weight * vi;
+            B.noalias() += (weight * vi) * dpos.transpose();
+          }
+      P_.v[p] = v;
+      P_.C[p] = B * inv_D;
+      P_.x[p] += static_cast<T>(dt) * v;
+    }
+  }
+
+  int nodes_per_axis() const { return n_; }
+  double mass(const IVec<3>& c) { return at(c[0], c[1], c[2]).mass; }
+  Vec<3> momentum(const IVec<3>& c) { return at(c[0], c[1], c[2]).momentum.template cast<double>(); }
+  const ParticleArrays<T>& particles() const { return P_; }
+
+private:
   struct Node {
     T mass = 0;
     V3<T> momentum = V3<T>::Zero();  // velocity after normalise()
   };
-  int n;  // nodes per axis; node (i, j, k) at (i, j, k) dx
-  T dx;
-  std::vector<Node> nodes;
+  // Quadratic B-spline weights of the nodes base, base+1, base+2 on every axis.
+  struct Weights {
+    Eigen::Vector3i base;
+    V3<T> fx;    // particle position minus base [cells]
+    V3<T> w[3];  // w[node][axis]
+    Weights(const V3<T>& x, T inv_dx) {
+      const V3<T> xi = x * inv_dx;
+      base = (xi.array() - T(0.5)).floor().template cast<int>();
+      fx = xi - base.template cast<T>();
+      w[0] = T(0.5) * (T(1.5) - fx.array()).square();
+      w[1] = T(0.75) - (fx.array() - T(1)).square();
+      w[2] = T(0.5) * (fx.array() - T(0.5)).square();
+    }
+  };
+  Node& at(int i, int j, int k) { return nodes_[(static_cast<std::size_t>(k) * n_ + j) * n_ + i]; }
 
-  DenseGrid(int nodes_per_axis, T spacing)
-      : n(nodes_per_axis), dx(spacing), nodes(static_cast<std::size_t>(n) * n * n) {}
-  Node& at(int i, int j, int k) { return nodes[(static_cast<std::size_t>(k) * n + j) * n + i]; }
-
-  void normalise() {
-    for (Node& g : nodes) g.momentum = g.mass > 0 ? V3<T>(g.momentum / g.mass) : V3<T>::Zero();
-  }
+  int n_;  // nodes per axis; node (i, j, k) at (i, j, k) dx
+  T dx_;
+  std::vector<Node> nodes_;
+  ParticleArrays<T> P_;
 };
 
-// Quadratic B-spline weights of the 3 nodes base, base+1, base+2 on every axis.
-template <class T>
-struct QuadraticWeights {
-  Eigen::Vector3i base;
-  V3<T> fx;    // particle position minus base [cells]
-  V3<T> w[3];  // w[node][axis]
-
-  QuadraticWeights(const V3<T>& x, T inv_dx) {
-    const V3<T> xi = x * inv_dx;
-    base = (xi.array() - T(0.5)).floor().template cast<int>();
-    fx = xi - base.template cast<T>();
-    w[0] = T(0.5) * (T(1.5) - fx.array()).square();
-    w[1] = T(0.75) - (fx.array() - T(1)).square();
-    w[2] = T(0.5) * (fx.array() - T(0.5)).square();
-  }
-};
-
-template <class T>
-void reference_p2g(const ReferenceParticles<T>& P, DenseGrid<T>& grid) {
-  std::fill(grid.nodes.begin(), grid.nodes.end(), typename DenseGrid<T>::Node{});
-  const T inv_dx = 1 / grid.dx;
-  for (std::size_t p = 0; p < P.x.size(); ++p) {
-    const QuadraticWeights<T> q(P.x[p], inv_dx);
-    const T m = P.mass[p];
-    const V3<T> mv = m * P.v[p];
-    const M3<T> affine = m * P.C[p];
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j)
-        for (int k = 0; k < 3; ++k) {
-          const V3<T> dpos = (V3<T>(i, j, k) - q.fx) * grid.dx;
-          const T weight = q.w[i][0] * q.w[j][1] * q.w[k][2];
-          auto& node = grid.at(q.base[0] + i, q.base[1] + j, q.base[2] + k);
-          node.mass += weight * m;
-          node.momentum += weight * (mv + affine * dpos);
-        }
-  }
-}
-
-template <class T>
-void reference_g2p(ReferenceParticles<T>& P, DenseGrid<T>& grid, T dt) {
-  const T inv_dx = 1 / grid.dx;
-  const T inv_D = 4 * inv_dx * inv_dx;  // APIC D_p^-1 for quadratic weights
-  for (std::size_t p = 0; p < P.x.size(); ++p) {
-    const QuadraticWeights<T> q(P.x[p], inv_dx);
-    V3<T> v = V3<T>::Zero();
-    M3<T> B = M3<T>::Zero();
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j)
-        for (int k = 0; k < 3; ++k) {
-          const V3<T> dpos = (V3<T>(i, j, k) - q.fx) * grid.dx;
-          const T weight = q.w[i][0] * q.w[j][1] * q.w[k][2];
-          const V3<T>& vi = grid.at(q.base[0] + i, q.base[1] + j, q.base[2] + k).momentum;
-          v += weight * vi;
-          B += (weight * vi) * dpos.transpose();
-        }
-    P.v[p] = v;
-    P.C[p] = B * inv_D;
-    P.x[p] += dt * v;
-  }
-}
-
-// 3. Timing: median over repeats, each from a fresh copy of the input (copy untimed).
+// 3. The solver: sort_into_buckets, then the bucketed transfers on the sparse grid.
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
+template <class Fn>
+double timed(Fn&& fn) {
+  const auto t0 = Clock::now();
+  fn();
+  return seconds_since(t0);
+}
+
+class DoubleSolver {  // the library
+public:
+  explicit DoubleSolver(const Options& o) : grid_(Vec<3>::Zero(), Vec<3>::Ones(), o.dx) {}
+  void load(const Particles<3>& input) { P_ = input; }
+  void sort() { sort_into_buckets(P_, kernel_, grid_, buckets_); }
+  void p2g() { particles_to_grid(P_, buckets_, kernel_, scheme_, grid_); }
+  void normalise() { momentum_to_velocity(grid_, scheme_); }
+  void g2p() { grid_to_particles(P_, buckets_, kernel_, scheme_, grid_, dt); }
+
+  const SparseGrid<3>& grid() const { return grid_; }
+  double mass(std::size_t k) const { return grid_.mass[k]; }
+  Vec<3> momentum(std::size_t k) const { return grid_.velocity[k]; }
+  Vec<3> v(std::size_t p) const { return P_.v[p]; }
+  Mat<3> C(std::size_t p) const { return P_.C[p]; }
+
+private:
+  Kernel kernel_ = QuadraticBSpline{};
+  TransferScheme scheme_;  // APIC
+  SparseGrid<3> grid_;
+  ParticleBuckets<3> buckets_;
+  Particles<3> P_;
+};
+
+class FloatSolver {  // the library's sort and scalar-generic loops in single precision
+public:
+  explicit FloatSolver(const Options& o) : grid_(Vec<3>::Zero(), Vec<3>::Ones(), o.dx) {}
+  void load(const Particles<3>& input) { P_.assign(input); }
+  void sort() { sort_into_buckets<3, float>(P_.x, Kernel{kernel_}, grid_, buckets_); }
+  void p2g() {
+    mass_.assign(grid_.node_storage(), 0.0f);
+    momentum_.assign(grid_.node_storage(), V3<float>::Zero());
+    std::array<detail::BasicChannelView<float>, 4> channels;
+    channels[0] = detail::scalar_view(mass_);
+    for (int a = 0; a < 3; ++a) channels[a + 1] = detail::component_view<3>(momentum_, a);
+    detail::p2g<3, QuadraticBSpline, true>(P_, buckets_, kernel_, grid_, channels);
+  }
+  void normalise() {
+    for (std::size_t k = 0; k < mass_.size(); ++k)
+      momentum_[k] = mass_[k] > 0 ? V3<float>(momentum_[k] / mass_[k]) : V3<float>::Zero();
+  }
+  void g2p() {
+    std::array<detail::BasicChannelView<float>, 3> velocity;
+    for (int a = 0; a < 3; ++a) velocity[a] = detail::component_view<3>(momentum_, a);
+    detail::g2p<3, QuadraticBSpline, false>(P_, buckets_, kernel_, grid_, velocity, 0.0f,
+                                            static_cast<float>(dt));
+  }
+
+  const SparseGrid<3>& grid() const { return grid_; }
+  double mass(std::size_t k) const { return mass_[k]; }
+  Vec<3> momentum(std::size_t k) const { return momentum_[k].cast<double>(); }
+  Vec<3> v(std::size_t p) const { return P_.v[p].cast<double>(); }
+  Mat<3> C(std::size_t p) const { return P_.C[p].cast<double>(); }
+
+private:
+  QuadraticBSpline kernel_;
+  SparseGrid<3> grid_;
+  ParticleBuckets<3> buckets_;
+  ParticleArrays<float> P_;
+  std::vector<float> mass_;
+  std::vector<V3<float>> momentum_;  // velocity after normalise()
+};
+
+// 4. Correctness: both implementations from the same particles. Differences are relative to
+//    the largest magnitude of the quantity (pointwise ratios are moot for node momenta near
+//    zero); the total mass is compared too, so no mass may land outside the sparse grid.
+struct Deviation {
+  double mass = 0, momentum = 0, v = 0, C = 0;
+  double max() const { return std::max({mass, momentum, v, C}); }
+};
+
+template <class Solver, class T>
+Deviation compare(const Particles<3>& input, Solver& solver, Reference<T>& ref) {
+  solver.load(input);
+  solver.sort();
+  solver.p2g();
+  ref.load(input);
+  ref.p2g();
+  const SparseGrid<3>& grid = solver.grid();
+  double err_m = 0, err_p = 0, scale_m = 0, scale_p = 0, total = 0, total_ref = 0;
+  for (std::size_t k = 0; k < grid.node_storage(); ++k) {
+    const IVec<3> c = grid.node_coord(k);
+    if ((c.array() >= ref.nodes_per_axis()).any()) continue;  // block padding past the domain
+    err_m = std::max(err_m, std::abs(solver.mass(k) - ref.mass(c)));
+    err_p = std::max(err_p, (solver.momentum(k) - ref.momentum(c)).norm());
+    scale_m = std::max(scale_m, ref.mass(c));
+    scale_p = std::max(scale_p, ref.momentum(c).norm());
+    total += solver.mass(k);
+    total_ref += ref.mass(c);
+  }
+  Deviation d;
+  const double n = static_cast<double>(input.size());
+  d.mass = std::max(err_m / scale_m, std::abs(total - n * input.mass[0]) / (n * input.mass[0]));
+  d.momentum = err_p / scale_p;
+
+  solver.normalise();
+  solver.g2p();
+  ref.normalise();
+  ref.g2p();
+  double err_v = 0, err_C = 0, scale_v = 0, scale_C = 0;
+  for (std::size_t p = 0; p < input.size(); ++p) {
+    const Vec<3> v_ref = ref.particles().v[p].template cast<double>();
+    const Mat<3> C_ref = ref.particles().C[p].template cast<double>();
+    err_v = std::max(err_v, (solver.v(p) - v_ref).norm());
+    err_C = std::max(err_C, (solver.C(p) - C_ref).norm());
+    scale_v = std::max(scale_v, v_ref.norm());
+    scale_C = std::max(scale_C, C_ref.norm());
+  }
+  d.v = err_v / scale_v;
+  d.C = err_C / scale_C;
+  return d;
+}
+
+// 5. Timing: median over repeats, each from a fresh copy of the input (the copy untimed).
+struct Timings {
+  double sort = 0, p2g = 0, g2p = 0;
+  double step() const { return sort + p2g + g2p; }
+};
+
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   const std::size_t h = v.size() / 2;
   return v.size() % 2 ? v[h] : 0.5 * (v[h - 1] + v[h]);
 }
 
-struct Timings {
-  double sort = 0, p2g = 0, g2p = 0;
-};
-
-Timings median(const std::vector<Timings>& runs) {
+template <class Run>
+Timings median_of(int repeat, Run&& run) {
   std::vector<double> s, p, g;
-  for (const Timings& t : runs) {
+  for (int r = 0; r < repeat; ++r) {
+    const Timings t = run();
     s.push_back(t.sort);
     p.push_back(t.p2g);
     g.push_back(t.g2p);
@@ -193,145 +337,91 @@ Timings median(const std::vector<Timings>& runs) {
   return {median(s), median(p), median(g)};
 }
 
-constexpr double dt = 1e-4;  // [s]; G2P advects x by dt v
-
-struct Setup {
-  Kernel kernel = QuadraticBSpline{};
-  TransferScheme scheme;  // APIC
-  SparseGrid<3> grid;
-  int nodes_per_axis;
-  explicit Setup(double dx)
-      : grid(Vec<3>::Zero(), Vec<3>::Ones(), dx),
-        nodes_per_axis(static_cast<int>(std::lround(1.0 / dx)) + 1) {}
-};
-
-Timings time_library(const Particles<3>& input, Setup& s, Particles<3>& P, ParticleBuckets<3>& buckets) {
-  P = input;
+template <class Solver>
+Timings time_solver(const Particles<3>& input, Solver& solver) {
+  solver.load(input);
   Timings t;
-  auto t0 = Clock::now();
-  sort_into_buckets(P, s.kernel, s.grid, buckets);
-  t.sort = seconds_since(t0);
-  t0 = Clock::now();
-  particles_to_grid(P, buckets, s.kernel, s.scheme, s.grid);
-  t.p2g = seconds_since(t0);
-  momentum_to_velocity(s.grid, s.scheme);
-  t0 = Clock::now();
-  grid_to_particles(P, buckets, s.kernel, s.scheme, s.grid, dt);
-  t.g2p = seconds_since(t0);
+  t.sort = timed([&] { solver.sort(); });
+  t.p2g = timed([&] { solver.p2g(); });
+  solver.normalise();
+  t.g2p = timed([&] { solver.g2p(); });
   return t;
 }
 
 template <class T>
-Timings time_reference(const Particles<3>& input, DenseGrid<T>& grid, ReferenceParticles<T>& P) {
-  P.assign(input);
+Timings time_reference(const Particles<3>& input, Reference<T>& ref) {
+  ref.load(input);
   Timings t;
-  auto t0 = Clock::now();
-  reference_p2g(P, grid);
-  t.p2g = seconds_since(t0);
-  grid.normalise();
-  t0 = Clock::now();
-  reference_g2p(P, grid, static_cast<T>(dt));
-  t.g2p = seconds_since(t0);
+  t.p2g = timed([&] { ref.p2g(); });
+  ref.normalise();
+  t.g2p = timed([&] { ref.g2p(); });
   return t;
 }
 
-// 4. Correctness: both implementations from the same particles. Differences are relative to
-//    the largest magnitude of the quantity (node values near zero make pointwise ratios moot).
-struct Deviation {
-  double mass = 0, momentum = 0, v = 0, C = 0;
-  double max() const { return std::max({mass, momentum, v, C}); }
-};
-
-template <class T>
-Deviation compare_library(const Particles<3>& input, Setup& s) {
-  Particles<3> P = input;
-  ParticleBuckets<3> buckets;
-  sort_into_buckets(P, s.kernel, s.grid, buckets);
-  particles_to_grid(P, buckets, s.kernel, s.scheme, s.grid);
-  ReferenceParticles<T> R;
-  R.assign(P);
-  DenseGrid<T> dense(s.nodes_per_axis, static_cast<T>(s.grid.dx()));
-  reference_p2g(R, dense);
-
-  Deviation d;
-  double scale_m = 0, scale_p = 0, err_m = 0, err_p = 0, total_sparse = 0, total_dense = 0;
-  for (std::size_t k = 0; k < s.grid.node_storage(); ++k) {
-    const IVec<3> c = s.grid.node_coord(k);
-    if ((c.array() >= s.nodes_per_axis).any()) continue;  // block padding beyond the domain
-    const auto& node = dense.at(c[0], c[1], c[2]);
-    err_m = std::max(err_m, std::abs(s.grid.mass[k] - node.mass));
-    err_p = std::max(err_p, (s.grid.velocity[k] - node.momentum.template cast<double>()).norm());
-    total_sparse += s.grid.mass[k];
-  }
-  for (const auto& node : dense.nodes) {
-    scale_m = std::max(scale_m, static_cast<double>(node.mass));
-    scale_p = std::max(scale_p, static_cast<double>(node.momentum.norm()));
-    total_dense += node.mass;
-  }
-  d.mass = std::max(err_m / scale_m, std::abs(total_sparse - total_dense) / total_dense);
-  d.momentum = err_p / scale_p;
-
-  momentum_to_velocity(s.grid, s.scheme);
-  dense.normalise();
-  grid_to_particles(P, buckets, s.kernel, s.scheme, s.grid, dt);
-  reference_g2p(R, dense, static_cast<T>(dt));
-  double scale_v = 0, scale_C = 0, err_v = 0, err_C = 0;
-  for (std::size_t p = 0; p < P.size(); ++p) {
-    scale_v = std::max(scale_v, static_cast<double>(R.v[p].norm()));
-    scale_C = std::max(scale_C, static_cast<double>(R.C[p].norm()));
-    err_v = std::max(err_v, (P.v[p] - R.v[p].template cast<double>()).norm());
-    err_C = std::max(err_C, (P.C[p] - R.C[p].template cast<double>()).norm());
-  }
-  d.v = err_v / scale_v;
-  d.C = err_C / scale_C;
-  return d;
-}
-
-// 5. One precision: correctness check, then the timings for both input orders.
 struct Row {
   std::string order;
   int threads;
-  Timings optimised, reference;
+  Timings solver, reference;
 };
 
-template <class T>
+const char* verdict(bool met) { return met ? "met" : "MISSED"; }
+
+void report(const char* name, std::size_t n, const Options& o, const std::vector<Row>& rows) {
+  std::printf("\n%s precision, %zu particles, dx = %g, median of %d runs [s]; the reference is "
+              "single-threaded, x = reference / solver\n", name, n, o.dx, o.repeat);
+  std::printf("%-8s %3s | %6s %6s %6s %8s %6s | %7s %7s | %5s %5s\n", "order", "thr", "sort", "P2G",
+              "G2P", "sort+P2G", "step", "ref P2G", "ref G2P", "P2G x", "G2P x");
+  for (const Row& r : rows) {
+    const Timings& t = r.solver;
+    std::printf("%-8s %3d | %6.3f %6.3f %6.3f %8.3f %6.3f | %7.3f %7.3f | %5.2f %5.2f\n",
+                r.order.c_str(), r.threads, t.sort, t.p2g, t.g2p, t.sort + t.p2g, t.step(),
+                r.reference.p2g, r.reference.g2p, r.reference.p2g / t.p2g, r.reference.g2p / t.g2p);
+  }
+  // rows: sorted 1, sorted 2, shuffled 1, shuffled 2
+  const Timings &s1 = rows[0].solver, &s2 = rows[1].solver, &h1 = rows[2].solver, &h2 = rows[3].solver;
+  const double p2g_x = rows[0].reference.p2g / s1.p2g, g2p_x = rows[0].reference.g2p / s1.g2p;
+  std::printf("targets (%s):\n", name);
+  std::printf("  1 thread, sorted: P2G %.2fx, G2P %.2fx faster than the reference (>= 2): %s\n",
+              p2g_x, g2p_x, verdict(p2g_x >= 2 && g2p_x >= 2));
+  for (int i = 0; i < 2; ++i) {
+    const Timings &s = i ? s2 : s1, &h = i ? h2 : h1;
+    const double step = h.step() / s.step(), p2g = (h.sort + h.p2g) / (s.sort + s.p2g);
+    std::printf("  %d thread%s, shuffled / sorted: step %.2f, sort+P2G %.2f, sort+P2G / P2G %.2f "
+                "(<= 1.3): %s\n", i + 1, i ? "s" : "", step, p2g, (h.sort + h.p2g) / s.p2g,
+                verdict(step <= 1.3 && p2g <= 1.3));
+  }
+  const double sp = s1.p2g / s2.p2g, sg = s1.g2p / s2.g2p, ss = s1.step() / s2.step();
+  std::printf("  2 threads vs 1, sorted: P2G %.2fx, G2P %.2fx, step %.2fx (>= 1.7): %s\n", sp, sg, ss,
+              verdict(sp >= 1.7 && sg >= 1.7));
+}
+
+template <class Solver, class T>
 bool run_precision(const Options& o, const char* name, const Particles<3>& sorted_input) {
-  Setup s(o.dx);
+  Solver solver(o);
+  Reference<T> ref(o);
   const Particles<3> shuffled_input = shuffled(sorted_input);
   const double tolerance = sizeof(T) == 8 ? 1e-10 : 1e-4;
-  const Deviation d = compare_library<T>(sorted_input, s);
-  std::printf("%s: solver vs reference, max relative difference: node mass %.2e, momentum %.2e, "
-              "particle v %.2e, C %.2e (tolerance %.0e) %s\n",
-              name, d.mass, d.momentum, d.v, d.C, tolerance, d.max() < tolerance ? "ok" : "FAILED");
-  if (!(d.max() < tolerance)) return false;
+  bool ok = true;
+  for (const auto* input : {&sorted_input, &shuffled_input}) {
+    const Deviation d = compare(*input, solver, ref);
+    std::printf("%s, %s input: max relative difference solver vs reference: node mass %.1e, "
+                "momentum %.1e, particle v %.1e, C %.1e (tolerance %.0e) %s\n", name,
+                input == &sorted_input ? "sorted" : "shuffled", d.mass, d.momentum, d.v, d.C,
+                tolerance, d.max() < tolerance ? "ok" : "FAILED");
+    ok = ok && d.max() < tolerance;
+  }
+  if (!ok) return false;
 
   std::vector<Row> rows;
-  Particles<3> work;
-  ParticleBuckets<3> buckets;
-  ReferenceParticles<T> ref_work;
-  DenseGrid<T> dense(s.nodes_per_axis, static_cast<T>(o.dx));
-  for (const auto& [order, input] : {std::pair<std::string, const Particles<3>*>{"sorted", &sorted_input},
-                                     {"shuffled", &shuffled_input}}) {
-    std::vector<Timings> ref;
-    for (int r = 0; r < o.repeat; ++r) ref.push_back(time_reference(*input, dense, ref_work));
+  for (const auto* input : {&sorted_input, &shuffled_input}) {
+    const Timings reference = median_of(o.repeat, [&] { return time_reference(*input, ref); });
     for (int threads : {1, 2}) {
       tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
-      std::vector<Timings> opt;
-      for (int r = 0; r < o.repeat; ++r) opt.push_back(time_library(*input, s, work, buckets));
-      rows.push_back({order, threads, median(opt), median(ref)});
+      const Timings t = median_of(o.repeat, [&] { return time_solver(*input, solver); });
+      rows.push_back({input == &sorted_input ? "sorted" : "shuffled", threads, t, reference});
     }
   }
-
-  std::printf("\n%s precision, %zu particles, dx = %g, median of %d (seconds; reference is "
-              "single-threaded)\n", name, sorted_input.size(), o.dx, o.repeat);
-  std::printf("%-9s %3s | %7s %7s %7s %7s | %7s %7s | %9s %9s\n", "order", "thr", "sort", "P2G",
-              "G2P", "step", "ref P2G", "ref G2P", "P2G x", "G2P x");
-  for (const Row& r : rows) {
-    const Timings& t = r.optimised;
-    std::printf("%-9s %3d | %7.3f %7.3f %7.3f %7.3f | %7.3f %7.3f | %9.2f %9.2f\n", r.order.c_str(),
-                r.threads, t.sort, t.p2g, t.g2p, t.sort + t.p2g + t.g2p, r.reference.p2g,
-                r.reference.g2p, r.reference.p2g / t.p2g, r.reference.g2p / t.g2p);
-  }
+  report(name, sorted_input.size(), o, rows);
   return true;
 }
 
@@ -340,21 +430,18 @@ bool run_precision(const Options& o, const char* name, const Particles<3>& sorte
 int main(int argc, char** argv) {
   Options o;
   CLI::App app{"Particle <-> grid transfer benchmark (Gao et al. 2017, Table 1)"};
-  app.add_option("--particles-spacing", o.spacing, "particle lattice spacing [m]")
-      ->check(CLI::Range(1e-4, 0.25));
-  app.add_option("--dx", o.dx, "grid spacing [m]")->check(CLI::Range(1e-3, 0.25));
-  app.add_option("--repeat", o.repeat, "timed repetitions (median reported)")->check(CLI::Range(1, 100));
-  app.add_option("--precision", o.precision)->check(CLI::IsMember({"float", "double", "both"}));
+  app.add_option("--particles-spacing", o.spacing, "particle lattice spacing [m] (default 1/256)")
+      ->check(CLI::Range(1e-3, 0.25));
+  app.add_option("--dx", o.dx, "grid spacing [m] (default 1/128)")->check(CLI::Range(2e-3, 0.25));
+  app.add_option("--repeat", o.repeat, "timed runs per configuration; the median is reported")
+      ->check(CLI::Range(1, 100));
+  app.add_option("--precision", o.precision, "float, double or both")
+      ->check(CLI::IsMember({"float", "double", "both"}));
   CLI11_PARSE(app, argc, argv);
 
-  Particles<3> input = lattice(o);
-  {  // "sorted" is the solver's own order, as after its first step
-    SparseGrid<3> grid(Vec<3>::Zero(), Vec<3>::Ones(), o.dx);
-    ParticleBuckets<3> buckets;
-    sort_into_buckets(input, Kernel{QuadraticBSpline{}}, grid, buckets);
-  }
+  const Particles<3> input = lattice(o);
   bool ok = true;
-  if (o.precision != "float") ok = run_precision<double>(o, "double", input) && ok;
-  if (o.precision != "double") ok = run_precision<float>(o, "float", input) && ok;
+  if (o.precision != "float") ok = run_precision<DoubleSolver, double>(o, "double", input) && ok;
+  if (o.precision != "double") ok = run_precision<FloatSolver, float>(o, "float", input) && ok;
   return ok ? 0 : 1;
 }

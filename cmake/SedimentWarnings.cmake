@@ -4,7 +4,8 @@ function(sediment_set_warnings target)
   target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Wshadow -Wnon-virtual-dtor
     -Wno-deprecated-declarations
     # GCC 12 reports false -Wrestrict positives inside std::string at -O3 (GCC bug 105651).
-    $<$<CXX_COMPILER_ID:GNU>:-Wno-restrict>)
+    # and false -Wmaybe-uninitialized positives inside Eigen's fixed-size decompositions.
+    $<$<CXX_COMPILER_ID:GNU>:-Wno-restrict -Wno-maybe-uninitialized>)
   if(SEDIMENT_WARNINGS_AS_ERRORS)
     target_compile_options(${target} PRIVATE -Werror)
   endif()

@@ -5,6 +5,7 @@ set -euo pipefail
 
 packages=(
   build-essential cmake ninja-build pkg-config
+  python3              # regression test drivers
   libeigen3-dev        # small fixed-size linear algebra
   libyaml-cpp-dev      # scene files
   libhdf5-dev          # particle output, checkpoints
@@ -14,7 +15,6 @@ packages=(
   libpng-dev           # previews
   doctest-dev          # tests
   libcli11-dev         # command lines
-  libfmt-dev           # formatting
   nlohmann-json3-dev   # summary.json
   libhypre-dev         # pressure solver back-end (libfluid)
   libsuitesparse-dev   # CHOLMOD direct solve (libfluid)

@@ -4,7 +4,7 @@
 //   column_collapse data/scenes/column_collapse.yaml
 //   column_collapse data/scenes/column_collapse.yaml --set column.aspect_ratio=4 --out out/a4
 //
-// summary.json: runout L_inf (front distance from the back wall), final_height,
+// summary.json: runout L_inf (deposit front distance from the back wall), final_height,
 // normalized_runout (L_inf - L0)/L0, duration (time until the kinetic energy falls below
 // 1e-6 of its peak). --check compares normalized_runout with the 2D runout law of Lube et
 // al. 2005 (PRE 72, 041301): 1.2 a for a < 2.3, 1.9 a^(2/3) above (data/reference/lube2005.md).
@@ -23,6 +23,25 @@ namespace {
 
 double lube_runout_law(double a) { return a < 2.3 ? 1.2 * a : 1.9 * std::cbrt(a * a); }
 
+//! The deposit front [m]: the far edge of the contiguous run of dx-wide slabs, from the back
+//! wall, that each hold at least half a layer of particles (`layer` particles). Grains that
+//! broke away ahead of the deposit are not part of the runout, as in the experiments.
+template <int dim>
+double deposit_front(const Particles<dim>& P, double dx, double layer) {
+  std::vector<int> count;
+  for (const Vec<dim>& x : P.x) {
+    const auto slab = static_cast<std::size_t>(std::max(0.0, x[0] / dx));
+    if (slab >= count.size()) count.resize(slab + 1, 0);
+    ++count[slab];
+  }
+  std::size_t slab = 0;
+  while (slab < count.size() && count[slab] >= 0.5 * layer) ++slab;
+  double front = 0.0;
+  for (const Vec<dim>& x : P.x)
+    if (x[0] < slab * dx) front = std::max(front, x[0]);
+  return front;
+}
+
 template <int dim>
 int run(const CommandLine& cl, const Config& scene) {
   // 1. The column and the domain derived from it: back wall at x = 0, floor at y = 0.
@@ -34,17 +53,18 @@ int run(const CommandLine& cl, const Config& scene) {
   const double length = column.number("domain_length", L0 * (1.0 + 1.5 * lube_runout_law(a)) + 4 * dx,
                                       Range{L0, 1e308, true, false});
   const double depth = dim == 3 ? column.number("depth", L0, Range::positive()) : 0.0;
-  DerivedDomain<dim> domain{Vec<dim>::Constant(-2 * dx), Vec<dim>::Zero(), dx};
-  domain.hi[0] = length;
-  domain.hi[1] = H0 + 4 * dx;
-  if constexpr (dim == 3) domain.hi[2] = depth + 2 * dx;
+  const double layer = wall_layer(parse_kernel(scene), dx);  // walls at x = 0, y = 0, z = 0
+  DerivedDomain<dim> domain{Vec<dim>::Constant(-layer), Vec<dim>::Zero(), dx};
+  domain.hi[0] = length + layer;
+  domain.hi[1] = H0 + 2 * layer;
+  if constexpr (dim == 3) domain.hi[2] = depth + layer;
 
   // 2. Settings, the sand, the walls (all validated before anything is written).
   SceneSettings<dim> settings = parse_scene_settings<dim>(scene, domain);
   std::vector<Material<dim>> sand = {parse_material<dim>(scene.child("material"))};
-  auto colliders = geometry::parse_colliders<dim>(scene, domain.lo, domain.hi, dx);
+  auto colliders = geometry::parse_colliders<dim>(scene, domain.lo, domain.hi, layer);
   solid::SolidScene<dim> solid = solid::make_solid_scene(settings, sand, colliders);
-  const int ppc = column.integer("particles_per_cell", dim == 2 ? 4 : 8, 1, 1000);
+  const int ppc = solid::particles_per_cell<dim>(column);
   Vec<dim> hi = Vec<dim>::Zero();
   hi[0] = L0;
   hi[1] = H0;
@@ -72,11 +92,11 @@ int run(const CommandLine& cl, const Config& scene) {
   runner.run(solid.state, pipeline);
 
   // 4. Results.
-  double runout = 0.0, height = 0.0;
-  for (const Vec<dim>& x : solid.state.particles.x) {
-    runout = std::max(runout, x[0]);
-    height = std::max(height, x[1]);
-  }
+  const int k = geometry::lattice_points_per_axis<dim>(ppc);
+  const double row = dim == 2 ? k : k * k * depth / dx;  // particles per lattice row of a slab
+  const double runout = deposit_front(solid.state.particles, dx, row);
+  double height = 0.0;
+  for (const Vec<dim>& x : solid.state.particles.x) height = std::max(height, x[1]);
   const double normalized = (runout - L0) / L0;
   runner.write_summary({{"runout", runout}, {"final_height", height}, {"normalized_runout", normalized},
                         {"duration", duration}, {"at_rest", at_rest ? 1.0 : 0.0},

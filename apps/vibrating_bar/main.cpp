@@ -43,18 +43,19 @@ int run(const CommandLine& cl, const Config& scene) {
   const int cells = bar.integer("cells", 32, 2, 1 << 16);
   const double dx = L / cells;
   const double thickness = dx * bar.integer("thickness_cells", 2, 1, 64);
-  const double tolerance = bar.number("check_tolerance", 0.05, Range::positive());
-  DerivedDomain<dim> domain{Vec<dim>::Constant(-2 * dx), Vec<dim>::Constant(thickness + 2 * dx), dx};
-  domain.hi[0] = 1.25 * L + 4 * dx;
+  const double tolerance = bar.number("check_tolerance", 0.1, Range::positive());
+  const double layer = wall_layer(parse_kernel(scene), dx);  // the fixed wall at x = 0
+  DerivedDomain<dim> domain{Vec<dim>::Constant(-layer), Vec<dim>::Constant(thickness + layer), dx};
+  domain.hi[0] = 1.25 * L + 2 * layer;
 
   // 2. Settings, material, walls: the x_min wall holds the bar (sticky), the others slip.
   SceneSettings<dim> settings = parse_scene_settings<dim>(scene, domain);
   std::vector<Material<dim>> materials = {parse_material<dim>(scene.child("material"))};
   if (materials[0].lame.lambda != 0.0)
     scene.child("material").fail("poisson_ratio", "the 1D bar solution needs poisson_ratio: 0");
-  auto colliders = geometry::parse_colliders<dim>(scene, domain.lo, domain.hi, dx);
+  auto colliders = geometry::parse_colliders<dim>(scene, domain.lo, domain.hi, layer);
   solid::SolidScene<dim> solid = solid::make_solid_scene(settings, materials, colliders);
-  const int ppc = bar.integer("particles_per_cell", dim == 2 ? 4 : 8, 1, 1000);
+  const int ppc = solid::particles_per_cell<dim>(bar);
   Vec<dim> hi = Vec<dim>::Constant(thickness);
   hi[0] = L;
   solid::add_particles<dim>(solid, geometry::seed_box<dim>(Vec<dim>::Zero(), hi, dx, ppc, 0.0, 1),

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <numeric>
 #include <sstream>
 
 namespace mpm {
@@ -38,29 +39,18 @@ bool stencil_base_in_grid(const K& kernel, const Eigen::Matrix<T, dim, 1>& xi,
   }
   return true;
 }
-}  // namespace
 
-template <int dim>
-IVec<dim> stencil_base(const SparseGrid<dim>& grid, const Kernel& kernel, const Vec<dim>& x) {
-  const Vec<dim> xi = CellMap<dim>(grid)(x);
-  return std::visit(
-      [&](const auto& k) {
-        IVec<dim> base;
-        double w[4], dw[4];
-        for (int a = 0; a < dim; ++a) k(xi[a], base[a], w, dw);
-        return base;
-      },
-      kernel);
-}
-
+// Block keys, then a stable counting sort of the particle indices into `order` (left alone
+// when the keys are already in storage order; the return value says which). Fills
+// everything of `buckets` but the index and allocates the grid blocks.
 template <int dim, class T>
-std::vector<std::uint32_t> bucket_order(const std::vector<Eigen::Matrix<T, dim, 1>>& x,
-                                        const Kernel& kernel, SparseGrid<dim>& grid,
-                                        ParticleBuckets<dim>& buckets, const std::string& stage) {
+bool order_by_block(const std::vector<Eigen::Matrix<T, dim, 1>>& x, const Kernel& kernel,
+                    SparseGrid<dim>& grid, ParticleBuckets<dim>& buckets, const std::string& stage,
+                    std::vector<std::uint32_t>& order) {
   const std::size_t n = x.size();
   const CellMap<dim> map(grid);
 
-  // Block keys in parallel; an invalid particle is reported after the loop, the one with the
+  // Keys in parallel; an invalid particle is reported after the loop, the one with the
   // lowest index so that the message does not depend on the thread count.
   std::vector<int> key(n);
   std::atomic<std::size_t> first_bad{n};
@@ -92,9 +82,9 @@ std::vector<std::uint32_t> bucket_order(const std::vector<Eigen::Matrix<T, dim, 
   }, kernel);
 
   // Counting sort by block id: O(n + table size), stable. The sorted keys are written in the
-  // same pass as the permutation (same target position, so no extra random access).
-  std::vector<std::uint32_t> order;
-  if (!std::is_sorted(key.begin(), key.end())) {
+  // same pass as the order (same target position, so no extra random access).
+  const bool in_order = std::is_sorted(key.begin(), key.end());
+  if (!in_order) {
     std::vector<std::uint32_t> offset(grid.table_size() + 1, 0);
     for (int k : key) ++offset[k + 1];
     for (int b = 0; b < grid.table_size(); ++b) offset[b + 1] += offset[b];
@@ -111,10 +101,10 @@ std::vector<std::uint32_t> bucket_order(const std::vector<Eigen::Matrix<T, dim, 
   buckets.begin.clear();
   buckets.block.clear();
   for (auto& c : buckets.by_color) c.clear();
-  for (std::size_t p = 0; p < n; ++p) {
-    if (p == 0 || key[p] != key[p - 1]) {
-      buckets.begin.push_back(static_cast<std::uint32_t>(p));
-      buckets.block.push_back(key[p]);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (i == 0 || key[i] != key[i - 1]) {
+      buckets.begin.push_back(static_cast<std::uint32_t>(i));
+      buckets.block.push_back(key[i]);
     }
   }
   buckets.begin.push_back(static_cast<std::uint32_t>(n));
@@ -136,28 +126,64 @@ std::vector<std::uint32_t> bucket_order(const std::vector<Eigen::Matrix<T, dim, 
   std::sort(blocks.begin(), blocks.end());
   blocks.erase(std::unique(blocks.begin(), blocks.end()), blocks.end());
   grid.activate(blocks);
-  return order;
+  return in_order;
+}
+
+void identity(std::vector<std::uint32_t>& index, std::size_t n) {
+  index.resize(n);
+  std::iota(index.begin(), index.end(), std::uint32_t{0});
+}
+}  // namespace
+
+template <int dim>
+IVec<dim> stencil_base(const SparseGrid<dim>& grid, const Kernel& kernel, const Vec<dim>& x) {
+  const Vec<dim> xi = CellMap<dim>(grid)(x);
+  return std::visit(
+      [&](const auto& k) {
+        IVec<dim> base;
+        double w[4], dw[4];
+        for (int a = 0; a < dim; ++a) k(xi[a], base[a], w, dw);
+        return base;
+      },
+      kernel);
+}
+
+template <int dim, class T>
+bool sort_into_buckets(const std::vector<Eigen::Matrix<T, dim, 1>>& x, const Kernel& kernel,
+                       SparseGrid<dim>& grid, ParticleBuckets<dim>& buckets, const std::string& stage) {
+  if (!order_by_block(x, kernel, grid, buckets, stage, buckets.particle)) return true;
+  identity(buckets.particle, x.size());
+  return false;
 }
 
 template <int dim>
-bool sort_into_buckets(Particles<dim>& particles, const Kernel& kernel, SparseGrid<dim>& grid,
+bool sort_into_buckets(const Particles<dim>& particles, const Kernel& kernel, SparseGrid<dim>& grid,
                        ParticleBuckets<dim>& buckets, const std::string& stage) {
-  const std::vector<std::uint32_t> order = bucket_order<dim, double>(particles.x, kernel, grid, buckets, stage);
-  if (order.empty()) return false;
-  particles.permute(order);
-  return true;
+  return sort_into_buckets<dim, double>(particles.x, kernel, grid, buckets, stage);
 }
 
-#define MPM_INSTANTIATE(dim)                                                                      \
-  template IVec<dim> stencil_base(const SparseGrid<dim>&, const Kernel&, const Vec<dim>&);        \
-  template bool sort_into_buckets(Particles<dim>&, const Kernel&, SparseGrid<dim>&,               \
-                                  ParticleBuckets<dim>&, const std::string&);                     \
-  template std::vector<std::uint32_t> bucket_order(const std::vector<Eigen::Matrix<double, dim, 1>>&, \
-                                                   const Kernel&, SparseGrid<dim>&,               \
-                                                   ParticleBuckets<dim>&, const std::string&);    \
-  template std::vector<std::uint32_t> bucket_order(const std::vector<Eigen::Matrix<float, dim, 1>>&, \
+template <int dim, class T>
+std::vector<std::uint32_t> bucket_order(const std::vector<Eigen::Matrix<T, dim, 1>>& x,
+                                        const Kernel& kernel, SparseGrid<dim>& grid,
+                                        ParticleBuckets<dim>& buckets, const std::string& stage) {
+  std::vector<std::uint32_t> order;
+  order_by_block(x, kernel, grid, buckets, stage, order);
+  identity(buckets.particle, x.size());
+  return order;
+}
+
+#define MPM_INSTANTIATE_SCALAR(dim, T)                                                            \
+  template bool sort_into_buckets(const std::vector<Eigen::Matrix<T, dim, 1>>&, const Kernel&,    \
+                                  SparseGrid<dim>&, ParticleBuckets<dim>&, const std::string&);   \
+  template std::vector<std::uint32_t> bucket_order(const std::vector<Eigen::Matrix<T, dim, 1>>&,  \
                                                    const Kernel&, SparseGrid<dim>&,               \
                                                    ParticleBuckets<dim>&, const std::string&);
+#define MPM_INSTANTIATE(dim)                                                                      \
+  template IVec<dim> stencil_base(const SparseGrid<dim>&, const Kernel&, const Vec<dim>&);        \
+  template bool sort_into_buckets(const Particles<dim>&, const Kernel&, SparseGrid<dim>&,         \
+                                  ParticleBuckets<dim>&, const std::string&);                     \
+  MPM_INSTANTIATE_SCALAR(dim, double)                                                             \
+  MPM_INSTANTIATE_SCALAR(dim, float)
 MPM_INSTANTIATE(2)
 MPM_INSTANTIATE(3)
 

@@ -90,7 +90,6 @@ void Runner<dim>::run(State& state, Pipeline<State>& pipeline) {
   };
 
   if (!cl_.restart) {
-    // The grid must exist for stages that read it; sort once so frame 0 reports a valid state.
     row(0);
     write_frame(state, 0, pipeline);
   }
@@ -148,6 +147,10 @@ void Runner<dim>::write_frame(const State& state, int frame, Pipeline<State>&) {
     }
     o.width_px = settings_.output.png_width;
     o.color_by = settings_.output.color_by;
+    if (!state.particles.volume0.empty()) {  // splats about as wide as the particle spacing
+      const double spacing = std::pow(state.particles.volume0[0], 1.0 / dim);
+      o.point_radius_px = std::max(1.0, 0.6 * spacing * o.width_px / (o.domain_hi[0] - o.domain_lo[0]));
+    }
     io::write_png_preview(out_ / numbered("preview", frame, ".png"), state.particles, o);
   }
 }

@@ -11,6 +11,15 @@ int SceneSettings<dim>::frame_count() const {
 
 int scene_dimension(const Config& scene) { return scene.integer("dim", 2, 2, 3); }
 
+Kernel parse_kernel(const Config& scene) {
+  const std::optional<Config> grid = scene.optional_child("grid");
+  if (!grid) return QuadraticBSpline{};
+  const std::string kernel = grid->choice("kernel", "quadratic", {"quadratic", "cubic", "ugimp"});
+  if (kernel == "quadratic") return QuadraticBSpline{};
+  if (kernel == "cubic") return CubicBSpline{};
+  return UGimp{0.5 * grid->number("particle_size", 1.0, Range{0.0, 1.0, true, false})};
+}
+
 template <int dim>
 SceneSettings<dim> parse_scene_settings(const Config& scene, const std::optional<DerivedDomain<dim>>& derived) {
   SceneSettings<dim> s;
@@ -26,12 +35,7 @@ SceneSettings<dim> parse_scene_settings(const Config& scene, const std::optional
       if (s.domain_hi[a] <= s.domain_lo[a]) domain.fail("hi", "must exceed domain.lo on every axis");
     s.dx = scene.child("grid").number("dx", Range::positive());
   }
-  const std::optional<Config> grid_keys = scene.optional_child("grid");
-  const Config grid = grid_keys ? *grid_keys : Config::parse("{}", scene.file());
-  const std::string kernel = grid.choice("kernel", "quadratic", {"quadratic", "cubic", "ugimp"});
-  if (kernel == "quadratic") s.kernel = QuadraticBSpline{};
-  else if (kernel == "cubic") s.kernel = CubicBSpline{};
-  else s.kernel = UGimp{0.5 * grid.number("particle_size", 1.0, Range{0.0, 1.0, true, false})};
+  s.kernel = parse_kernel(scene);
 
   if (auto transfer = scene.optional_child("transfer")) {
     const std::string scheme = transfer->choice("scheme", "apic", {"apic", "flip"});
@@ -49,7 +53,7 @@ SceneSettings<dim> parse_scene_settings(const Config& scene, const std::optional
   s.max_steps_per_frame = time.integer("max_steps_per_frame", 1000000, 1, 1000000000);
 
   Vec<dim> g = Vec<dim>::Zero();
-  g[dim - 1] = -9.81;
+  g[1] = -9.81;  // y is up in 2D and 3D (previews, apps and walls follow this convention)
   s.gravity = scene.vector<dim>("gravity", g);
 
   if (auto out = scene.optional_child("output")) {

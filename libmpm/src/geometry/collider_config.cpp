@@ -52,7 +52,23 @@ Cylinder<dim> parse_cylinder(const Config& entry) {
   }
 }
 
-//! A mesh (.obj/.stl) or .vdb level set; a relative file name is relative to the scene file.
+template <int dim>
+Shape<dim> parse_shape(const Config& entry) {
+  if (!entry.has("type")) entry.fail("type", "missing required key");
+  const std::string type = entry.choice("type", "", {"half_space", "box", "sphere", "cylinder", "level_set"});
+  if (type == "half_space") return HalfSpace<dim>(entry.vector<dim>("point"), direction<dim>(entry, "normal"));
+  if (type == "box") {
+    const Vec<dim> lo = entry.vector<dim>("lo"), hi = entry.vector<dim>("hi");
+    if (!(hi.array() > lo.array()).all()) entry.fail("hi", "must exceed lo in every component");
+    return Box<dim>(lo, hi);
+  }
+  if (type == "sphere") return Sphere<dim>(entry.vector<dim>("center"), entry.number("radius", Range::positive()));
+  if (type == "cylinder") return parse_cylinder<dim>(entry);
+  return parse_level_set<dim>(entry);
+}
+
+}  // namespace
+
 template <int dim>
 LevelSetShape<dim> parse_level_set(const Config& entry) {
   const std::string file = entry.text("file");
@@ -86,22 +102,6 @@ LevelSetShape<dim> parse_level_set(const Config& entry) {
   }
 }
 
-template <int dim>
-Shape<dim> parse_shape(const Config& entry) {
-  if (!entry.has("type")) entry.fail("type", "missing required key");
-  const std::string type = entry.choice("type", "", {"half_space", "box", "sphere", "cylinder", "level_set"});
-  if (type == "half_space") return HalfSpace<dim>(entry.vector<dim>("point"), direction<dim>(entry, "normal"));
-  if (type == "box") {
-    const Vec<dim> lo = entry.vector<dim>("lo"), hi = entry.vector<dim>("hi");
-    if (!(hi.array() > lo.array()).all()) entry.fail("hi", "must exceed lo in every component");
-    return Box<dim>(lo, hi);
-  }
-  if (type == "sphere") return Sphere<dim>(entry.vector<dim>("center"), entry.number("radius", Range::positive()));
-  if (type == "cylinder") return parse_cylinder<dim>(entry);
-  return parse_level_set<dim>(entry);
-}
-
-}  // namespace
 
 template <int dim>
 Collider<dim> parse_collider(const Config& entry) {
@@ -111,11 +111,12 @@ Collider<dim> parse_collider(const Config& entry) {
 }
 
 template <int dim>
-DomainWalls<dim> parse_walls(const Config& walls, const Vec<dim>& domain_lo, const Vec<dim>& domain_hi, double dx) {
-  verify<InputError>(dx > 0.0, "domain walls: the grid spacing must be > 0");
+DomainWalls<dim> parse_walls(const Config& walls, const Vec<dim>& domain_lo, const Vec<dim>& domain_hi,
+                             double default_thickness) {
+  verify<InputError>(default_thickness > 0.0, "domain walls: the default wall thickness must be > 0");
   const Contact contact = parse_contact(walls);
   const double half_extent = 0.5 * (domain_hi - domain_lo).minCoeff();
-  const double thickness = walls.number("thickness", 2.0 * dx, Range::open(0.0, half_extent));
+  const double thickness = walls.number("thickness", default_thickness, Range::open(0.0, half_extent));
   DomainWalls<dim> result(domain_lo, domain_hi, thickness, contact);
   for (int axis = 0; axis < dim; ++axis) {
     for (const Side side : {Side::lower, Side::upper}) {
@@ -133,14 +134,16 @@ DomainWalls<dim> parse_walls(const Config& walls, const Vec<dim>& domain_lo, con
 
 template <int dim>
 ColliderSet<dim> parse_colliders(const Config& scene, const Vec<dim>& domain_lo, const Vec<dim>& domain_hi,
-                                 double dx) {
+                                 double default_wall_thickness) {
   ColliderSet<dim> colliders;
   for (const Config& entry : scene.list("colliders")) colliders.add(parse_collider<dim>(entry));
   if (const std::optional<Config> walls = scene.optional_child("walls"))
-    colliders.set_walls(parse_walls<dim>(*walls, domain_lo, domain_hi, dx));
+    colliders.set_walls(parse_walls<dim>(*walls, domain_lo, domain_hi, default_wall_thickness));
   return colliders;
 }
 
+template LevelSetShape<2> parse_level_set<2>(const Config&);
+template LevelSetShape<3> parse_level_set<3>(const Config&);
 template Collider<2> parse_collider<2>(const Config&);
 template Collider<3> parse_collider<3>(const Config&);
 template DomainWalls<2> parse_walls<2>(const Config&, const Vec<2>&, const Vec<2>&, double);

@@ -41,47 +41,81 @@ std::uint16_t material_index(const std::vector<Material<dim>>& materials, const 
   cfg.fail(key, "no material named '" + name + "' (materials: " + known + ")");
 }
 
+namespace {
+//! "(0.1, 0.2)"
+template <int dim>
+std::string point_text(const Vec<dim>& x) {
+  std::ostringstream s;
+  s << "(";
+  for (int a = 0; a < dim; ++a) s << (a ? ", " : "") << x[a];
+  s << ")";
+  return s.str();
+}
+
+//! The first position outside the domain box: why ("a particle at (1.0025, 0.2025) lies
+//! outside the domain (0, 0) - (1, 0.6)") and whether it lies below domain.lo; an empty
+//! `why` when every position lies inside.
+struct Outside {
+  std::string why;
+  bool below = false;
+};
+template <int dim>
+Outside first_outside_domain(const SceneSettings<dim>& settings, const std::vector<Vec<dim>>& positions) {
+  for (const Vec<dim>& x : positions)
+    for (int a = 0; a < dim; ++a)
+      if (!(x[a] >= settings.domain_lo[a] && x[a] <= settings.domain_hi[a]))
+        return {"a particle at " + point_text<dim>(x) + " lies outside the domain " +
+                    point_text<dim>(settings.domain_lo) + " - " + point_text<dim>(settings.domain_hi),
+                x[a] < settings.domain_lo[a]};
+  return {};
+}
+}  // namespace
+
 template <int dim>
 void add_particles(SolidScene<dim>& scene, const std::vector<Vec<dim>>& positions, double volume,
                    std::uint16_t m, const Vec<dim>& velocity, const std::string& where) {
+  if (const Outside outside = first_outside_domain(scene.settings, positions); !outside.why.empty())
+    throw InputError(where + ": " + outside.why);
   Particles<dim>& P = scene.state.particles;
   P.enable_deformation();
   const double mass = scene.materials.at(m).density * volume;
-  for (const Vec<dim>& x : positions) {
-    for (int a = 0; a < dim; ++a)
-      if (!(x[a] >= scene.settings.domain_lo[a] && x[a] <= scene.settings.domain_hi[a])) {
-        std::ostringstream s;
-        s << where << ": a particle at (" << x.transpose() << ") lies outside the domain ["
-          << scene.settings.domain_lo.transpose() << "] - [" << scene.settings.domain_hi.transpose() << "]";
-        throw InputError(s.str());
-      }
-    P.push_back(x, velocity, mass, volume, m);
+  for (const Vec<dim>& x : positions) P.push_back(x, velocity, mass, volume, m);
+}
+
+template <int dim>
+int particles_per_cell(const Config& cfg) {
+  const int ppc = cfg.integer("particles_per_cell", dim == 2 ? 4 : 8, 1, 1000);
+  try {
+    geometry::lattice_points_per_axis<dim>(ppc);
+  } catch (const InputError& e) {
+    cfg.fail("particles_per_cell", e.what());
   }
+  return ppc;
 }
 
 namespace {
 template <int dim>
 void seed_body(SolidScene<dim>& scene, const Config& body) {
   const double dx = scene.settings.dx;
-  const int ppc = body.integer("particles_per_cell", dim == 2 ? 4 : 8, 1, 1000);
+  const int ppc = particles_per_cell<dim>(body);
   const double jitter = body.number("jitter", 0.0, Range::half_open(0.0, 1.0));
   const auto seed = static_cast<std::uint64_t>(body.integer("seed", 1, 0, 1 << 30));
   const std::uint16_t m = material_index(scene.materials, body.text("material"), body, "material");
   const Vec<dim> velocity = body.vector<dim>("velocity", Vec<dim>::Zero());
-  const std::string shape = body.choice("shape", "box", {"box", "sphere", "mesh"});
+  const std::string shape = body.choice("shape", "box", {"box", "sphere", "level_set"});
   std::vector<Vec<dim>> x;
-  if (shape == "box") {
+  if (shape == "box")
     x = geometry::seed_box<dim>(body.vector<dim>("lo"), body.vector<dim>("hi"), dx, ppc, jitter, seed);
-  } else if (shape == "sphere") {
+  else if (shape == "sphere")
     x = geometry::seed_sphere<dim>(body.vector<dim>("center"), body.number("radius", Range::positive()), dx,
                                    ppc, jitter, seed);
-  } else {
-    const auto level_set = geometry::LevelSet::from_mesh(body.text("file"),
-                                                         body.number("voxel_size", 0.5 * dx, Range::positive()));
-    x = geometry::seed_level_set<dim>(geometry::LevelSetShape<dim>(level_set, body.number("slice_z", 0.0, Range::any())),
-                                      dx, ppc, jitter, seed);
-  }
+  else
+    x = geometry::seed_level_set<dim>(geometry::parse_level_set<dim>(body), dx, ppc, jitter, seed);
   if (x.empty()) body.fail("shape", "the body contains no particle at this resolution");
+  // Blame the key that placed the body, so the message carries its file position and value.
+  if (const Outside outside = first_outside_domain(scene.settings, x); !outside.why.empty())
+    body.fail(shape == "box" ? (outside.below ? "lo" : "hi") : shape == "sphere" ? "center" : "file",
+              "expected the body inside the domain, but " + outside.why);
   add_particles(scene, x, geometry::particle_volume<dim>(dx, ppc), m, velocity, body.path());
 }
 }  // namespace
@@ -105,7 +139,8 @@ void seed_bodies(SolidScene<dim>& solid, const Config& scene) {
 template <int dim>
 SolidScene<dim> load_solid_scene(const Config& scene) {
   SceneSettings<dim> settings = parse_scene_settings<dim>(scene);
-  auto colliders = geometry::parse_colliders<dim>(scene, settings.domain_lo, settings.domain_hi, settings.dx);
+  auto colliders = geometry::parse_colliders<dim>(scene, settings.domain_lo, settings.domain_hi,
+                                                   wall_layer(settings.kernel, settings.dx));
   SolidScene<dim> s = make_solid_scene(std::move(settings), parse_materials<dim>(scene), std::move(colliders));
   seed_bodies(s, scene);
   return s;
@@ -119,7 +154,8 @@ Pipeline<MpmState<dim>> make_explicit_pipeline(const SolidScene<dim>& scene) {
   dt.max_dt = scene.settings.max_dt;
   for (const auto& m : scene.materials) dt.wave_speed = std::max(dt.wave_speed, m.wave_speed());
 
-  Pipeline<MpmState<dim>> p({"particle.x", "particle.v", "particle.C", "particle.mass", "particle.F"});
+  Pipeline<MpmState<dim>> p({"particle.x", "particle.v", "particle.C", "particle.mass", "particle.volume0",
+                             "particle.material", "particle.F", "particle.plastic"});
   p.add(std::make_unique<stages::TimeStepControl<dim>>(dt));
   p.add(std::make_unique<stages::SortParticles<dim>>());
   p.add(std::make_unique<stages::ParticlesToGrid<dim>>());
@@ -142,6 +178,7 @@ double elastic_energy(const MpmState<dim>& state, const std::vector<Material<dim
 
 #define MPM_SOLID_SCENE(dim)                                                                       \
   template std::vector<Material<dim>> parse_materials<dim>(const Config&);                        \
+  template int particles_per_cell<dim>(const Config&);                                            \
   template std::uint16_t material_index(const std::vector<Material<dim>>&, const std::string&,    \
                                         const Config&, const std::string&);                       \
   template void add_particles(SolidScene<dim>&, const std::vector<Vec<dim>>&, double, std::uint16_t, \

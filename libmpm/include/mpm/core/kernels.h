@@ -75,6 +75,14 @@ struct UGimp {
 
 using Kernel = std::variant<QuadraticBSpline, CubicBSpline, UGimp>;
 
+inline int kernel_support(const Kernel& k) {
+  return std::visit([](const auto& kernel) { return kernel.support; }, k);
+}
+
+//! Thickness of the wall layer a domain needs so that no stencil leaves the grid: the nodes
+//! within (support - 1) dx of a face carry the wall condition [m].
+inline double wall_layer(const Kernel& k, double dx) { return (kernel_support(k) - 1) * dx; }
+
 inline std::string kernel_name(const Kernel& k) {
   return std::visit([](const auto& kernel) { return std::string(kernel.name()); }, k);
 }

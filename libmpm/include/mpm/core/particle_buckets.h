@@ -6,6 +6,11 @@
 //! 2^dim blocks it overlaps. Buckets whose blocks differ in parity ("colour") never touch the
 //! same nodes, so each colour runs in parallel without atomics and the result does not depend
 //! on the thread count.
+//!
+//! The order is an index (ParticleBuckets::particle); the particle storage is not moved.
+//! Moving every channel of millions of particles costs more than the transfers themselves,
+//! while the transfers reach particles through the index at almost no cost: they load a
+//! chunk of particles at once, so out-of-order loads overlap (bench/bench_transfer.cpp).
 #include <mpm/core/kernels.h>
 #include <mpm/core/particles.h>
 #include <mpm/core/sparse_grid.h>
@@ -20,8 +25,9 @@ namespace mpm {
 template <int dim>
 struct ParticleBuckets {
   static constexpr int colors = 1 << dim;
-  std::vector<std::uint32_t> begin;  //!< bucket b holds particles [begin[b], begin[b+1])
-  std::vector<int> block;            //!< block id (dense table) of bucket b
+  std::vector<std::uint32_t> particle;  //!< particle indices in bucket order
+  std::vector<std::uint32_t> begin;     //!< bucket b holds particle[begin[b]] .. particle[begin[b+1] - 1]
+  std::vector<int> block;               //!< block id (dense table) of bucket b
   std::array<std::vector<int>, colors> by_color;
 
   int count() const { return static_cast<int>(block.size()); }
@@ -45,18 +51,24 @@ struct CellMap {
 template <int dim>
 IVec<dim> stencil_base(const SparseGrid<dim>& grid, const Kernel& kernel, const Vec<dim>& x);
 
-//! Sorts `particles` by block (counting sort, skipped when already ordered), fills `buckets`
-//! and allocates the grid blocks their stencils touch. Throws NumericalError naming `stage`,
-//! the particle and its position if a particle is not finite or its stencil leaves the grid.
-//! Returns true when the particles were reordered.
+//! Orders the particles by block (stable counting sort of an index; the particles are not
+//! moved), fills `buckets` and allocates the grid blocks their stencils touch. Throws
+//! NumericalError naming `stage`, the particle and its position if a particle is not finite
+//! or its stencil leaves the grid. Returns true when the bucket order differs from the
+//! storage order.
 template <int dim>
-bool sort_into_buckets(Particles<dim>& particles, const Kernel& kernel, SparseGrid<dim>& grid,
+bool sort_into_buckets(const Particles<dim>& particles, const Kernel& kernel, SparseGrid<dim>& grid,
                        ParticleBuckets<dim>& buckets, const std::string& stage = "sort");
 
-//! The sort of sort_into_buckets for positions in any storage and precision (T = double or
-//! float): fills `buckets` for the particles in block order, allocates the grid blocks and
-//! returns the permutation into that order (new index i holds old index order[i]), empty when
-//! the particles are already in order. The caller applies the permutation to its channels.
+//! sort_into_buckets for positions in any storage and precision (T = double or float).
+template <int dim, class T>
+bool sort_into_buckets(const std::vector<Eigen::Matrix<T, dim, 1>>& x, const Kernel& kernel,
+                       SparseGrid<dim>& grid, ParticleBuckets<dim>& buckets,
+                       const std::string& stage = "sort");
+
+//! For callers that keep their particles stored in bucket order: returns the permutation into
+//! block order (new index i holds old index order[i]), empty when the particles are already
+//! in order, and fills `buckets` for the particles after the caller has applied it.
 template <int dim, class T>
 std::vector<std::uint32_t> bucket_order(const std::vector<Eigen::Matrix<T, dim, 1>>& x,
                                         const Kernel& kernel, SparseGrid<dim>& grid,

@@ -1,6 +1,6 @@
 #pragma once
 //! The keys every scene shares: dimension, domain, grid, transfer, time, gravity and output.
-//! See docs/scene_reference.md for units, defaults and ranges.
+//! See docs/user_guide.md (scene file reference) for units, defaults and ranges.
 #include <mpm/core/config.h>
 #include <mpm/core/kernels.h>
 #include <mpm/core/transfer.h>
@@ -35,6 +35,9 @@ struct SceneSettings {
 
   int frame_count() const;
 };
+
+//! The interpolation kernel of `grid.kernel` (and `grid.particle_size` for uGIMP).
+Kernel parse_kernel(const Config& scene);
 
 //! Reads the top-level "dim" key (2 or 3) that selects the template instantiation.
 int scene_dimension(const Config& scene);

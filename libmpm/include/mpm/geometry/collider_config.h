@@ -20,7 +20,8 @@
 //!   walls:                           # optional: the faces of the domain box
 //!     contact: separate              # for every wall (default separate)
 //!     friction: 0.2                  # (default 0)
-//!     thickness: 0.1                 # boundary layer [m] (default 2 dx)
+//!     thickness: 0.1                 # boundary layer [m] (default: wall_layer(kernel, dx),
+//!                                    # (support - 1) dx, so no stencil leaves the grid)
 //!     y_max: open                    # per face x_min .. z_max: sticky | slip | separate | open
 //!
 //! Every error is an InputError from Config (file, line, key path, value, accepted range).
@@ -30,17 +31,25 @@
 
 namespace mpm::geometry {
 
+//! The level set of an entry with keys file (.vdb, .obj or .stl; relative to the scene file),
+//! voxel_size and half_width (meshes), grid_name (.vdb) and slice_z (2D). Shared by
+//! `type: level_set` colliders and `shape: level_set` bodies.
+template <int dim>
+LevelSetShape<dim> parse_level_set(const Config& entry);
+
 //! One entry of `colliders:`.
 template <int dim>
 Collider<dim> parse_collider(const Config& entry);
 
-//! The `walls:` map for the domain box [domain_lo, domain_hi] of grid spacing dx [m].
+//! The `walls:` map for the domain box [domain_lo, domain_hi]; `default_thickness` [m] applies
+//! when the map has no `thickness` key.
 template <int dim>
-DomainWalls<dim> parse_walls(const Config& walls, const Vec<dim>& domain_lo, const Vec<dim>& domain_hi, double dx);
+DomainWalls<dim> parse_walls(const Config& walls, const Vec<dim>& domain_lo, const Vec<dim>& domain_hi,
+                             double default_thickness);
 
 //! The `colliders:` list and the `walls:` map of `scene` (the map that holds both keys).
 template <int dim>
 ColliderSet<dim> parse_colliders(const Config& scene, const Vec<dim>& domain_lo, const Vec<dim>& domain_hi,
-                                 double dx);
+                                 double default_wall_thickness);
 
 }  // namespace mpm::geometry

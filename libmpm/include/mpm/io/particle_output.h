@@ -4,7 +4,7 @@
 //! particles_0007.h5 holds, for N particles (SI units):
 //!   position [m] and velocity [m/s] as N x 3 (2D padded with z = 0 so that ParaView shows it),
 //!   mass [kg], volume0 [m^dim], material (int32 index), speed = |v| [m/s], and, when the
-//!   particles carry deformation, J = det F^E and plastic (log det F^P);
+//!   particles carry deformation, J = det F^E and plastic (the Drucker-Prager volume correction);
 //! and the root attributes time [s], frame and dim. particles_0007.xdmf next to it describes the
 //! frame as a Polyvertex grid, and particles.xdmf gathers the frames as a time series.
 //! All files are replaced atomically (io/atomic_file.h).

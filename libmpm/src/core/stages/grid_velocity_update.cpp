@@ -2,7 +2,7 @@
 //   v_i^n     = (m v)_i / m_i                    (kept as v_i^old for FLIP)
 //   v_i^{n+1} = v_i^n + dt (f_i / m_i + g)
 // Nodes without mass keep zero velocity. Non-finite results stop the run naming the node.
-#include <mpm/core/finite_guard.h>
+#include <mpm/core/error.h>
 #include <mpm/core/stages/grid_velocity_update.h>
 
 #include <tbb/parallel_for.h>
@@ -22,7 +22,14 @@ void GridVelocityUpdate<dim>::run(MpmState<dim>& s) {
       g.velocity[k] += dv_gravity;
     }
   });
-  check_finite(g.velocity, name(), "grid node (storage index)", "velocity");
+  for (std::size_t k = 0; k < g.node_storage(); ++k)
+    if (!g.velocity[k].allFinite()) {
+      const IVec<dim> node = g.node_coord(k);
+      std::string where;
+      for (int a = 0; a < dim; ++a) where += (a ? ", " : "") + std::to_string(node[a]);
+      throw NumericalError("stage '" + name() + "': grid node (" + where + ") has non-finite velocity (mass " +
+                           std::to_string(g.mass[k]) + " kg)");
+    }
 }
 
 template class GridVelocityUpdate<2>;

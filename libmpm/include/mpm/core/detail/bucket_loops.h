@@ -5,6 +5,7 @@
 //! a (2B)^dim scratch patch and then adds the patch into the grid channels.
 //! gather:  buckets in parallel; each bucket copies the patch of Ch grid values per node into
 //! scratch, then visits its particles.
+//! The *_buckets forms hand the body a bucket's particle range, the plain forms one particle.
 //! The per-particle body sees a Stencil: 1D weights per axis and a patch-local node offset.
 //! The scalar type T of channels, patch and stencil is double for the library; the skeletons
 //! are scalar-generic so a single-precision path can reuse them (bench/bench_transfer.cpp).
@@ -60,15 +61,22 @@ struct Stencil {
   }
 
   //! 1 / D_p per axis [1/cells^2], D_p = sum_i w_ip (x_i - x_p)^2 (APIC inertia, diagonal for
-  //! tensor-product kernels because of linear reproduction).
-  VecT inverse_inertia() const {
-    VecT d;
+  //! tensor-product kernels because of linear reproduction). One division for all axes,
+  //! 1/D_a = prod_{b != a} D_b / prod_b D_b; scalar code, as a vector built element by element
+  //! and read back whole would stall store forwarding.
+  void inverse_inertia(T (&inv_D)[dim]) const {
+    T D[dim], prod = 1;
     for (int a = 0; a < dim; ++a) {
-      T s = 0;
-      for (int k = 0; k < S; ++k) s += w[a][k] * rel[a][k] * rel[a][k];
-      d[a] = 1 / s;
+      D[a] = 0;
+      for (int k = 0; k < S; ++k) D[a] += w[a][k] * rel[a][k] * rel[a][k];
+      prod *= D[a];
     }
-    return d;
+    const T inv_prod = 1 / prod;
+    for (int a = 0; a < dim; ++a) {
+      inv_D[a] = inv_prod;
+      for (int b = 0; b < dim; ++b)
+        if (b != a) inv_D[a] *= D[b];
+    }
   }
 
   //! Calls fn(patch index, weight, gradient [1/cell], node - particle [cells]) for S^dim nodes.
@@ -147,11 +155,12 @@ struct PatchFrame {
   Eigen::Matrix<T, dim, 1> cells(const Eigen::Matrix<T, dim, 1>& x) const { return map(x); }
 };
 
-//! body(particle index p, const PatchFrame&, T* patch) adds Ch values per node into
-//! patch[node * Ch + c]; the sums are added into `channels` afterwards.
-template <int dim, int Ch, class T, class Body>
-void scatter(const SparseGrid<dim>& grid, const ParticleBuckets<dim>& buckets,
-             const std::array<BasicChannelView<T>, Ch>& channels, Body&& body) {
+//! bucket_body(first, last, const PatchFrame&, T* patch) adds Ch values per node of the
+//! particles with indices [first, last) (a range of ParticleBuckets::particle: one bucket)
+//! into patch[node * Ch + c]; the sums are added into `channels` afterwards.
+template <int dim, int Ch, class T, class BucketBody>
+void scatter_buckets(const SparseGrid<dim>& grid, const ParticleBuckets<dim>& buckets,
+                     const std::array<BasicChannelView<T>, Ch>& channels, BucketBody&& bucket_body) {
   for (const std::vector<int>& same_color : buckets.by_color) {
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, same_color.size(), 4),
                       [&](const tbb::blocked_range<std::size_t>& range) {
@@ -159,8 +168,8 @@ void scatter(const SparseGrid<dim>& grid, const ParticleBuckets<dim>& buckets,
       for (std::size_t r = range.begin(); r != range.end(); ++r) {
         const int b = same_color[r];
         patch.fill(T(0));
-        const PatchFrame<dim> frame(grid, buckets.block[b]);
-        for (std::uint32_t p = buckets.begin[b]; p < buckets.begin[b + 1]; ++p) body(p, frame, patch.data());
+        bucket_body(buckets.particle.data() + buckets.begin[b], buckets.particle.data() + buckets.begin[b + 1],
+                    PatchFrame<dim>(grid, buckets.block[b]), patch.data());
         for_each_patch_node(grid, buckets.block[b], [&](int node, std::size_t k) {
           for (int c = 0; c < Ch; ++c)
             channels[c].data[k * channels[c].stride + channels[c].offset] += patch[node * Ch + c];
@@ -170,10 +179,21 @@ void scatter(const SparseGrid<dim>& grid, const ParticleBuckets<dim>& buckets,
   }
 }
 
-//! body(particle index p, const PatchFrame&, const T* patch) reads Ch values per node.
+//! scatter_buckets with a body per particle: body(p, const PatchFrame&, T* patch).
 template <int dim, int Ch, class T, class Body>
-void gather(const SparseGrid<dim>& grid, const ParticleBuckets<dim>& buckets,
-            const std::array<BasicChannelView<T>, Ch>& channels, Body&& body) {
+void scatter(const SparseGrid<dim>& grid, const ParticleBuckets<dim>& buckets,
+             const std::array<BasicChannelView<T>, Ch>& channels, Body&& body) {
+  scatter_buckets<dim, Ch>(grid, buckets, channels,
+                           [&](const std::uint32_t* first, const std::uint32_t* last, const PatchFrame<dim>& f, T* patch) {
+    for (const std::uint32_t* p = first; p != last; ++p) body(*p, f, patch);
+  });
+}
+
+//! bucket_body(first, last, const PatchFrame&, const T* patch) reads Ch values per node for
+//! the particles with indices [first, last) (one bucket).
+template <int dim, int Ch, class T, class BucketBody>
+void gather_buckets(const SparseGrid<dim>& grid, const ParticleBuckets<dim>& buckets,
+                    const std::array<BasicChannelView<T>, Ch>& channels, BucketBody&& bucket_body) {
   tbb::parallel_for(tbb::blocked_range<int>(0, buckets.count(), 4),
                     [&](const tbb::blocked_range<int>& range) {
     alignas(64) std::array<T, patch_nodes<dim> * Ch> patch;
@@ -182,9 +202,19 @@ void gather(const SparseGrid<dim>& grid, const ParticleBuckets<dim>& buckets,
         for (int c = 0; c < Ch; ++c)
           patch[node * Ch + c] = channels[c].data[k * channels[c].stride + channels[c].offset];
       });
-      const PatchFrame<dim> frame(grid, buckets.block[b]);
-      for (std::uint32_t p = buckets.begin[b]; p < buckets.begin[b + 1]; ++p) body(p, frame, patch.data());
+      bucket_body(buckets.particle.data() + buckets.begin[b], buckets.particle.data() + buckets.begin[b + 1],
+                  PatchFrame<dim>(grid, buckets.block[b]), patch.data());
     }
+  });
+}
+
+//! gather_buckets with a body per particle: body(p, const PatchFrame&, const T* patch).
+template <int dim, int Ch, class T, class Body>
+void gather(const SparseGrid<dim>& grid, const ParticleBuckets<dim>& buckets,
+            const std::array<BasicChannelView<T>, Ch>& channels, Body&& body) {
+  gather_buckets<dim, Ch>(grid, buckets, channels,
+                          [&](const std::uint32_t* first, const std::uint32_t* last, const PatchFrame<dim>& f, const T* patch) {
+    for (const std::uint32_t* p = first; p != last; ++p) body(*p, f, patch);
   });
 }
 

@@ -12,72 +12,125 @@
 //! matrix-vector product per node.
 #include <mpm/core/detail/bucket_loops.h>
 
+#include <algorithm>
+
 namespace mpm::detail {
 
+//! Asks for the cache lines of `object` ahead of use (for writing when `write`). A hint: a
+//! no-op for compilers without the builtin.
+template <bool write = false, class Object>
+void prefetch(const Object& object) {
+#if defined(__GNUC__)
+  const char* bytes = reinterpret_cast<const char*>(&object);
+  for (std::size_t b = 0; b < sizeof(Object); b += 64) __builtin_prefetch(bytes + b, write);
+  __builtin_prefetch(bytes + sizeof(Object) - 1, write);
+#else
+  (void)object;
+#endif
+}
+
+//! Visits the particles with indices [first, last) in chunks: prefetch(p) for the particles
+//! of the next chunk, then prepare(p, slot) for every particle of this chunk, then
+//! finish(p, slot). Particles stored out of bucket order are reached at random: the prefetch
+//! one chunk ahead hides those cache misses behind the stencil work of a chunk. And the
+//! set-up of a particle (loads; weights: floor, int conversions, polynomials) is a latency
+//! chain; done for a chunk at once it is independent work the CPU overlaps instead of a stall
+//! at the head of every particle's stencil loop.
+constexpr std::ptrdiff_t chunk_size = 16;
+template <class Prefetch, class Prepare, class Finish>
+void in_chunks(const std::uint32_t* first, const std::uint32_t* last, Prefetch&& prefetch,
+               Prepare&& prepare, Finish&& finish) {
+  const std::ptrdiff_t n = last - first;
+  for (std::ptrdiff_t i = 0; i < std::min(n, chunk_size); ++i) prefetch(first[i]);
+  for (std::ptrdiff_t i = 0; i < n; i += chunk_size) {
+    const std::ptrdiff_t end = std::min(n, i + chunk_size);
+    for (std::ptrdiff_t j = end; j < std::min(n, end + chunk_size); ++j) prefetch(first[j]);
+    for (std::ptrdiff_t j = i; j < end; ++j) prepare(first[j], static_cast<int>(j - i));
+    for (std::ptrdiff_t j = i; j < end; ++j) finish(first[j], static_cast<int>(j - i));
+  }
+}
+
 //! Adds w (c[0] + sum_a rel_a c[a+1]) for every stencil node into the patch (Ch values per
-//! node); the rel terms only when `affine`.
+//! node); the rel terms only when `affine`. With the integer node offsets n_a = rel_a -
+//! rel_a[0] the value is c0 + sum_a n_a c[a+1], c0 = c[0] + sum_a rel_a[0] c[a+1]: along a
+//! row it grows by c[1] from node to node, so a node costs one multiply-add.
 template <bool affine, int dim, int S, class T, class Node>
 [[gnu::always_inline]] inline void spread(const Stencil<dim, S, T>& st, const Node (&c)[dim + 1], T* patch) {
   constexpr int Ch = Node::RowsAtCompileTime;
   constexpr int W = patch_width<dim>;
-  const auto row = [&](int offset, const Node& q, const Node& e) {  // nodes along axis 0
+  Node c0 = c[0];
+  if constexpr (affine)
+    for (int a = 0; a < dim; ++a) c0.noalias() += st.rel[a][0] * c[a + 1];
+  const auto row = [&](int offset, T w_outer, const Node& q) {  // q: value at the row's first node
+    Node v = w_outer * q;
+    const Node step = w_outer * c[1];
     for (int i = 0; i < S; ++i) {
-      Eigen::Map<Node> out(patch + (offset + i) * Ch);
-      if constexpr (affine) out += st.w[0][i] * q + (st.w[0][i] * st.rel[0][i]) * e;
-      else out += st.w[0][i] * q;
+      Eigen::Map<Node>(patch + (offset + i) * Ch).noalias() += st.w[0][i] * v;
+      if constexpr (affine) v += step;
     }
   };
   if constexpr (dim == 2) {
-    for (int j = 0; j < S; ++j)
-      row(st.patch_offset + W * j, st.w[1][j] * (c[0] + st.rel[1][j] * c[2]), st.w[1][j] * c[1]);
+    Node q = c0;
+    for (int j = 0; j < S; ++j) {
+      row(st.patch_offset + W * j, st.w[1][j], q);
+      if constexpr (affine) q += c[2];
+    }
   } else {
+    Node qk = c0;
     for (int k = 0; k < S; ++k) {
-      const T wk = st.w[2][k];
-      const Node qk = wk * (c[0] + st.rel[2][k] * c[3]), bk = wk * c[2], ek = wk * c[1];
-      for (int j = 0; j < S; ++j)
-        row(st.patch_offset + W * (j + W * k), st.w[1][j] * (qk + st.rel[1][j] * bk), st.w[1][j] * ek);
+      Node q = qk;
+      for (int j = 0; j < S; ++j) {
+        row(st.patch_offset + W * (j + W * k), st.w[1][j] * st.w[2][k], q);
+        if constexpr (affine) q += c[2];
+      }
+      if constexpr (affine) qk += c[3];
     }
   }
 }
 
 //! Moments of the node values v (Ch values apart in the patch) over the stencil:
-//! s = sum w v and t[a] = sum w rel_a v.
-template <int Ch, int dim, int S, class T, class VecT>
-[[gnu::always_inline]] inline void collect(const Stencil<dim, S, T>& st, const T* patch, VecT& s, VecT (&t)[dim]) {
+//! s = sum w v and t[a] = sum w n_a v with the integer node offsets n_a = rel_a - rel_a[0],
+//! so sum w rel_a v = t[a] + rel_a[0] s. Integer offsets turn the moments into sums of the
+//! products w v: a node costs one multiply and a few adds.
+template <int Ch, int dim, int S, class T, class Lanes>
+[[gnu::always_inline]] inline void collect(const Stencil<dim, S, T>& st, const T* patch, Lanes& s,
+                                           Lanes (&t)[dim]) {
   constexpr int W = patch_width<dim>;
-  const auto row = [&](int offset, VecT& rs, VecT& rt) {  // nodes along axis 0
-    rs.setZero();
-    rt.setZero();
+  const auto row = [&](int offset, Lanes& m0, Lanes& m1) {  // sum w v and sum n_0 w v along axis 0
+    m0.setZero();
+    m1.setZero();
     for (int i = 0; i < S; ++i) {
-      const Eigen::Map<const VecT> v(patch + (offset + i) * Ch);
-      rs.noalias() += st.w[0][i] * v;
-      rt.noalias() += (st.w[0][i] * st.rel[0][i]) * v;
+      const Lanes wv = st.w[0][i] * Eigen::Map<const Lanes>(patch + (offset + i) * Ch);
+      m0 += wv;
+      if (i > 0) m1 += T(i) * wv;
     }
   };
   s.setZero();
-  for (VecT& ta : t) ta.setZero();
-  VecT rs, rt;
+  for (Lanes& ta : t) ta.setZero();
+  Lanes m0, m1;
   if constexpr (dim == 2) {
     for (int j = 0; j < S; ++j) {
-      row(st.patch_offset + W * j, rs, rt);
-      s.noalias() += st.w[1][j] * rs;
-      t[0].noalias() += st.w[1][j] * rt;
-      t[1].noalias() += (st.w[1][j] * st.rel[1][j]) * rs;
+      row(st.patch_offset + W * j, m0, m1);
+      const Lanes b = st.w[1][j] * m0;
+      s += b;
+      t[0].noalias() += st.w[1][j] * m1;
+      if (j > 0) t[1].noalias() += T(j) * b;
     }
   } else {
     for (int k = 0; k < S; ++k) {
-      VecT sk = VecT::Zero(), t0k = VecT::Zero(), t1k = VecT::Zero();
+      Lanes M0 = Lanes::Zero(), M1 = Lanes::Zero(), M2 = Lanes::Zero();
       for (int j = 0; j < S; ++j) {
-        row(st.patch_offset + W * (j + W * k), rs, rt);
-        sk.noalias() += st.w[1][j] * rs;
-        t0k.noalias() += st.w[1][j] * rt;
-        t1k.noalias() += (st.w[1][j] * st.rel[1][j]) * rs;
+        row(st.patch_offset + W * (j + W * k), m0, m1);
+        const Lanes b = st.w[1][j] * m0;
+        M0 += b;
+        M1.noalias() += st.w[1][j] * m1;
+        if (j > 0) M2.noalias() += T(j) * b;
       }
-      const T wk = st.w[2][k];
-      s.noalias() += wk * sk;
-      t[0].noalias() += wk * t0k;
-      t[1].noalias() += wk * t1k;
-      t[2].noalias() += (wk * st.rel[2][k]) * sk;
+      const Lanes d = st.w[2][k] * M0;
+      s += d;
+      t[0].noalias() += st.w[2][k] * M1;
+      t[1].noalias() += st.w[2][k] * M2;
+      if (k > 0) t[2].noalias() += T(k) * d;
     }
   }
 }
@@ -89,14 +142,22 @@ void p2g(const PS& P, const ParticleBuckets<dim>& buckets, const K& kernel,
          const SparseGrid<dim>& grid, const std::array<BasicChannelView<T>, dim + 1>& channels) {
   using Node = Eigen::Matrix<T, dim + 1, 1>;
   const T dx = static_cast<T>(grid.dx());
-  scatter<dim, dim + 1>(grid, buckets, channels, [&](std::uint32_t p, const PatchFrame<dim>& f, T* patch) {
-    Stencil<dim, K::support, T> st;
-    st.compute(kernel, f.cells(P.x[p]), f.origin);
-    const T m = P.mass[p];
-    Node c[dim + 1];
-    c[0] << m, m * P.v[p];
-    for (int a = 0; a < dim; ++a) c[a + 1] << T(0), (m * dx) * P.C[p].col(a);
-    spread<affine>(st, c, patch);
+  scatter_buckets<dim, dim + 1>(grid, buckets, channels,
+                                [&](const std::uint32_t* first, const std::uint32_t* last,
+                                    const PatchFrame<dim>& f, T* patch) {
+    Stencil<dim, K::support, T> st[chunk_size];
+    Node c[chunk_size][dim + 1];
+    in_chunks(first, last, [&](std::uint32_t p) {
+      prefetch(P.x[p]);
+      prefetch(P.v[p]);
+      prefetch(P.C[p]);
+      prefetch(P.mass[p]);
+    }, [&](std::uint32_t p, int q) {
+      st[q].compute(kernel, f.cells(P.x[p]), f.origin);
+      const T m = P.mass[p];
+      c[q][0] << m, m * P.v[p];
+      for (int a = 0; a < dim; ++a) c[q][a + 1] << T(0), (m * dx) * P.C[p].col(a);
+    }, [&](std::uint32_t, int q) { spread<affine>(st[q], c[q], patch); });
   });
 }
 
@@ -108,28 +169,46 @@ void g2p(PS& P, const ParticleBuckets<dim>& buckets, const K& kernel, const Spar
          const std::array<BasicChannelView<T>, Ch>& channels, T flip_ratio, T dt) {
   static_assert(Ch == (flip ? 2 * dim : dim));
   using VecT = Eigen::Matrix<T, dim, 1>;
+  // APIC reads the velocity padded to a whole number of SIMD packets (the extra lane repeats
+  // component 0 and is ignored), so the stencil sums are packet operations.
+  constexpr int lanes = flip || dim != 3 ? int(Ch) : 4;
+  using Lanes = Eigen::Matrix<T, lanes, 1>;
+  std::array<BasicChannelView<T>, lanes> read;
+  for (int c = 0; c < lanes; ++c) read[c] = channels[c < int(Ch) ? c : 0];
   const T inv_dx = static_cast<T>(1.0 / grid.dx());
-  gather<dim, int(Ch)>(grid, buckets, channels, [&](std::uint32_t p, const PatchFrame<dim>& f, const T* patch) {
-    Stencil<dim, K::support, T> st;
-    st.compute(kernel, f.cells(P.x[p]), f.origin);
-    VecT v_pic;
-    if constexpr (flip) {
-      v_pic.setZero();
-      VecT dv = VecT::Zero();
-      st.for_each_node([&](int node, T w, const VecT&, const VecT&) {
-        const Eigen::Map<const VecT> vi(patch + node * Ch);
-        v_pic.noalias() += w * vi;
-        dv.noalias() += w * (vi - Eigen::Map<const VecT>(patch + node * Ch + dim));
-      });
-      P.v[p] = flip_ratio * (P.v[p] + dv) + (1 - flip_ratio) * v_pic;
-    } else {
-      VecT t[dim];  // column a of B_p = sum w v (x_i - x_p)^T, in cells
-      collect<int(Ch)>(st, patch, v_pic, t);
-      const VecT inv_D = st.inverse_inertia() * inv_dx;
-      for (int a = 0; a < dim; ++a) P.C[p].col(a) = t[a] * inv_D[a];
-      P.v[p] = v_pic;
-    }
-    P.x[p] += dt * v_pic;
+  gather_buckets<dim, lanes>(grid, buckets, read,
+                             [&](const std::uint32_t* first, const std::uint32_t* last,
+                                 const PatchFrame<dim>& f, const T* patch) {
+    Stencil<dim, K::support, T> st[chunk_size];
+    T inv_D[chunk_size][dim];  // APIC D_p^-1 [1/cells^2]; its division overlaps in the set-up
+    in_chunks(first, last, [&](std::uint32_t p) {
+      prefetch<true>(P.x[p]);
+      prefetch<true>(P.v[p]);
+      if constexpr (!flip) prefetch<true>(P.C[p]);
+    }, [&](std::uint32_t p, int q) {
+      st[q].compute(kernel, f.cells(P.x[p]), f.origin);
+      if constexpr (!flip) st[q].inverse_inertia(inv_D[q]);
+    }, [&](std::uint32_t p, int q) {
+      VecT v_pic;
+      if constexpr (flip) {
+        v_pic.setZero();
+        VecT dv = VecT::Zero();
+        st[q].for_each_node([&](int node, T w, const VecT&, const VecT&) {
+          const Eigen::Map<const VecT> vi(patch + node * lanes);
+          v_pic.noalias() += w * vi;
+          dv.noalias() += w * (vi - Eigen::Map<const VecT>(patch + node * lanes + dim));
+        });
+        P.v[p] = flip_ratio * (P.v[p] + dv) + (1 - flip_ratio) * v_pic;
+      } else {
+        Lanes s, t[dim];  // B_p = sum w v (x_i - x_p)^T [cells]: column a is t[a] + rel_a[0] s
+        collect<lanes>(st[q], patch, s, t);
+        for (int a = 0; a < dim; ++a)
+          P.C[p].col(a) = (t[a] + st[q].rel[a][0] * s).template head<dim>() * (inv_D[q][a] * inv_dx);
+        v_pic = s.template head<dim>();
+        P.v[p] = v_pic;
+      }
+      P.x[p] += dt * v_pic;
+    });
   });
 }
 

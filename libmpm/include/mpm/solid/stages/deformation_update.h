@@ -9,7 +9,7 @@ template <int dim>
 class DeformationUpdate final : public Stage<MpmState<dim>> {
 public:
   std::string name() const override { return "deformation"; }
-  std::vector<std::string> reads() const override { return {"grid.velocity", "particle.F"}; }
+  std::vector<std::string> reads() const override { return {"particle.order", "grid.velocity", "particle.F"}; }
   std::vector<std::string> writes() const override { return {"particle.F"}; }
   void run(MpmState<dim>& s) override;
 

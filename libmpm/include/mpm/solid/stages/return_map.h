@@ -12,7 +12,7 @@ class ReturnMap final : public Stage<MpmState<dim>> {
 public:
   explicit ReturnMap(std::vector<Material<dim>> materials) : materials_(std::move(materials)) {}
   std::string name() const override { return "plasticity"; }
-  std::vector<std::string> reads() const override { return {"particle.F"}; }
+  std::vector<std::string> reads() const override { return {"particle.F", "particle.plastic", "particle.material"}; }
   std::vector<std::string> writes() const override { return {"particle.F", "particle.plastic"}; }
   void run(MpmState<dim>& s) override;
 

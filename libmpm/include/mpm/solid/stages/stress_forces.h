@@ -11,7 +11,9 @@ class StressForces final : public Stage<MpmState<dim>> {
 public:
   explicit StressForces(std::vector<Material<dim>> materials) : materials_(std::move(materials)) {}
   std::string name() const override { return "stress_forces"; }
-  std::vector<std::string> reads() const override { return {"particle.order", "grid.blocks", "particle.F"}; }
+  std::vector<std::string> reads() const override {
+    return {"particle.order", "grid.blocks", "particle.x", "particle.volume0", "particle.material", "particle.F"};
+  }
   std::vector<std::string> writes() const override { return {"grid.force"}; }
   void run(MpmState<dim>& s) override;
 

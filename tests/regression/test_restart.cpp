@@ -1,0 +1,213 @@
+// Restart: a column collapse continued from a checkpoint reaches the same bits as the run that
+// was never interrupted. The run writes 10 frames with checkpoint_every = 4; a copy of its
+// output folder loses every file written after frame 4 (as if the run had died there) and is
+// continued with --restart checkpoint_0004.h5. Then every particle channel of the later
+// checkpoints (mpm::io::load_checkpoint) and every dataset of the later particles_NNNN.h5
+// (HDF5 C API) must be equal bit for bit, the .xdmf files byte for byte, and diagnostics.csv
+// row for row (17 significant digits, so equal text is equal bits) except the seconds_* timings.
+#include <mpm/io/checkpoint.h>
+
+#include <doctest/doctest.h>
+#include <hdf5.h>
+#include <nlohmann/json.hpp>
+
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <regex>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <sys/wait.h>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+const fs::path kWork = RESTART_WORK_DIR;
+constexpr int kFrames = 10, kCheckpointEvery = 4;
+
+//! Runs column_collapse on the reduced scene; its stderr goes to <out>.log. Returns the exit status.
+int run_column_collapse(const fs::path& out, const std::string& extra) {
+  const std::string command = std::string("'") + COLUMN_COLLAPSE_APP + "' '" + SEDIMENT_DATA_DIR +
+                              "/scenes/column_collapse.yaml' --quiet --set column.cells_per_width=10"
+                              " --set time.frame_dt=0.02 --set time.end=" +
+                              std::to_string(kFrames * 0.02) + " --set output.png=false" +
+                              " --set output.checkpoint_every=" + std::to_string(kCheckpointEvery) +
+                              " --out '" + out.string() + "' " + extra + " 2> '" + out.string() + ".log'";
+  const int status = std::system(command.c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+std::string read_text(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  REQUIRE_MESSAGE(in, "cannot read " << path);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+std::vector<std::string> split(const std::string& line) {
+  std::vector<std::string> fields;
+  std::stringstream s(line);
+  for (std::string field; std::getline(s, field, ',');) fields.push_back(field);
+  return fields;
+}
+
+//! Every double of `a` equals the one of `b` in all its bits (NaN payloads and -0 included).
+template <class T>
+bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
+  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
+}
+
+void check_checkpoints_equal(const fs::path& a, const fs::path& b) {
+  mpm::io::CheckpointHeader ha, hb;
+  const mpm::Particles<2> pa = mpm::io::load_checkpoint<2>(a, ha);
+  const mpm::Particles<2> pb = mpm::io::load_checkpoint<2>(b, hb);
+  INFO(a.filename().string());
+  CHECK(ha.frame == hb.frame);
+  CHECK(ha.step == hb.step);
+  CHECK(std::memcmp(&ha.time, &hb.time, sizeof(double)) == 0);
+  CHECK(std::memcmp(&ha.dt_previous, &hb.dt_previous, sizeof(double)) == 0);
+  REQUIRE(pa.size() > 0);
+  CHECK(same_bits(pa.x, pb.x));
+  CHECK(same_bits(pa.v, pb.v));
+  CHECK(same_bits(pa.C, pb.C));
+  CHECK(same_bits(pa.mass, pb.mass));
+  CHECK(same_bits(pa.volume0, pb.volume0));
+  CHECK(same_bits(pa.material, pb.material));
+  CHECK(same_bits(pa.F, pb.F));
+  CHECK(same_bits(pa.plastic, pb.plastic));
+}
+
+//! Names of the datasets in the root group of an open HDF5 file.
+std::vector<std::string> dataset_names(hid_t file) {
+  std::vector<std::string> names;
+  H5Literate(
+      file, H5_INDEX_NAME, H5_ITER_INC, nullptr,
+      [](hid_t, const char* name, const H5L_info_t*, void* data) -> herr_t {
+        static_cast<std::vector<std::string>*>(data)->push_back(name);
+        return 0;
+      },
+      &names);
+  return names;
+}
+
+//! The raw bytes of a dataset in its native memory type.
+std::vector<unsigned char> dataset_bytes(hid_t file, const std::string& name) {
+  const hid_t set = H5Dopen2(file, name.c_str(), H5P_DEFAULT);
+  REQUIRE_MESSAGE(set >= 0, "cannot open dataset " << name);
+  const hid_t space = H5Dget_space(set), stored = H5Dget_type(set);
+  const hid_t native = H5Tget_native_type(stored, H5T_DIR_ASCEND);
+  std::vector<unsigned char> bytes(static_cast<std::size_t>(H5Sget_simple_extent_npoints(space)) *
+                                   H5Tget_size(native));
+  if (!bytes.empty()) CHECK(H5Dread(set, native, H5S_ALL, H5S_ALL, H5P_DEFAULT, bytes.data()) >= 0);
+  H5Tclose(native);
+  H5Tclose(stored);
+  H5Sclose(space);
+  H5Dclose(set);
+  return bytes;
+}
+
+void check_particle_files_equal(const fs::path& a, const fs::path& b) {
+  INFO(a.filename().string());
+  const hid_t fa = H5Fopen(a.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  const hid_t fb = H5Fopen(b.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  REQUIRE(fa >= 0);
+  REQUIRE(fb >= 0);
+  const std::vector<std::string> names = dataset_names(fa);
+  CHECK(names.size() >= 6);
+  CHECK(names == dataset_names(fb));
+  for (const std::string& name : names) {
+    INFO("dataset " << name);
+    CHECK(dataset_bytes(fa, name) == dataset_bytes(fb, name));
+  }
+  H5Fclose(fa);
+  H5Fclose(fb);
+}
+
+//! The frame number NNNN of "<stem>_NNNN.<ext>", or -1.
+int frame_of(const fs::path& file) {
+  static const std::regex numbered(R"(.*_(\d{4})\.[a-z0-9]+)");
+  std::smatch m;
+  const std::string name = file.filename().string();
+  return std::regex_match(name, m, numbered) ? std::stoi(m[1]) : -1;
+}
+
+std::string numbered(const std::string& stem, int frame, const std::string& ext) {
+  char name[64];
+  std::snprintf(name, sizeof name, "%s_%04d%s", stem.c_str(), frame, ext.c_str());
+  return name;
+}
+
+void check_particle_state(const fs::path& full, const fs::path& restarted) {
+  for (const int frame : {2 * kCheckpointEvery, kFrames})
+    check_checkpoints_equal(full / numbered("checkpoint", frame, ".h5"),
+                            restarted / numbered("checkpoint", frame, ".h5"));
+  for (int frame = kCheckpointEvery + 1; frame <= kFrames; ++frame) {
+    check_particle_files_equal(full / numbered("particles", frame, ".h5"),
+                               restarted / numbered("particles", frame, ".h5"));
+    CHECK(read_text(full / numbered("particles", frame, ".xdmf")) ==
+          read_text(restarted / numbered("particles", frame, ".xdmf")));
+  }
+  CHECK(read_text(full / "particles.xdmf") == read_text(restarted / "particles.xdmf"));
+}
+
+void check_diagnostics_equal_but_timings(const fs::path& full, const fs::path& restarted) {
+  std::stringstream a(read_text(full / "diagnostics.csv")), b(read_text(restarted / "diagnostics.csv"));
+  std::string line_a, line_b;
+  REQUIRE(std::getline(a, line_a));
+  REQUIRE(std::getline(b, line_b));
+  const std::vector<std::string> columns = split(line_a);
+  REQUIRE(line_a == line_b);
+  int rows = 0;
+  while (std::getline(a, line_a)) {
+    REQUIRE_MESSAGE(std::getline(b, line_b), "the restarted run has fewer rows");
+    const std::vector<std::string> fa = split(line_a), fb = split(line_b);
+    REQUIRE(fa.size() == columns.size());
+    REQUIRE(fb.size() == columns.size());
+    for (std::size_t c = 0; c < columns.size(); ++c)
+      if (columns[c].rfind("seconds_", 0) != 0)
+        CHECK_MESSAGE(fa[c] == fb[c], "row " << rows << " column " << columns[c]);
+    ++rows;
+  }
+  CHECK_FALSE(std::getline(b, line_b));
+  CHECK(rows == kFrames + 1);
+}
+
+//! The results that depend on the final state only (duration and at_rest also depend on the
+//! kinetic-energy history before the restart, which a restarted run does not see).
+void check_final_results_equal(const fs::path& full, const fs::path& restarted) {
+  const auto a = nlohmann::json::parse(read_text(full / "summary.json"))["results"];
+  const auto b = nlohmann::json::parse(read_text(restarted / "summary.json"))["results"];
+  for (const char* key : {"runout", "final_height", "normalized_runout"}) {
+    INFO(key);
+    CHECK(a.at(key).get<double>() == b.at(key).get<double>());
+  }
+}
+
+}  // namespace
+
+TEST_CASE("a run continued from a checkpoint is bit-identical to the uninterrupted run") {
+  const fs::path full = kWork / "uninterrupted", restarted = kWork / "restarted";
+  fs::remove_all(kWork);
+  fs::create_directories(kWork);
+  REQUIRE_MESSAGE(run_column_collapse(full, "") == 0, read_text(full.string() + ".log"));
+
+  // The copy loses what the run wrote after frame 4: later frames, checkpoints and the summary.
+  fs::copy(full, restarted, fs::copy_options::recursive);
+  std::vector<fs::path> later;
+  for (const auto& entry : fs::directory_iterator(restarted))
+    if (frame_of(entry.path()) > kCheckpointEvery || entry.path().filename() == "summary.json")
+      later.push_back(entry.path());
+  for (const fs::path& file : later) fs::remove(file);
+  REQUIRE_FALSE(fs::exists(restarted / numbered("checkpoint", kFrames, ".h5")));
+  const fs::path checkpoint = restarted / numbered("checkpoint", kCheckpointEvery, ".h5");
+  REQUIRE_MESSAGE(run_column_collapse(restarted, "--restart '" + checkpoint.string() + "'") == 0,
+                  read_text(restarted.string() + ".log"));
+
+  check_particle_state(full, restarted);
+  check_diagnostics_equal_but_timings(full, restarted);
+  check_final_results_equal(full, restarted);
+}
