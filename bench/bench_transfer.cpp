@@ -86,6 +86,18 @@ struct ParticleArrays {
   std::vector<M3<T>> C;
   std::vector<T> mass;
 
+  void permute(const std::vector<std::uint32_t>& order) {
+    const auto gather = [&](auto& channel) {
+      std::remove_reference_t<decltype(channel)> out(order.size());
+      for (std::size_t i = 0; i < order.size(); ++i) out[i] = channel[order[i]];
+      channel.swap(out);
+    };
+    gather(x);
+    gather(v);
+    gather(C);
+    gather(mass);
+  }
+
   void assign(const Particles<3>& P) {
     x.resize(P.size());
     v.resize(P.size());
@@ -211,6 +223,7 @@ public:
   void g2p() { grid_to_particles(P_, buckets_, kernel_, scheme_, grid_, dt); }
 
   const SparseGrid<3>& grid() const { return grid_; }
+  const Particles<3>& particles() const { return P_; }
   double mass(std::size_t k) const { return grid_.mass[k]; }
   Vec<3> momentum(std::size_t k) const { return grid_.velocity[k]; }
   Vec<3> v(std::size_t p) const { return P_.v[p]; }
@@ -228,7 +241,10 @@ class FloatSolver {  // the library's sort and scalar-generic loops in single pr
 public:
   explicit FloatSolver(const Options& o) : grid_(Vec<3>::Zero(), Vec<3>::Ones(), o.dx) {}
   void load(const Particles<3>& input) { P_.assign(input); }
-  void sort() { sort_into_buckets<3, float>(P_.x, Kernel{kernel_}, grid_, buckets_); }
+  void sort() {
+    sort_into_buckets<3, float>(P_.x, Kernel{kernel_}, grid_, buckets_,
+                                [&](const std::vector<std::uint32_t>& order) { P_.permute(order); });
+  }
   void p2g() {
     mass_.assign(grid_.node_storage(), 0.0f);
     momentum_.assign(grid_.node_storage(), V3<float>::Zero());
@@ -249,6 +265,14 @@ public:
   }
 
   const SparseGrid<3>& grid() const { return grid_; }
+  Particles<3> particles() const {
+    Particles<3> P;
+    for (std::size_t p = 0; p < P_.x.size(); ++p) {
+      P.push_back(P_.x[p].cast<double>(), P_.v[p].cast<double>(), P_.mass[p], 0.0, 0);
+      P.C.back() = P_.C[p].cast<double>();
+    }
+    return P;
+  }
   double mass(std::size_t k) const { return mass_[k]; }
   Vec<3> momentum(std::size_t k) const { return momentum_[k].cast<double>(); }
   Vec<3> v(std::size_t p) const { return P_.v[p].cast<double>(); }
@@ -274,9 +298,9 @@ struct Deviation {
 template <class Solver, class T>
 Deviation compare(const Particles<3>& input, Solver& solver, Reference<T>& ref) {
   solver.load(input);
-  solver.sort();
+  solver.sort();  // may store the particles anew in bucket order: the reference gets that order
   solver.p2g();
-  ref.load(input);
+  ref.load(solver.particles());
   ref.p2g();
   const SparseGrid<3>& grid = solver.grid();
   double err_m = 0, err_p = 0, scale_m = 0, scale_p = 0, total = 0, total_ref = 0;

@@ -7,7 +7,8 @@
 // summary.json: runout L_inf (deposit front distance from the back wall), final_height,
 // normalized_runout (L_inf - L0)/L0, duration (time until the kinetic energy falls below
 // 1e-6 of its peak). --check compares normalized_runout with the 2D runout law of Lube et
-// al. 2005 (PRE 72, 041301): 1.2 a for a < 2.3, 1.9 a^(2/3) above (data/reference/lube2005.md).
+// al. 2005 (PRE 72, 041301): 1.2 a for a < 2.3, 1.9 a^(2/3) above, within +-50 % (the spread
+// between published experiments; data/reference/lube2005.md).
 #include <mpm/core/app.h>
 #include <mpm/core/runner.h>
 #include <mpm/geometry/collider_config.h>
@@ -73,25 +74,21 @@ int run(const CommandLine& cl, const Config& scene) {
                        geometry::particle_volume<dim>(dx, ppc), std::uint16_t{0}, Vec<dim>::Zero(), "column");
   scene.reject_unknown_keys();
 
-  // 3. Run, tracking the kinetic energy peak for the duration.
+  // 3. Run.
   auto pipeline = solid::make_explicit_pipeline(solid);
   Runner<dim> runner("column_collapse", cl, scene, settings);
   runner.set_elastic_energy([&](const MpmState<dim>& s) { return solid::elastic_energy(s, solid.materials); });
-  double peak = 0.0, duration = settings.end_time;
-  bool at_rest = false;
-  runner.on_frame([&](const MpmState<dim>& s, int) {
-    double kinetic = 0.0;
-    for (std::size_t p = 0; p < s.particles.size(); ++p)
-      kinetic += 0.5 * s.particles.mass[p] * s.particles.v[p].squaredNorm();
-    peak = std::max(peak, kinetic);
-    if (!at_rest && peak > 0.0 && kinetic < 1e-6 * peak) {
-      at_rest = true;
-      duration = s.time;
-    }
-  });
   runner.run(solid.state, pipeline);
 
-  // 4. Results.
+  // 4. Results; the duration from the kinetic energy of every frame (restarts included).
+  const std::vector<double> time = runner.history("time"), kinetic = runner.history("kinetic_energy");
+  double peak = 0.0, duration = settings.end_time;
+  bool at_rest = false;
+  for (std::size_t f = 0; f < time.size() && !at_rest; ++f) {
+    peak = std::max(peak, kinetic[f]);
+    at_rest = peak > 0.0 && kinetic[f] < 1e-6 * peak;
+    if (at_rest) duration = time[f];
+  }
   const int k = geometry::lattice_points_per_axis<dim>(ppc);
   const double row = dim == 2 ? k : k * k * depth / dx;  // particles per lattice row of a slab
   const double runout = deposit_front(solid.state.particles, dx, row);
@@ -103,7 +100,7 @@ int run(const CommandLine& cl, const Config& scene) {
                         {"runout_law_lube2005", lube_runout_law(a)}});
   if (cl.check) {
     const double law = lube_runout_law(a);
-    return check_value("normalized_runout", normalized, law, 0.35 * law) ? 0 : 1;
+    return check_value("normalized_runout", normalized, law, 0.5 * law) ? 0 : 1;
   }
   return 0;
 }
@@ -111,9 +108,5 @@ int run(const CommandLine& cl, const Config& scene) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  return run_app(argc, argv, "column_collapse", "Dry granular column collapse (Drucker-Prager)",
-                 [](const CommandLine& cl) {
-                   const Config scene = Config::load(cl.scene_file, cl.overrides);
-                   return scene_dimension(scene) == 2 ? run<2>(cl, scene) : run<3>(cl, scene);
-                 });
+  return run_scene_app(argc, argv, "column_collapse", "Dry granular column collapse (Drucker-Prager)", run<2>, run<3>);
 }

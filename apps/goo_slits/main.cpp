@@ -4,11 +4,12 @@
 // on top, while a grid of 0.0125 m or finer has nodes inside the slits and the goo seeps
 // through. (The adaptive grid of a later stage refines only near the plate.)
 //
-//   goo_slits data/scenes/goo_slits.yaml                      # dx = 0.01: the goo passes
+//   goo_slits data/scenes/goo_slits.yaml                      # dx = 0.01: goo seeps through
 //   goo_slits data/scenes/goo_slits.yaml --set grid.dx=0.05   # coarse: it does not
 //
-// summary.json: mass_fraction_through (mass below the plate at the end), max_penetration
-// (deepest particle inside the plate [m]). --check asserts max_penetration < dx.
+// diagnostics.csv adds max_penetration (deepest particle inside the plate [m]); summary.json:
+// mass_fraction_through (mass below the plate at the end) and max_penetration over the run.
+// --check asserts max_penetration < dx.
 #include <mpm/core/app.h>
 #include <mpm/core/runner.h>
 #include <mpm/solid/solid_scene.h>
@@ -33,11 +34,14 @@ int run(const CommandLine& cl, const Config& scene) {
   auto pipeline = solid::make_explicit_pipeline(solid);
   Runner<dim> runner("goo_slits", cl, scene, solid.settings);
   runner.set_elastic_energy([&](const MpmState<dim>& s) { return solid::elastic_energy(s, solid.materials); });
-  double penetration = 0.0;
-  runner.on_frame([&](const MpmState<dim>& s, int) {
-    for (const Vec<dim>& x : s.particles.x) penetration = std::max(penetration, -plate->phi(x, s.time));
+  runner.add_column("max_penetration", [&](const MpmState<dim>& s) {
+    double depth = 0.0;
+    for (const Vec<dim>& x : s.particles.x) depth = std::max(depth, -plate->phi(x, s.time));
+    return depth;
   });
   runner.run(solid.state, pipeline);
+  const std::vector<double> depths = runner.history("max_penetration");
+  const double penetration = *std::max_element(depths.begin(), depths.end());
 
   const Particles<dim>& P = solid.state.particles;
   double through = 0.0, total = 0.0;
@@ -53,8 +57,5 @@ int run(const CommandLine& cl, const Config& scene) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  return run_app(argc, argv, "goo_slits", "von Mises goo through sub-cell slits", [](const CommandLine& cl) {
-    const Config scene = Config::load(cl.scene_file, cl.overrides);
-    return scene_dimension(scene) == 2 ? run<2>(cl, scene) : run<3>(cl, scene);
-  });
+  return run_scene_app(argc, argv, "goo_slits", "von Mises goo through sub-cell slits", run<2>, run<3>);
 }

@@ -66,8 +66,5 @@ int run(const CommandLine& cl, const Config& scene) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  return run_app(argc, argv, "jello_collide", "Two elastic blocks collide", [](const CommandLine& cl) {
-    const Config scene = Config::load(cl.scene_file, cl.overrides);
-    return scene_dimension(scene) == 2 ? run<2>(cl, scene) : run<3>(cl, scene);
-  });
+  return run_scene_app(argc, argv, "jello_collide", "Two elastic blocks collide", run<2>, run<3>);
 }

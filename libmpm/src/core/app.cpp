@@ -1,5 +1,7 @@
 #include <mpm/core/app.h>
+#include <mpm/core/config.h>
 #include <mpm/core/error.h>
+#include <mpm/core/scene_settings.h>
 
 #include <cmath>
 #include <cstdio>
@@ -25,6 +27,14 @@ int run_app(int argc, char** argv, const std::string& app_name, const std::strin
     std::cerr << "\n" << app_name << ": error: " << e.what() << "\n";
     return 4;
   }
+}
+
+int run_scene_app(int argc, char** argv, const std::string& app_name, const std::string& description,
+                  SceneRunner run_2d, SceneRunner run_3d) {
+  return run_app(argc, argv, app_name, description, [&](const CommandLine& cl) {
+    const Config scene = Config::load(cl.scene_file, cl.overrides);
+    return scene_dimension(scene) == 2 ? run_2d(cl, scene) : run_3d(cl, scene);
+  });
 }
 
 bool check_value(const std::string& name, double value, double expected, double tolerance) {

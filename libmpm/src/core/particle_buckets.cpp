@@ -133,6 +133,14 @@ void identity(std::vector<std::uint32_t>& index, std::size_t n) {
   index.resize(n);
   std::iota(index.begin(), index.end(), std::uint32_t{0});
 }
+
+// Scattered: on average fewer than 8 particles per run of consecutive storage indices, so
+// reaching particles through the index misses the cache at almost every particle.
+bool scattered(const std::vector<std::uint32_t>& index) {
+  std::size_t breaks = 0;
+  for (std::size_t i = 1; i < index.size(); ++i) breaks += index[i] != index[i - 1] + 1;
+  return 8 * breaks > index.size();
+}
 }  // namespace
 
 template <int dim>
@@ -150,16 +158,24 @@ IVec<dim> stencil_base(const SparseGrid<dim>& grid, const Kernel& kernel, const 
 
 template <int dim, class T>
 bool sort_into_buckets(const std::vector<Eigen::Matrix<T, dim, 1>>& x, const Kernel& kernel,
-                       SparseGrid<dim>& grid, ParticleBuckets<dim>& buckets, const std::string& stage) {
-  if (!order_by_block(x, kernel, grid, buckets, stage, buckets.particle)) return true;
+                       SparseGrid<dim>& grid, ParticleBuckets<dim>& buckets, const MoveParticles& move,
+                       const std::string& stage) {
+  if (order_by_block(x, kernel, grid, buckets, stage, buckets.particle)) {
+    identity(buckets.particle, x.size());
+    return false;
+  }
+  if (!move || !scattered(buckets.particle)) return false;
+  move(buckets.particle);
   identity(buckets.particle, x.size());
-  return false;
+  return true;
 }
 
 template <int dim>
-bool sort_into_buckets(const Particles<dim>& particles, const Kernel& kernel, SparseGrid<dim>& grid,
+bool sort_into_buckets(Particles<dim>& particles, const Kernel& kernel, SparseGrid<dim>& grid,
                        ParticleBuckets<dim>& buckets, const std::string& stage) {
-  return sort_into_buckets<dim, double>(particles.x, kernel, grid, buckets, stage);
+  return sort_into_buckets<dim, double>(
+      particles.x, kernel, grid, buckets,
+      [&](const std::vector<std::uint32_t>& order) { particles.permute(order); }, stage);
 }
 
 template <int dim, class T>
@@ -174,13 +190,14 @@ std::vector<std::uint32_t> bucket_order(const std::vector<Eigen::Matrix<T, dim, 
 
 #define MPM_INSTANTIATE_SCALAR(dim, T)                                                            \
   template bool sort_into_buckets(const std::vector<Eigen::Matrix<T, dim, 1>>&, const Kernel&,    \
-                                  SparseGrid<dim>&, ParticleBuckets<dim>&, const std::string&);   \
+                                  SparseGrid<dim>&, ParticleBuckets<dim>&, const MoveParticles&,  \
+                                  const std::string&);                                            \
   template std::vector<std::uint32_t> bucket_order(const std::vector<Eigen::Matrix<T, dim, 1>>&,  \
                                                    const Kernel&, SparseGrid<dim>&,               \
                                                    ParticleBuckets<dim>&, const std::string&);
 #define MPM_INSTANTIATE(dim)                                                                      \
   template IVec<dim> stencil_base(const SparseGrid<dim>&, const Kernel&, const Vec<dim>&);        \
-  template bool sort_into_buckets(const Particles<dim>&, const Kernel&, SparseGrid<dim>&,         \
+  template bool sort_into_buckets(Particles<dim>&, const Kernel&, SparseGrid<dim>&,               \
                                   ParticleBuckets<dim>&, const std::string&);                     \
   MPM_INSTANTIATE_SCALAR(dim, double)                                                             \
   MPM_INSTANTIATE_SCALAR(dim, float)

@@ -14,6 +14,12 @@
 namespace mpm {
 
 namespace {
+std::string number(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.6g", value);
+  return text;
+}
+
 std::string numbered(const std::string& stem, int frame, const std::string& ext) {
   char name[64];
   std::snprintf(name, sizeof name, "%s_%04d%s", stem.c_str(), frame, ext.c_str());
@@ -39,27 +45,48 @@ std::vector<std::string> Runner<dim>::columns(const Pipeline<State>& pipeline) c
 }
 
 template <int dim>
+std::string Runner<dim>::scene_digest() const {
+  // FNV-1a over the resolved keys that determine the solution: time.end and output.* may
+  // change between a run and its restart.
+  std::uint64_t h = 1469598103934665603ull;
+  for (const auto& [key, value] : scene_.resolved()) {
+    if (key == "time.end" || key.rfind("output.", 0) == 0) continue;
+    for (const char c : key + "=" + value + ";") h = (h ^ static_cast<unsigned char>(c)) * 1099511628211ull;
+  }
+  char text[17];
+  std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(h));
+  return text;
+}
+
+template <int dim>
 void Runner<dim>::run(State& state, Pipeline<State>& pipeline) {
+  if (!cl_.quiet) {
+    std::cerr << app_ << ": " << cl_.scene_file << " (" << dim << "D), resolved parameters:\n";
+    for (const auto& [key, value] : scene_.resolved()) std::cerr << "  " << key << " = " << value << "\n";
+  }
   start_ = std::chrono::steady_clock::now();
   int first_frame = 0;
-  io::DiagnosticsCsv csv;
   if (cl_.restart) {
     io::CheckpointHeader header;
     state.particles = io::load_checkpoint<dim>(*cl_.restart, header);
     verify<InputError>(header.dim == dim, "checkpoint '" + *cl_.restart + "' is " +
                                               std::to_string(header.dim) + "D, the scene is " +
                                               std::to_string(dim) + "D");
+    verify<InputError>(header.scene_digest == scene_digest(),
+                       "checkpoint '" + *cl_.restart + "' was written by another scene (digest " +
+                           header.scene_digest + ", this scene " + scene_digest() +
+                           "): a restart needs the same keys and values, except time.end and output.*");
     state.time = header.time;
     state.step = header.step;
     first_frame = header.frame;
     std::filesystem::create_directories(out_);
-    csv.open_for_restart(out_ / "diagnostics.csv", columns(pipeline), first_frame);
+    csv_.open_for_restart(out_ / "diagnostics.csv", columns(pipeline), first_frame);
     for (int f = 0; f <= first_frame; ++f)
       if (std::filesystem::exists(out_ / io::particle_file_name(f)))
         frames_written_.emplace_back(f, f * settings_.frame_dt);
   } else {
     std::filesystem::create_directories(out_);
-    csv.open(out_ / "diagnostics.csv", columns(pipeline));
+    csv_.open(out_ / "diagnostics.csv", columns(pipeline));
   }
   stage_seconds_at_last_frame_.assign(pipeline.stage_names().size(), 0.0);
   steps_at_last_frame_ = state.step;
@@ -86,7 +113,7 @@ void Runner<dim>::run(State& state, Pipeline<State>& pipeline) {
       stage_seconds_at_last_frame_[s] = t.seconds[s];
     }
     steps_at_last_frame_ = state.step;
-    csv.append(r);
+    csv_.append(r);
   };
 
   if (!cl_.restart) {
@@ -102,8 +129,8 @@ void Runner<dim>::run(State& state, Pipeline<State>& pipeline) {
       state.dt_limit = t_end - state.time;
       pipeline.step(state);
       if (!(state.dt > 0.0) || ++steps > settings_.max_steps_per_frame)
-        throw NumericalError("stage 'time_step': the time step collapsed to " + std::to_string(state.dt) +
-                             " s at t = " + std::to_string(state.time) + " s (more than " +
+        throw NumericalError("stage 'time_step': the time step collapsed to " + number(state.dt) +
+                             " s at t = " + number(state.time) + " s (more than " +
                              std::to_string(settings_.max_steps_per_frame) +
                              " steps in frame " + std::to_string(frame) + ")");
       state.time = state.dt >= state.dt_limit ? t_end : state.time + state.dt;
@@ -114,7 +141,7 @@ void Runner<dim>::run(State& state, Pipeline<State>& pipeline) {
     const bool checkpoint = frame == frames ||
                             (settings_.output.checkpoint_every > 0 && frame % settings_.output.checkpoint_every == 0);
     if (checkpoint) {
-      io::CheckpointHeader h{dim, frame, state.step, state.time, state.dt, cl_.scene_file};
+      io::CheckpointHeader h{dim, frame, state.step, state.time, state.dt, scene_digest()};
       io::save_checkpoint(out_ / numbered("checkpoint", frame, ".h5"), state.particles, h);
     }
     if (!cl_.quiet) progress(state, frame, frame == frames);
@@ -133,7 +160,6 @@ void Runner<dim>::run(State& state, Pipeline<State>& pipeline) {
 
 template <int dim>
 void Runner<dim>::write_frame(const State& state, int frame, Pipeline<State>&) {
-  for (const auto& hook : hooks_) hook(state, frame);
   if (settings_.output.particles) {
     io::write_particles(out_ / io::particle_file_name(frame), state.particles, state.time, frame);
     frames_written_.emplace_back(frame, state.time);

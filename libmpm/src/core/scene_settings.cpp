@@ -50,7 +50,7 @@ SceneSettings<dim> parse_scene_settings(const Config& scene, const std::optional
   s.cfl = time.number("cfl", 0.4, Range{0.0, 1.0, true, false});
   s.wave_cfl = time.number("wave_cfl", 0.5, Range{0.0, 1.0, true, false});
   s.max_dt = time.number("max_dt", 1e300, Range::positive());
-  s.max_steps_per_frame = time.integer("max_steps_per_frame", 1000000, 1, 1000000000);
+  s.max_steps_per_frame = time.integer("max_steps_per_frame", 200000, 1, 1000000000);
 
   Vec<dim> g = Vec<dim>::Zero();
   g[1] = -9.81;  // y is up in 2D and 3D (previews, apps and walls follow this convention)

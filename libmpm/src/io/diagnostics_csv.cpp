@@ -47,6 +47,7 @@ void DiagnosticsCsv::open(const std::filesystem::path& path, std::vector<std::st
   verify_columns(columns, path);
   path_ = path;
   columns_ = std::move(columns);
+  rows_.clear();
   open_file("w");
   const std::string header = header_line(columns_) + "\n";
   if (std::fputs(header.c_str(), file_.get()) < 0 || std::fflush(file_.get()) != 0)
@@ -68,6 +69,7 @@ void DiagnosticsCsv::open_for_restart(const std::filesystem::path& path,
 
   // Only lines ending in '\n' are complete; text after the last one is a row cut short.
   std::string kept;
+  std::vector<std::vector<double>> rows;
   std::size_t line_number = 0;
   for (std::size_t start = 0, end; (end = text.find('\n', start)) != std::string::npos;
        start = end + 1) {
@@ -82,19 +84,24 @@ void DiagnosticsCsv::open_for_restart(const std::filesystem::path& path,
     if (fields.size() != columns.size())
       throw IoError(where + ": " + std::to_string(fields.size()) + " fields, the header has " +
                     std::to_string(columns.size()));
-    const std::string_view frame_text = fields[static_cast<std::size_t>(frame_column)];
-    double frame = 0.0;
-    const auto [end_of_number, error] =
-        std::from_chars(frame_text.data(), frame_text.data() + frame_text.size(), frame);
-    if (error != std::errc() || end_of_number != frame_text.data() + frame_text.size())
-      throw IoError(where + ": frame '" + std::string(frame_text) + "' is not a number");
-    if (frame <= last_frame_kept) kept.append(line).push_back('\n');
+    std::vector<double> row(fields.size());
+    for (std::size_t c = 0; c < fields.size(); ++c) {
+      const auto [end_of_number, error] =
+          std::from_chars(fields[c].data(), fields[c].data() + fields[c].size(), row[c]);
+      if (error != std::errc() || end_of_number != fields[c].data() + fields[c].size())
+        throw IoError(where + ": " + columns[c] + " '" + std::string(fields[c]) + "' is not a number");
+    }
+    if (row[static_cast<std::size_t>(frame_column)] <= last_frame_kept) {
+      kept.append(line).push_back('\n');
+      rows.push_back(std::move(row));
+    }
   }
   if (line_number == 0) throw IoError("'" + path.string() + "' has no header line");
 
   write_file_atomically(path, header + "\n" + kept);
   path_ = path;
   columns_ = std::move(columns);
+  rows_ = std::move(rows);
   open_file("a");
 }
 
@@ -109,6 +116,15 @@ void DiagnosticsCsv::append(const std::vector<double>& row) {
   line += '\n';
   if (std::fputs(line.c_str(), file_.get()) < 0 || std::fflush(file_.get()) != 0)
     throw IoError("cannot append to '" + path_.string() + "': " + std::strerror(errno));
+  rows_.push_back(row);
+}
+
+std::vector<double> DiagnosticsCsv::column(const std::string& name) const {
+  const auto c = std::find(columns_.begin(), columns_.end(), name) - columns_.begin();
+  verify<InputError>(c < std::ssize(columns_), "diagnostics '" + path_.string() + "': no column '" + name + "'");
+  std::vector<double> values;
+  for (const auto& row : rows_) values.push_back(row[static_cast<std::size_t>(c)]);
+  return values;
 }
 
 void DiagnosticsCsv::open_file(const char* mode) {

@@ -13,6 +13,14 @@ namespace mpm {
 int run_app(int argc, char** argv, const std::string& app_name, const std::string& description,
             const std::function<int(const CommandLine&)>& body);
 
+class Config;
+
+//! run_app for a scene file: loads the scene with the --set overrides and calls run_2d or
+//! run_3d according to its "dim" key.
+using SceneRunner = int (*)(const CommandLine&, const Config&);
+int run_scene_app(int argc, char** argv, const std::string& app_name, const std::string& description,
+                  SceneRunner run_2d, SceneRunner run_3d);
+
 //! Prints "check <name>: value (expected ..., tolerance ...) ok|FAILED" and returns whether
 //! |value - expected| <= tolerance.
 bool check_value(const std::string& name, double value, double expected, double tolerance);

@@ -7,16 +7,18 @@
 //! same nodes, so each colour runs in parallel without atomics and the result does not depend
 //! on the thread count.
 //!
-//! The order is an index (ParticleBuckets::particle); the particle storage is not moved.
-//! Moving every channel of millions of particles costs more than the transfers themselves,
-//! while the transfers reach particles through the index at almost no cost: they load a
-//! chunk of particles at once, so out-of-order loads overlap (bench/bench_transfer.cpp).
+//! The order is an index (ParticleBuckets::particle). Between steps particles change
+//! buckets only here and there, the index stays nearly sequential, and the transfers reach
+//! the particles through it at the cost of sorted storage, so no channel is copied. Only a
+//! scattered index (storage far from bucket order) makes every particle a cache miss, twice
+//! per step; then the particles are moved into bucket order once (bench/bench_transfer.cpp).
 #include <mpm/core/kernels.h>
 #include <mpm/core/particles.h>
 #include <mpm/core/sparse_grid.h>
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -51,20 +53,26 @@ struct CellMap {
 template <int dim>
 IVec<dim> stencil_base(const SparseGrid<dim>& grid, const Kernel& kernel, const Vec<dim>& x);
 
-//! Orders the particles by block (stable counting sort of an index; the particles are not
-//! moved), fills `buckets` and allocates the grid blocks their stencils touch. Throws
-//! NumericalError naming `stage`, the particle and its position if a particle is not finite
-//! or its stencil leaves the grid. Returns true when the bucket order differs from the
-//! storage order.
+//! Orders the particles by block (stable counting sort of an index), fills `buckets` and
+//! allocates the grid blocks their stencils touch. The particles stay where they are unless
+//! the index is scattered (storage order far from bucket order, e.g. freshly seeded or
+//! shuffled particles): then they are stored anew in bucket order, once, and the index is the
+//! identity. Throws NumericalError naming `stage`, the particle and its position if a
+//! particle is not finite or its stencil leaves the grid. Returns true when the particles
+//! were moved.
 template <int dim>
-bool sort_into_buckets(const Particles<dim>& particles, const Kernel& kernel, SparseGrid<dim>& grid,
+bool sort_into_buckets(Particles<dim>& particles, const Kernel& kernel, SparseGrid<dim>& grid,
                        ParticleBuckets<dim>& buckets, const std::string& stage = "sort");
 
-//! sort_into_buckets for positions in any storage and precision (T = double or float).
+using MoveParticles = std::function<void(const std::vector<std::uint32_t>& order)>;
+
+//! sort_into_buckets for positions in any storage and precision (T = double or float): when
+//! the index is scattered, calls move(order) for the caller to store its particles anew in
+//! bucket order (new index i holds old index order[i]); without `move` the index stays.
 template <int dim, class T>
 bool sort_into_buckets(const std::vector<Eigen::Matrix<T, dim, 1>>& x, const Kernel& kernel,
                        SparseGrid<dim>& grid, ParticleBuckets<dim>& buckets,
-                       const std::string& stage = "sort");
+                       const MoveParticles& move = {}, const std::string& stage = "sort");
 
 //! For callers that keep their particles stored in bucket order: returns the permutation into
 //! block order (new index i holds old index order[i]), empty when the particles are already

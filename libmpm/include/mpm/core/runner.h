@@ -9,6 +9,7 @@
 #include <mpm/core/pipeline.h>
 #include <mpm/core/scene_settings.h>
 #include <mpm/core/state.h>
+#include <mpm/io/diagnostics_csv.h>
 
 #include <chrono>
 #include <filesystem>
@@ -32,8 +33,8 @@ public:
   void set_elastic_energy(Column energy) { elastic_energy_ = std::move(energy); }
   //! An extra diagnostics column, evaluated once per frame.
   void add_column(std::string name, Column value) { extra_.emplace_back(std::move(name), std::move(value)); }
-  //! Called after every frame (and for the initial state, frame 0).
-  void on_frame(std::function<void(const State&, int frame)> hook) { hooks_.push_back(std::move(hook)); }
+  //! Every value of a diagnostics column so far, frame 0 first (rows before a restart included).
+  std::vector<double> history(const std::string& column) const { return csv_.column(column); }
 
   //! Creates the output folder (or continues from --restart) and runs all frames.
   void run(State& state, Pipeline<State>& pipeline);
@@ -45,6 +46,7 @@ public:
 
 private:
   std::vector<std::string> columns(const Pipeline<State>& pipeline) const;
+  std::string scene_digest() const;
   void write_frame(const State& state, int frame, Pipeline<State>& pipeline);
   void progress(const State& state, int frame, bool last) const;
 
@@ -55,7 +57,7 @@ private:
   std::filesystem::path out_;
   Column elastic_energy_;
   std::vector<std::pair<std::string, Column>> extra_;
-  std::vector<std::function<void(const State&, int)>> hooks_;
+  io::DiagnosticsCsv csv_;
   std::vector<std::pair<int, double>> frames_written_;
   std::vector<double> stage_seconds_at_last_frame_;
   Index steps_at_last_frame_ = 0;

@@ -29,7 +29,7 @@ struct SceneSettings {
   double cfl = 0.4;               //!< particle CFL number
   double wave_cfl = 0.5;          //!< elastic-wave Courant number
   double max_dt = 1e300;          //!< user upper bound on dt [s]
-  int max_steps_per_frame = 1000000;  //!< stops a run whose step collapsed instead of hanging
+  int max_steps_per_frame = 200000;   //!< stops a run whose step collapsed instead of hanging
   Vec<dim> gravity;               //!< [m/s^2]
   OutputSettings output;
 

@@ -33,6 +33,9 @@ public:
 
   bool is_open() const { return file_ != nullptr; }
   const std::vector<std::string>& columns() const { return columns_; }
+  //! Every value of column `name` in the file, one per row (rows kept at a restart included),
+  //! so results accumulated over a run survive a restart.
+  std::vector<double> column(const std::string& name) const;
 
 private:
   struct Close {
@@ -42,6 +45,7 @@ private:
 
   std::filesystem::path path_;
   std::vector<std::string> columns_;
+  std::vector<std::vector<double>> rows_;
   std::unique_ptr<std::FILE, Close> file_;
 };
 

@@ -38,11 +38,11 @@ template <int dim, int S, class T = double>
 struct Stencil {
   using VecT = Eigen::Matrix<T, dim, 1>;
   T w[dim][S];     //!< N(r) per axis
-  T dw[dim][S];    //!< dN/dxi per axis [1/cell]
+  T dw[dim][S];    //!< dN/dxi per axis [1/cell] (left unset by compute<false>)
   T rel[dim][S];   //!< node minus particle position per axis [cells]
   int patch_offset;  //!< patch index of the first stencil node
 
-  template <class K>
+  template <bool gradient = true, class K>
   void compute(const K& kernel, const VecT& xi, const IVec<dim>& patch_origin) {
     patch_offset = 0;
     int stride = 1;
@@ -52,7 +52,7 @@ struct Stencil {
       kernel(static_cast<double>(xi[a]), base, wa, dwa);
       for (int k = 0; k < S; ++k) {
         w[a][k] = static_cast<T>(wa[k]);
-        dw[a][k] = static_cast<T>(dwa[k]);
+        if constexpr (gradient) dw[a][k] = static_cast<T>(dwa[k]);
         rel[a][k] = static_cast<T>(base + k) - xi[a];
       }
       patch_offset += (base - patch_origin[a]) * stride;

@@ -16,14 +16,14 @@
 
 namespace mpm::detail {
 
-//! Asks for the cache lines of `object` ahead of use (for writing when `write`). A hint: a
-//! no-op for compilers without the builtin.
-template <bool write = false, class Object>
+//! Asks for the cache lines of `object` ahead of use. A hint: a no-op for compilers without
+//! the builtin.
+template <class Object>
 void prefetch(const Object& object) {
 #if defined(__GNUC__)
   const char* bytes = reinterpret_cast<const char*>(&object);
-  for (std::size_t b = 0; b < sizeof(Object); b += 64) __builtin_prefetch(bytes + b, write);
-  __builtin_prefetch(bytes + sizeof(Object) - 1, write);
+  for (std::size_t b = 0; b < sizeof(Object); b += 64) __builtin_prefetch(bytes + b);
+  __builtin_prefetch(bytes + sizeof(Object) - 1);
 #else
   (void)object;
 #endif
@@ -31,11 +31,11 @@ void prefetch(const Object& object) {
 
 //! Visits the particles with indices [first, last) in chunks: prefetch(p) for the particles
 //! of the next chunk, then prepare(p, slot) for every particle of this chunk, then
-//! finish(p, slot). Particles stored out of bucket order are reached at random: the prefetch
-//! one chunk ahead hides those cache misses behind the stencil work of a chunk. And the
-//! set-up of a particle (loads; weights: floor, int conversions, polynomials) is a latency
-//! chain; done for a chunk at once it is independent work the CPU overlaps instead of a stall
-//! at the head of every particle's stencil loop.
+//! finish(p, slot). The set-up of a particle (loads; weights: floor, int conversions,
+//! polynomials; a division) is a latency chain; done for a chunk at once it is independent
+//! work the CPU overlaps instead of a stall at the head of every particle's stencil loop.
+//! The prefetch one chunk ahead keeps the particle streams (several channels, and runs
+//! broken where particles changed buckets) ahead of the loads.
 constexpr std::ptrdiff_t chunk_size = 16;
 template <class Prefetch, class Prepare, class Finish>
 void in_chunks(const std::uint32_t* first, const std::uint32_t* last, Prefetch&& prefetch,
@@ -88,6 +88,14 @@ template <bool affine, int dim, int S, class T, class Node>
   }
 }
 
+//! acc = x for the first term of a sum, acc += x after: starting from zero is not free
+//! (-0 + 0 = +0 keeps the compiler from dropping the add).
+template <class Acc, class X>
+[[gnu::always_inline]] inline void accumulate(bool first, Acc& acc, const X& x) {
+  if (first) acc = x;
+  else acc += x;
+}
+
 //! Moments of the node values v (Ch values apart in the patch) over the stencil:
 //! s = sum w v and t[a] = sum w n_a v with the integer node offsets n_a = rel_a - rel_a[0],
 //! so sum w rel_a v = t[a] + rel_a[0] s. Integer offsets turn the moments into sums of the
@@ -97,40 +105,36 @@ template <int Ch, int dim, int S, class T, class Lanes>
                                            Lanes (&t)[dim]) {
   constexpr int W = patch_width<dim>;
   const auto row = [&](int offset, Lanes& m0, Lanes& m1) {  // sum w v and sum n_0 w v along axis 0
-    m0.setZero();
-    m1.setZero();
     for (int i = 0; i < S; ++i) {
       const Lanes wv = st.w[0][i] * Eigen::Map<const Lanes>(patch + (offset + i) * Ch);
-      m0 += wv;
-      if (i > 0) m1 += T(i) * wv;
+      accumulate(i == 0, m0, wv);
+      if (i > 0) accumulate(i == 1, m1, T(i) * wv);
     }
   };
-  s.setZero();
-  for (Lanes& ta : t) ta.setZero();
   Lanes m0, m1;
   if constexpr (dim == 2) {
     for (int j = 0; j < S; ++j) {
       row(st.patch_offset + W * j, m0, m1);
       const Lanes b = st.w[1][j] * m0;
-      s += b;
-      t[0].noalias() += st.w[1][j] * m1;
-      if (j > 0) t[1].noalias() += T(j) * b;
+      accumulate(j == 0, s, b);
+      accumulate(j == 0, t[0], st.w[1][j] * m1);
+      if (j > 0) accumulate(j == 1, t[1], T(j) * b);
     }
   } else {
     for (int k = 0; k < S; ++k) {
-      Lanes M0 = Lanes::Zero(), M1 = Lanes::Zero(), M2 = Lanes::Zero();
+      Lanes M0, M1, M2;  // over the rows of one k: sum w v, sum n_0 w v, sum n_1 w v
       for (int j = 0; j < S; ++j) {
         row(st.patch_offset + W * (j + W * k), m0, m1);
         const Lanes b = st.w[1][j] * m0;
-        M0 += b;
-        M1.noalias() += st.w[1][j] * m1;
-        if (j > 0) M2.noalias() += T(j) * b;
+        accumulate(j == 0, M0, b);
+        accumulate(j == 0, M1, st.w[1][j] * m1);
+        if (j > 0) accumulate(j == 1, M2, T(j) * b);
       }
       const Lanes d = st.w[2][k] * M0;
-      s += d;
-      t[0].noalias() += st.w[2][k] * M1;
-      t[1].noalias() += st.w[2][k] * M2;
-      if (k > 0) t[2].noalias() += T(k) * d;
+      accumulate(k == 0, s, d);
+      accumulate(k == 0, t[0], st.w[2][k] * M1);
+      accumulate(k == 0, t[1], st.w[2][k] * M2);
+      if (k > 0) accumulate(k == 1, t[2], T(k) * d);
     }
   }
 }
@@ -153,7 +157,7 @@ void p2g(const PS& P, const ParticleBuckets<dim>& buckets, const K& kernel,
       prefetch(P.C[p]);
       prefetch(P.mass[p]);
     }, [&](std::uint32_t p, int q) {
-      st[q].compute(kernel, f.cells(P.x[p]), f.origin);
+      st[q].template compute<false>(kernel, f.cells(P.x[p]), f.origin);
       const T m = P.mass[p];
       c[q][0] << m, m * P.v[p];
       for (int a = 0; a < dim; ++a) c[q][a + 1] << T(0), (m * dx) * P.C[p].col(a);
@@ -182,11 +186,11 @@ void g2p(PS& P, const ParticleBuckets<dim>& buckets, const K& kernel, const Spar
     Stencil<dim, K::support, T> st[chunk_size];
     T inv_D[chunk_size][dim];  // APIC D_p^-1 [1/cells^2]; its division overlaps in the set-up
     in_chunks(first, last, [&](std::uint32_t p) {
-      prefetch<true>(P.x[p]);
-      prefetch<true>(P.v[p]);
-      if constexpr (!flip) prefetch<true>(P.C[p]);
+      prefetch(P.x[p]);
+      prefetch(P.v[p]);
+      if constexpr (!flip) prefetch(P.C[p]);
     }, [&](std::uint32_t p, int q) {
-      st[q].compute(kernel, f.cells(P.x[p]), f.origin);
+      st[q].template compute<flip>(kernel, f.cells(P.x[p]), f.origin);
       if constexpr (!flip) st[q].inverse_inertia(inv_D[q]);
     }, [&](std::uint32_t p, int q) {
       VecT v_pic;
