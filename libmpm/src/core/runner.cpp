@@ -59,85 +59,94 @@ std::string Runner<dim>::scene_digest() const {
 }
 
 template <int dim>
+int Runner<dim>::open_output(State& state, const Pipeline<State>& pipeline) {
+  if (!cl_.restart) {
+    std::filesystem::create_directories(out_);
+    csv_.open(out_ / "diagnostics.csv", columns(pipeline));
+    return 0;
+  }
+  verify<InputError>(std::filesystem::exists(out_ / "diagnostics.csv"),
+                     "--restart continues a run in its output folder, but '" + out_.string() +
+                         "' holds no diagnostics.csv: pass --out with the folder of the run that wrote '" +
+                         *cl_.restart + "'");
+  io::CheckpointHeader header;
+  state.particles = io::load_checkpoint<dim>(*cl_.restart, header);
+  verify<InputError>(header.dim == dim, "checkpoint '" + *cl_.restart + "' is " + std::to_string(header.dim) +
+                                            "D, the scene is " + std::to_string(dim) + "D");
+  verify<InputError>(header.scene_digest == scene_digest(),
+                     "checkpoint '" + *cl_.restart + "' was written by another scene (digest " +
+                         header.scene_digest + ", this scene " + scene_digest() +
+                         "): a restart needs the same keys and values, except time.end and output.*");
+  state.time = header.time;
+  state.step = header.step;
+  csv_.open_for_restart(out_ / "diagnostics.csv", columns(pipeline), header.frame);
+  for (int f = 0; f <= header.frame; ++f)
+    if (std::filesystem::exists(out_ / io::particle_file_name(f)))
+      frames_written_.emplace_back(f, f * settings_.frame_dt);
+  return header.frame;
+}
+
+template <int dim>
+void Runner<dim>::append_diagnostics(const State& state, int frame, const Pipeline<State>& pipeline) {
+  const Particles<dim>& P = state.particles;
+  double kinetic = 0, potential = 0, mass = 0, max_speed2 = 0;
+  Vec<dim> momentum = Vec<dim>::Zero();
+  for (std::size_t p = 0; p < P.size(); ++p) {
+    kinetic += 0.5 * P.mass[p] * P.v[p].squaredNorm();
+    potential -= P.mass[p] * state.gravity.dot(P.x[p]);
+    mass += P.mass[p];
+    momentum += P.mass[p] * P.v[p];
+    max_speed2 = std::max(max_speed2, P.v[p].squaredNorm());
+  }
+  std::vector<double> r = {double(frame), state.time, state.dt, double(state.step - steps_at_last_frame_),
+                           kinetic, elastic_energy_ ? elastic_energy_(state) : 0.0, potential, mass};
+  for (int a = 0; a < dim; ++a) r.push_back(momentum[a]);
+  r.push_back(std::sqrt(max_speed2));
+  for (const auto& [name, fn] : extra_) r.push_back(fn(state));
+  const StageTimes& t = pipeline.times();
+  for (std::size_t s = 0; s < t.seconds.size(); ++s) {
+    r.push_back(t.seconds[s] - stage_seconds_at_last_frame_[s]);
+    stage_seconds_at_last_frame_[s] = t.seconds[s];
+  }
+  steps_at_last_frame_ = state.step;
+  csv_.append(r);
+}
+
+template <int dim>
+void Runner<dim>::advance(State& state, Pipeline<State>& pipeline, double t_end, int frame) {
+  int steps = 0;
+  while (state.time < t_end - 1e-12 * settings_.frame_dt) {
+    state.dt_limit = t_end - state.time;
+    pipeline.step(state);
+    if (!(state.dt > 0.0) || ++steps > settings_.max_steps_per_frame)
+      throw NumericalError("stage 'time_step': the time step collapsed to " + number(state.dt) + " s at t = " +
+                           number(state.time) + " s (more than " + std::to_string(settings_.max_steps_per_frame) +
+                           " steps in frame " + std::to_string(frame) + ")");
+    state.time = state.dt >= state.dt_limit ? t_end : state.time + state.dt;
+    ++state.step;
+  }
+}
+
+template <int dim>
 void Runner<dim>::run(State& state, Pipeline<State>& pipeline) {
   if (!cl_.quiet) {
     std::cerr << app_ << ": " << cl_.scene_file << " (" << dim << "D), resolved parameters:\n";
     for (const auto& [key, value] : scene_.resolved()) std::cerr << "  " << key << " = " << value << "\n";
   }
   start_ = std::chrono::steady_clock::now();
-  int first_frame = 0;
-  if (cl_.restart) {
-    io::CheckpointHeader header;
-    state.particles = io::load_checkpoint<dim>(*cl_.restart, header);
-    verify<InputError>(header.dim == dim, "checkpoint '" + *cl_.restart + "' is " +
-                                              std::to_string(header.dim) + "D, the scene is " +
-                                              std::to_string(dim) + "D");
-    verify<InputError>(header.scene_digest == scene_digest(),
-                       "checkpoint '" + *cl_.restart + "' was written by another scene (digest " +
-                           header.scene_digest + ", this scene " + scene_digest() +
-                           "): a restart needs the same keys and values, except time.end and output.*");
-    state.time = header.time;
-    state.step = header.step;
-    first_frame = header.frame;
-    std::filesystem::create_directories(out_);
-    csv_.open_for_restart(out_ / "diagnostics.csv", columns(pipeline), first_frame);
-    for (int f = 0; f <= first_frame; ++f)
-      if (std::filesystem::exists(out_ / io::particle_file_name(f)))
-        frames_written_.emplace_back(f, f * settings_.frame_dt);
-  } else {
-    std::filesystem::create_directories(out_);
-    csv_.open(out_ / "diagnostics.csv", columns(pipeline));
-  }
+  const int first_frame = open_output(state, pipeline);
   stage_seconds_at_last_frame_.assign(pipeline.stage_names().size(), 0.0);
   steps_at_last_frame_ = state.step;
-
-  auto row = [&](int frame) {
-    const Particles<dim>& P = state.particles;
-    double kinetic = 0, potential = 0, mass = 0, max_speed2 = 0;
-    Vec<dim> momentum = Vec<dim>::Zero();
-    for (std::size_t p = 0; p < P.size(); ++p) {
-      kinetic += 0.5 * P.mass[p] * P.v[p].squaredNorm();
-      potential -= P.mass[p] * state.gravity.dot(P.x[p]);
-      mass += P.mass[p];
-      momentum += P.mass[p] * P.v[p];
-      max_speed2 = std::max(max_speed2, P.v[p].squaredNorm());
-    }
-    std::vector<double> r = {double(frame), state.time, state.dt, double(state.step - steps_at_last_frame_),
-                             kinetic, elastic_energy_ ? elastic_energy_(state) : 0.0, potential, mass};
-    for (int a = 0; a < dim; ++a) r.push_back(momentum[a]);
-    r.push_back(std::sqrt(max_speed2));
-    for (const auto& [name, fn] : extra_) r.push_back(fn(state));
-    const StageTimes& t = pipeline.times();
-    for (std::size_t s = 0; s < t.seconds.size(); ++s) {
-      r.push_back(t.seconds[s] - stage_seconds_at_last_frame_[s]);
-      stage_seconds_at_last_frame_[s] = t.seconds[s];
-    }
-    steps_at_last_frame_ = state.step;
-    csv_.append(r);
-  };
-
   if (!cl_.restart) {
-    row(0);
-    write_frame(state, 0, pipeline);
+    append_diagnostics(state, 0, pipeline);
+    write_frame(state, 0);
   }
 
   const int frames = settings_.frame_count();
   for (int frame = first_frame + 1; frame <= frames; ++frame) {
-    const double t_end = std::min(frame * settings_.frame_dt, settings_.end_time);
-    int steps = 0;
-    while (state.time < t_end - 1e-12 * settings_.frame_dt) {
-      state.dt_limit = t_end - state.time;
-      pipeline.step(state);
-      if (!(state.dt > 0.0) || ++steps > settings_.max_steps_per_frame)
-        throw NumericalError("stage 'time_step': the time step collapsed to " + number(state.dt) +
-                             " s at t = " + number(state.time) + " s (more than " +
-                             std::to_string(settings_.max_steps_per_frame) +
-                             " steps in frame " + std::to_string(frame) + ")");
-      state.time = state.dt >= state.dt_limit ? t_end : state.time + state.dt;
-      ++state.step;
-    }
-    row(frame);
-    write_frame(state, frame, pipeline);
+    advance(state, pipeline, std::min(frame * settings_.frame_dt, settings_.end_time), frame);
+    append_diagnostics(state, frame, pipeline);
+    write_frame(state, frame);
     const bool checkpoint = frame == frames ||
                             (settings_.output.checkpoint_every > 0 && frame % settings_.output.checkpoint_every == 0);
     if (checkpoint) {
@@ -159,7 +168,7 @@ void Runner<dim>::run(State& state, Pipeline<State>& pipeline) {
 }
 
 template <int dim>
-void Runner<dim>::write_frame(const State& state, int frame, Pipeline<State>&) {
+void Runner<dim>::write_frame(const State& state, int frame) {
   if (settings_.output.particles) {
     io::write_particles(out_ / io::particle_file_name(frame), state.particles, state.time, frame);
     frames_written_.emplace_back(frame, state.time);

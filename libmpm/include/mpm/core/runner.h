@@ -47,7 +47,10 @@ public:
 private:
   std::vector<std::string> columns(const Pipeline<State>& pipeline) const;
   std::string scene_digest() const;
-  void write_frame(const State& state, int frame, Pipeline<State>& pipeline);
+  int open_output(State& state, const Pipeline<State>& pipeline);  // returns the first frame to run
+  void append_diagnostics(const State& state, int frame, const Pipeline<State>& pipeline);
+  void advance(State& state, Pipeline<State>& pipeline, double t_end, int frame);
+  void write_frame(const State& state, int frame);
   void progress(const State& state, int frame, bool last) const;
 
   std::string app_;

@@ -5,11 +5,12 @@
 //!
 //! The stencil is a tensor product, and the APIC node value is affine in the node offset,
 //!   m_p (v_p + C_p (x_i - x_p)) = c_0 + sum_a rel_a c_{a+1},  c_0 = (m, m v), c_{a+1} = (0, m C e_a dx),
-//! so both loops factor it one axis at a time, outermost first: P2G folds an axis's weight
-//! and offset into the coefficients c (spread), G2P sums the moments sum w v and
-//! sum w rel_a v one axis at a time (collect). The innermost loop over the S nodes of a row
-//! is then two multiply-adds of a node's channels instead of a weight product and a
-//! matrix-vector product per node.
+//! so both loops work one axis at a time with integer node offsets n_a = rel_a - rel_a[0]:
+//! P2G (spread) steps the node value by c_{a+1} from node to node, G2P (collect) forms the
+//! moments sum w v and sum w n_a v from the products w v by additions. A node then costs one
+//! multiply and a few adds on its channels, where the textbook loop forms a weight product
+//! and a matrix-vector product per node. Particles are set up in chunks (in_chunks).
+//! spread and collect are forced inline: called, they pass the coefficients through memory.
 #include <mpm/core/detail/bucket_loops.h>
 
 #include <algorithm>

@@ -1,0 +1,63 @@
+#pragma once
+//! The pressure operator of the projection, matrix-free, on a dense box of cells.
+//!
+//! Unknowns p_c live at cell centres; velocities at the nodes (cell corners) of the same box
+//! (semi-staggered grid, DESIGN.md). Cells are fluid (an unknown) or empty (p = 0, free
+//! surface); every other cell is also p = 0, and walls enter through node coefficients.
+//!
+//! Two operators share this interface:
+//!  * NodeCell (the project's own): A = D B D^T, with
+//!      (D u)_c = exact cell average of div u for the multilinear nodal field u
+//!              = sum_{corners i of c} sum_a s_{c,i,a} u_{i,a} / (2^{dim-1} dx),
+//!      s_{c,i,a} = +1 if corner i is on the upper side of c along axis a, else -1,
+//!      B = diag(beta_i) per node (beta_i = dt (n_w/rho_w + n_s/rho_s) [m^3 s/kg]; 0 on nodes
+//!      whose velocity is prescribed by a wall or collider, which is how Neumann walls enter),
+//!    so that u <- u - B G p = u + B D^T p (G = -D^T, the discrete gradient) with
+//!    A p = b, b = -D u, makes D u = 0 in every fluid cell. A is symmetric
+//!    positive semi-definite; on a uniform box it has checkerboard null modes besides constants.
+//!  * Poisson (the standard 2*dim+1-point Laplacian, for benchmarks against hypre):
+//!      (A p)_c = sum_{faces f of c} (p_c - p_nb) / dx^2, neighbour outside the box or empty: p_nb = 0.
+//! Both are stored as a cell-type mask plus per-node (NodeCell) coefficients; solvers apply A
+//! matrix-free and may assemble it (CHOLMOD, hypre) through for_each_entry.
+#include <mpm/core/types.h>
+
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+namespace fluid {
+
+using mpm::IVec;
+using mpm::Vec;
+
+enum class CellType : std::uint8_t { empty = 0, fluid = 1 };
+
+template <int dim>
+struct CellOperator {
+  enum class Kind { node_cell, poisson };
+  Kind kind = Kind::node_cell;
+  IVec<dim> cells = IVec<dim>::Zero();  //!< cells per axis; nodes per axis = cells + 1
+  double dx = 1.0;                      //!< [m]
+  std::vector<CellType> type;           //!< per cell, x fastest
+  std::vector<double> beta;             //!< per node, x fastest (NodeCell only)
+
+  std::int64_t cell_count() const;
+  std::int64_t node_count() const;
+  std::int64_t cell_index(const IVec<dim>& c) const;  //!< x fastest
+  std::int64_t node_index(const IVec<dim>& n) const;
+
+  //! y = A x over all cells (y_c = 0 for empty cells; x is read only at fluid cells).
+  void apply(const std::vector<double>& x, std::vector<double>& y) const;
+  //! The diagonal of A (0 for empty cells).
+  void diagonal(std::vector<double>& d) const;
+  //! Calls f(row cell, column cell, value) for every nonzero of A between fluid cells,
+  //! row by row, columns ascending (for assembly by direct and algebraic solvers).
+  void for_each_entry(const std::function<void(std::int64_t, std::int64_t, double)>& f) const;
+
+  //! rhs of the projection: b_c = -(D u)_c for fluid cells, 0 elsewhere (u per node, x fastest).
+  void divergence(const std::vector<Vec<dim>>& u, std::vector<double>& div) const;
+  //! u_i += beta_i (D^T p)_i (= u_i - beta_i (G p)_i) for every node.
+  void subtract_gradient(const std::vector<double>& p, std::vector<Vec<dim>>& u) const;
+};
+
+}  // namespace fluid

@@ -1,0 +1,47 @@
+#pragma once
+//! One interface for every pressure solver back-end (STYLE.md: OpenVDB's ConjGradient State,
+//! AMReX's bottom-solver enum). A solve never fails silently: it returns its result and the
+//! caller (a scene setting) decides whether a non-converged solve warns or stops.
+#include <fluid/pressure/cell_operator.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace fluid {
+
+struct SolveControl {
+  double relative_tolerance = 1e-8;  //!< stop when |b - A p| <= rtol |b|
+  double absolute_tolerance = 0.0;   //!< ... or when |b - A p| <= atol
+  int max_iterations = 1000;
+};
+
+struct SolveResult {
+  bool converged = false;
+  int iterations = 0;
+  double relative_residual = 0.0;  //!< |b - A p| / |b| (0 when b = 0)
+  double absolute_residual = 0.0;
+  double setup_seconds = 0.0;
+  double solve_seconds = 0.0;
+};
+
+template <int dim>
+class PressureSolver {
+public:
+  virtual ~PressureSolver() = default;
+  virtual std::string name() const = 0;
+  //! Solves A p = b on the fluid cells of `op` (p is resized to the cell count; empty cells 0).
+  //! `p` holds the initial guess on entry when it has the right size.
+  virtual SolveResult solve(const CellOperator<dim>& op, const std::vector<double>& b,
+                            std::vector<double>& p, const SolveControl& control) = 0;
+};
+
+//! Names accepted by make_pressure_solver, in the order of docs/user_guide.md.
+std::vector<std::string> pressure_solver_names();
+
+//! "mgpcg" (default), "cg", "jacobi_pcg", "cholmod", "hypre_pfmg", "hypre_boomeramg".
+//! Throws mpm::InputError listing the accepted names for any other.
+template <int dim>
+std::unique_ptr<PressureSolver<dim>> make_pressure_solver(const std::string& name);
+
+}  // namespace fluid

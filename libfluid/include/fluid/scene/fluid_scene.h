@@ -1,0 +1,84 @@
+#pragma once
+//! Assembles a free-surface LANS fluid scene from a scene file (DESIGN.md):
+//!   time_step -> sort -> p2g -> grid_update (gravity) -> viscosity (only when mu > 0)
+//!   -> boundary -> pressure -> g2p (and advection)
+//! The projection leaves every node that a wall or collider prescribes untouched, so the
+//! boundary conditions still hold after it and no second boundary stage is needed.
+//!
+//!   fluid:                   # the liquid
+//!     density: 1000          # rho_w [kg/m^3] > 0
+//!     viscosity: 1.0e-3      # dynamic viscosity mu [Pa s] >= 0 (0: inviscid, no viscosity stage)
+//!   pressure:                # optional
+//!     solver: mgpcg          # one of pressure_solver_names()
+//!     tolerance: 1.0e-8      # relative residual |b - A p| / |b|, in (0, 1)
+//!     max_iterations: 1000
+//!     on_failure: stop       # stop | warn: what a solve that misses the tolerance does
+//!   bodies:                  # fluid regions: {shape: box, lo, hi} or {shape: sphere, center,
+//!     - {shape: box, lo: [0, 0], hi: [0.1, 0.2], particles_per_cell: 4, velocity: [0, 0]}
+//! plus the shared keys (scene_settings.h) and walls/colliders (collider_config.h). Walls act
+//! on the fluid as prescribed node velocities; use `contact: sticky` (no-slip): the pressure
+//! does not act on nodes inside a wall, so the tangential velocity a slip wall leaves there
+//! would not be corrected.
+#include <fluid/stages/pressure_projection.h>
+
+#include <mpm/core/config.h>
+#include <mpm/core/pipeline.h>
+#include <mpm/core/runner.h>
+#include <mpm/core/scene_settings.h>
+#include <mpm/core/state.h>
+#include <mpm/geometry/collider.h>
+
+#include <string>
+#include <vector>
+
+namespace fluid {
+
+struct FluidMaterial {
+  double density = 1000.0;  //!< rho_w [kg/m^3]
+  double viscosity = 0.0;   //!< dynamic viscosity mu [Pa s]
+};
+
+template <int dim>
+struct FluidScene {
+  mpm::SceneSettings<dim> settings;
+  FluidMaterial fluid;
+  stages::PressureSettings pressure;
+  mpm::geometry::ColliderSet<dim> colliders;
+  mpm::MpmState<dim> state;  //!< particles seeded, grid sized to the domain
+};
+
+//! The `fluid` map: density > 0, viscosity >= 0.
+FluidMaterial parse_fluid_material(const Config& fluid);
+//! The optional `pressure` map of `scene` (defaults: mgpcg, 1e-8, 1000 iterations, stop).
+stages::PressureSettings parse_pressure_settings(const Config& scene);
+
+//! A scene with no particles and the grid sized to the settings' domain.
+template <int dim>
+FluidScene<dim> make_fluid_scene(mpm::SceneSettings<dim> settings, FluidMaterial fluid,
+                                 stages::PressureSettings pressure, mpm::geometry::ColliderSet<dim> colliders);
+
+//! Appends fluid particles of volume `volume` [m^dim] each at `positions`, moving with
+//! `velocity`; InputError naming `where` when one lies outside the domain.
+template <int dim>
+void add_fluid_particles(FluidScene<dim>& scene, const std::vector<Vec<dim>>& positions, double volume,
+                         const Vec<dim>& velocity, const std::string& where);
+
+//! Seeds the optional `bodies` list of `scene` (box and sphere shapes).
+template <int dim>
+void seed_fluid_bodies(FluidScene<dim>& fluid, const Config& scene);
+
+//! Reads settings, the fluid, the pressure keys, walls/colliders and bodies.
+template <int dim>
+FluidScene<dim> load_fluid_scene(const Config& scene);
+
+//! The fluid pipeline for `scene`. Besides the particle CFL, dt <= wave_cfl sqrt(dx / |g|):
+//! a particle starting from rest falls less than wave_cfl^2 dx / 2 in one step.
+template <int dim>
+mpm::Pipeline<mpm::MpmState<dim>> make_fluid_pipeline(const FluidScene<dim>& scene);
+
+//! Adds the diagnostics columns pressure_iterations and pressure_residual (of the last solve
+//! of each frame) for the projection stage of `pipeline`.
+template <int dim>
+void add_pressure_columns(mpm::Runner<dim>& runner, mpm::Pipeline<mpm::MpmState<dim>>& pipeline);
+
+}  // namespace fluid

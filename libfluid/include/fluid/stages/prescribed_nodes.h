@@ -1,0 +1,23 @@
+#pragma once
+//! The grid nodes whose velocity a wall or collider prescribes, shared by the fluid stages that
+//! must leave those nodes alone (the pressure acts on them with beta = 0, the viscous solve
+//! takes them as Dirichlet data).
+#include <mpm/core/sparse_grid.h>
+#include <mpm/geometry/collider.h>
+
+#include <cstdint>
+#include <vector>
+
+namespace fluid::stages {
+
+//! 1 for every grid storage node with mass whose velocity `colliders` constrains at time t [s],
+//! else 0. A node is constrained when ColliderSet::project changes either of the probe
+//! velocities a and -a (a generic, non-axis-aligned vector): sticky and slip obstacles change
+//! every generic probe, a separating one changes the probe that points into it. So the mask
+//! is exactly the set of nodes inside an obstacle or a closed wall layer, for every contact
+//! type and obstacle shape, without a second definition of "inside".
+template <int dim>
+std::vector<std::uint8_t> prescribed_nodes(const mpm::SparseGrid<dim>& grid,
+                                           const mpm::geometry::ColliderSet<dim>& colliders, double t);
+
+}  // namespace fluid::stages

@@ -1,0 +1,79 @@
+#pragma once
+//! The pressure projection of the LANS fluid on the semi-staggered grid (DESIGN.md; Gao et al.
+//! 2018): after the explicit update and the boundary conditions, makes the node velocity field
+//! discretely divergence-free in every fluid cell, with p = 0 in empty cells (free surface)
+//! and no pressure impulse on nodes whose velocity a wall or collider prescribes.
+#include <fluid/pressure/cell_operator.h>
+#include <fluid/pressure/pressure_solver.h>
+
+#include <mpm/core/stage.h>
+#include <mpm/core/state.h>
+#include <mpm/geometry/collider.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace fluid::stages {
+
+//! What a scene decides about a pressure solve that did not converge.
+enum class OnFailure { warn, stop };
+
+struct PressureSettings {
+  std::string solver = "mgpcg";  //!< one of pressure_solver_names()
+  SolveControl control;          //!< tolerance and iteration cap of every solve
+  OnFailure on_failure = OnFailure::stop;
+};
+
+//! The second phase of the mixture constraint div(n_w v_w + n_s v_s) = 0 (Gao et al. 2018),
+//! one entry per grid storage node, supplied by the coupling before every projection. Without
+//! it the stage is single phase: n_w = 1, n_s = 0.
+template <int dim>
+struct MixtureNodes {
+  std::vector<double> fluid_fraction;  //!< n_w [-]
+  std::vector<Vec<dim>> solid_flux;    //!< n_s v_s^* after the solid's explicit update [m/s]
+  std::vector<double> solid_mobility;  //!< n_s / rho_s [m^3/kg]
+};
+
+template <int dim>
+class PressureProjection final : public mpm::Stage<mpm::MpmState<dim>> {
+public:
+  //! `density` rho_w [kg/m^3] of the fluid; `colliders` the same obstacles as the boundary stage.
+  PressureProjection(double density, mpm::geometry::ColliderSet<dim> colliders, PressureSettings settings);
+
+  std::string name() const override { return "pressure"; }
+  std::vector<std::string> reads() const override { return {"grid.mass", "grid.velocity", "particle.x"}; }
+  std::vector<std::string> writes() const override { return {"grid.velocity", "cell.pressure"}; }
+  void run(mpm::MpmState<dim>& s) override;
+
+  //! Couples the projection to a second phase (nullptr: single phase). The pointer must stay
+  //! valid while the stage runs. The stage updates only v_w; the coupling applies
+  //! v_s += dt / rho_s (D^T p) with operator() and pressure() of the same step.
+  void set_mixture(const MixtureNodes<dim>* mixture) { mixture_ = mixture; }
+
+  //! The operator of the last solve (beta_i = dt (n_w / rho_w + n_s / rho_s), 0 on prescribed
+  //! and massless nodes) and the pressure per cell of its box [Pa]; cell (0, ...) of the box is
+  //! the global grid cell box_origin().
+  const CellOperator<dim>& cell_operator() const { return op_; }
+  const std::vector<double>& pressure() const { return p_; }
+  const IVec<dim>& box_origin() const { return box_lo_; }
+  //! Pressure [Pa] of the cell holding x after the last solve (0 in empty cells and outside).
+  double pressure_at(const mpm::SparseGrid<dim>& grid, const Vec<dim>& x) const;
+  const SolveResult& last_result() const { return result_; }
+  const PressureSettings& settings() const { return settings_; }
+
+private:
+  double density_;
+  mpm::geometry::ColliderSet<dim> colliders_;
+  PressureSettings settings_;
+  std::unique_ptr<PressureSolver<dim>> solver_;
+  const MixtureNodes<dim>* mixture_ = nullptr;
+  CellOperator<dim> op_;
+  IVec<dim> box_lo_ = IVec<dim>::Zero();
+  std::vector<double> p_;  // last pressure, the initial guess of the next solve
+  std::vector<double> b_;
+  std::vector<Vec<dim>> u_;
+  SolveResult result_;
+};
+
+}  // namespace fluid::stages

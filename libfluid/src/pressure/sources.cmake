@@ -1,0 +1,3 @@
+list(APPEND FLUID_SOURCES
+  src/pressure/cell_operator.cpp
+)

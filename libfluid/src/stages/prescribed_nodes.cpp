@@ -1,0 +1,36 @@
+// mask_i = [m_i > 0 and (P(a) != a or P(-a) != -a)],  P = ColliderSet::project at (x_i, t),
+// a = (1, 1/sqrt(2), 1/sqrt(3)) [m/s]: no obstacle normal used by the scenes is orthogonal to a.
+#include <fluid/stages/prescribed_nodes.h>
+
+#include <tbb/parallel_for.h>
+
+#include <cmath>
+
+namespace fluid::stages {
+
+template <int dim>
+std::vector<std::uint8_t> prescribed_nodes(const mpm::SparseGrid<dim>& grid,
+                                           const mpm::geometry::ColliderSet<dim>& colliders, double t) {
+  std::vector<std::uint8_t> mask(grid.node_storage(), 0);
+  if (colliders.empty()) return mask;
+  mpm::Vec<dim> a;
+  for (int d = 0; d < dim; ++d) a[d] = 1.0 / std::sqrt(d + 1.0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, grid.node_storage(), 1024), [&](const auto& r) {
+    for (std::size_t k = r.begin(); k != r.end(); ++k) {
+      if (grid.mass[k] <= 0.0) continue;
+      const mpm::Vec<dim> x = grid.node_position(k);
+      mpm::Vec<dim> up = a, down = -a;
+      colliders.project(x, t, up);
+      colliders.project(x, t, down);
+      mask[k] = up != a || down != -a;
+    }
+  });
+  return mask;
+}
+
+template std::vector<std::uint8_t> prescribed_nodes(const mpm::SparseGrid<2>&, const mpm::geometry::ColliderSet<2>&,
+                                                    double);
+template std::vector<std::uint8_t> prescribed_nodes(const mpm::SparseGrid<3>&, const mpm::geometry::ColliderSet<3>&,
+                                                    double);
+
+}  // namespace fluid::stages

@@ -1,0 +1,5 @@
+list(APPEND FLUID_SOURCES
+  src/stages/prescribed_nodes.cpp
+  src/stages/pressure_projection.cpp
+  src/stages/implicit_viscosity.cpp
+)
