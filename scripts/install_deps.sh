@@ -6,6 +6,7 @@ set -euo pipefail
 packages=(
   build-essential cmake ninja-build pkg-config
   python3              # regression test drivers
+  gnuplot-nox          # error-vs-run-time plots of the study program
   libeigen3-dev        # small fixed-size linear algebra
   libyaml-cpp-dev      # scene files
   libhdf5-dev          # particle output, checkpoints

@@ -1,6 +1,12 @@
 #pragma once
 //! Private: what every back-end does to b and p before it solves on the fluid cells only.
 #include <fluid/pressure/cell_operator.h>
+#include <fluid/pressure/pressure_solver.h>
+
+#include "cell_kernels.h"
+
+#include <algorithm>
+#include <cmath>
 
 #include <cstdint>
 #include <vector>
@@ -37,6 +43,25 @@ std::int64_t number_fluid_cells(const CellOperator<dim>& op, std::vector<std::in
       cell_of.push_back(static_cast<std::int64_t>(c));
     }
   return static_cast<std::int64_t>(cell_of.size());
+}
+
+//! Fills the residuals of `result` from b - A p (b already masked) and sets `converged` by the
+//! control, so that back-ends with their own stopping tests report the same measure.
+template <int dim>
+void measure_residual(const CellOperator<dim>& op, const std::vector<double>& b, const std::vector<double>& p,
+                      const SolveControl& control, SolveResult& result) {
+  std::vector<double> Ap, scratch;
+  apply_operator(op, p, Ap, scratch);
+  double r2 = 0.0, b2 = 0.0;
+  for (std::size_t c = 0; c < b.size(); ++c) {
+    r2 += (b[c] - Ap[c]) * (b[c] - Ap[c]);
+    b2 += b[c] * b[c];
+  }
+  result.absolute_residual = std::sqrt(r2);
+  result.relative_residual = b2 > 0.0 ? result.absolute_residual / std::sqrt(b2) : 0.0;
+  // A factor 10 above the target covers the drift between a solver's own residual and ours.
+  const double target = std::max(control.relative_tolerance * std::sqrt(b2), control.absolute_tolerance);
+  result.converged = std::isfinite(r2) && result.absolute_residual <= 10.0 * target;
 }
 
 }  // namespace fluid::detail

@@ -374,6 +374,40 @@ template Vec<3> Config::vector<3>(const std::string&, Range) const;
 template Vec<2> Config::vector<2>(const std::string&, const Vec<2>&, Range) const;
 template Vec<3> Config::vector<3>(const std::string&, const Vec<3>&, Range) const;
 
+std::vector<double> Config::numbers(const std::string& key, Range range) const {
+  if (!has(key)) fail(key, "missing required key");
+  const YAML::Node node = lookup(*node_, key);
+  if (!node.IsSequence() || node.size() == 0) fail(key, "expected a non-empty list of numbers");
+  const std::string full = join(path_, key);
+  std::vector<double> values(node.size());
+  std::string text = "[";
+  for (std::size_t i = 0; i < node.size(); ++i) {
+    if (const auto problem = number_problem(node[i], range, values[i])) {
+      const std::string entry_path = full + "[" + std::to_string(i) + "]";
+      throw InputError(shared_->position(entry_path, node[i]) + ": key '" + entry_path + "' = " +
+                       yaml_text(node[i]) + ": " + *problem);
+    }
+    text += (i ? ", " : "") + format_number(values[i]);
+  }
+  shared_->record(full, text + "]");
+  return values;
+}
+
+std::vector<std::string> Config::texts(const std::string& key) const {
+  std::vector<std::string> values;
+  if (!has(key)) return values;
+  const YAML::Node node = lookup(*node_, key);
+  if (!node.IsSequence()) fail(key, "expected a list of texts" + got(node));
+  std::string text = "[";
+  for (std::size_t i = 0; i < node.size(); ++i) {
+    if (!node[i].IsScalar()) fail(key, "expected a list of texts; entry " + std::to_string(i) + got(node[i]));
+    values.push_back(node[i].Scalar());
+    text += (i ? ", " : "") + values.back();
+  }
+  shared_->record(join(path_, key), text + "]");
+  return values;
+}
+
 Config Config::child(const std::string& key) const {
   if (!has(key)) fail(key, "missing required key");
   return *optional_child(key);

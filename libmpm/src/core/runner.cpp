@@ -159,6 +159,8 @@ void Runner<dim>::run(State& state, Pipeline<State>& pipeline) {
   wall_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
   stage_names_ = pipeline.stage_names();
   stage_table_ = pipeline.times().table();
+  particle_count_ = state.particles.size();
+  grid_nodes_ = state.grid.node_storage();
   memory_ = state.particles.memory_per_field();
   for (const auto& m : state.grid.memory_per_field()) memory_.push_back(m);
   std::cerr << "\n" << app_ << ": stages run, in order, with their total time\n" << stage_table_;
@@ -209,6 +211,9 @@ void Runner<dim>::write_summary(const std::vector<std::pair<std::string, double>
   std::string stages;
   for (const auto& s : stage_names_) stages += (stages.empty() ? "" : ",") + s;
   info.emplace_back("stages", stages);
+  info.emplace_back("steps", std::to_string(steps_at_last_frame_));
+  info.emplace_back("particles", std::to_string(particle_count_));
+  info.emplace_back("grid_nodes", std::to_string(grid_nodes_));
   for (const auto& [name, bytes] : memory_) info.emplace_back("memory_bytes." + name, std::to_string(bytes));
   io::write_summary(out_ / "summary.json", results, scene_.resolved(), info);
 }

@@ -12,6 +12,9 @@
 #include <mpm/solid/stages/return_map.h>
 #include <mpm/solid/stages/stress_forces.h>
 
+#include <Eigen/Geometry>
+
+#include <cmath>
 #include <sstream>
 
 namespace mpm::solid {
@@ -116,7 +119,25 @@ void seed_body(SolidScene<dim>& scene, const Config& body) {
   if (const Outside outside = first_outside_domain(scene.settings, x); !outside.why.empty())
     body.fail(shape == "box" ? (outside.below ? "lo" : "hi") : shape == "sphere" ? "center" : "file",
               "expected the body inside the domain, but " + outside.why);
-  add_particles(scene, x, geometry::particle_volume<dim>(dx, ppc), m, velocity, body.path());
+  // A body may start deformed, F = diag(stretch), from a rest state of volume V / |det F| (a
+  // crushed or inverted block), and spinning rigidly about its centroid.
+  const Vec<dim> stretch = body.vector<dim>("stretch", Vec<dim>::Ones());
+  if (!(stretch.array().abs() > 0.0).all()) body.fail("stretch", "every component must be nonzero");
+  const std::size_t first = scene.state.particles.size();
+  add_particles(scene, x, geometry::particle_volume<dim>(dx, ppc) / std::fabs(stretch.prod()), m, velocity,
+                body.path());
+  Particles<dim>& P = scene.state.particles;
+  Vec<dim> centroid = Vec<dim>::Zero();
+  for (const Vec<dim>& p : x) centroid += p / static_cast<double>(x.size());
+  Eigen::Matrix<double, 3, 1> omega = Eigen::Matrix<double, 3, 1>::Zero();
+  if constexpr (dim == 2) omega[2] = body.number("angular_velocity", 0.0, Range::any());
+  else omega = body.vector<3>("angular_velocity", Vec<3>::Zero());
+  for (std::size_t p = first; p < P.size(); ++p) {
+    P.F[p] = stretch.asDiagonal();
+    Eigen::Matrix<double, 3, 1> r = Eigen::Matrix<double, 3, 1>::Zero();
+    r.template head<dim>() = P.x[p] - centroid;
+    P.v[p] += omega.cross(r).template head<dim>();
+  }
 }
 }  // namespace
 

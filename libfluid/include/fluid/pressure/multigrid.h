@@ -8,15 +8,36 @@
 //!    Poisson: the same stencil; NodeCell: beta at coarse node N is injected from fine node 2N
 //!    (clamped to the last fine node). Injection keeps beta = 0 exactly on wall nodes, which
 //!    averaging would smear into the first fluid layer and so turn Neumann walls into leaks.
-//!  * Transfers: P is cell-centred multilinear interpolation (weights 3/4, 1/4 per axis,
-//!    constant extrapolation at the box faces), R = P^T / 2^dim, so that R A P ~ A_2dx.
-//!  * Smoother: damped Jacobi, omega = 4 / (3 lambda_max(D^-1 A)) with lambda_max estimated
-//!    by power iteration per level (2/3 for the Laplacian; the 3D NodeCell operator has
-//!    positive off-diagonals and lambda_max = 8/3, so a fixed 2/3 would diverge there).
+//!  * Transfers: P is cell-centred multilinear interpolation (weights 3/4, 1/4 per axis),
+//!    R = P^T / 2^dim, so that R A P ~ A_2dx; both are applied one axis at a time. At the box
+//!    faces the missing coarse neighbour is the mirror image of the nearest coarse cell:
+//!    -x for Poisson (p = 0 on the face: Dirichlet), +x for NodeCell (walls: Neumann), as the
+//!    fine operator does. Constant extrapolation for Poisson gave 17 -> 22 iterations from
+//!    256^2 -> 1024^2 (Jacobi smoother); the mirror gives 8 -> 8 (red-black smoother).
+//!  * Smoother: Poisson: red-black Gauss-Seidel (same-colour cells do not couple), red then
+//!    black before the coarse correction, black then red after. NodeCell: damped Jacobi (its
+//!    3^dim stencil couples same-colour cells in 3D), omega = 4 / (3 lambda_max(D^-1 A)) with
+//!    lambda_max estimated by power iteration per level (2/3 for a Laplacian; the 3D NodeCell
+//!    operator has positive off-diagonals and lambda_max = 8/3, where 2/3 would diverge).
+//!    Two sweeps each side: 7 (3D) and 8 (2D) iterations, flat from 32^3 and 256^2; one
+//!    sweep needs 10-11 and is no faster.
 //!  * Bottom: the Moore-Penrose pseudo-inverse of the coarsest matrix (dense, <= a few
 //!    hundred fluid cells), which also covers the singular closed-box NodeCell operator.
-//! The same number of Jacobi sweeps before and after the coarse correction and R = c P^T make
-//! the V-cycle a symmetric positive semi-definite linear map, so CG stays valid.
+//!  * Checkerboard modes (2D NodeCell): in 2D, A = D B D^T couples only diagonal neighbours
+//!    (the face-neighbour entry sums s_x s_x' + s_y s_y' = 0 over the shared corners), so the
+//!    red and black cells decouple and S A S = A for S = diag((-1)^(i+j)), for any beta and
+//!    free surface. Smooth transfers cannot represent the near-null modes S q (q smooth)
+//!    and Jacobi does not reduce them, so the preconditioner is M = V + S V S: the second
+//!    V-cycle sees them as smooth. Measured: 46 -> 179 iterations 64^2 -> 256^2 without,
+//!    11 -> 11 -> 12 for 64^2 -> 256^2 -> 1024^2 with (dam break, rtol 1e-8).
+//!    In 3D S A S != A for every sign pattern (A also couples face and corner neighbours)
+//!    and the near-null set is three lines through (pi,pi,pi) in Fourier space, (pi,pi,t)
+//!    and permutations: modes (-1)^(i+j) f(k) with f arbitrary. Representing them needs
+//!    semicoarsened coarse spaces per family; this V-cycle does not have them, and 3D NodeCell
+//!    iteration counts grow with N (docs/performance.md). The same correction with the four
+//!    3D sign patterns was tried and does not help (231 vs 173 iterations at 16^3).
+//! The post-smoother is the adjoint of the pre-smoother and R = c P^T, so the V-cycle is a
+//! symmetric positive semi-definite linear map and CG stays valid.
 #include <fluid/pressure/cell_operator.h>
 
 #include <Eigen/Dense>
@@ -29,15 +50,16 @@ template <int dim>
 class Multigrid {
 public:
   struct Options {
-    int smoothing_sweeps = 2;           //!< Jacobi sweeps before and after each coarse correction
-    std::int64_t max_coarse_cells = 512;  //!< coarsen until the coarsest level has at most this many fluid cells
+    int smoothing_sweeps = 2;             //!< smoothing sweeps before and after each coarse correction
+    std::int64_t max_coarse_cells = 256;  //!< coarsen until the coarsest level has at most this many fluid cells
   };
 
   //! Builds the hierarchy; `fine` must outlive the Multigrid.
   explicit Multigrid(const CellOperator<dim>& fine, const Options& options);
   explicit Multigrid(const CellOperator<dim>& fine) : Multigrid(fine, Options{}) {}
 
-  //! z = M r: one V-cycle from z = 0 (z resized to the cell count; empty cells 0).
+  //! z = M r: one V-cycle from z = 0, two for 2D NodeCell (z resized to the cell count; empty
+  //! cells 0).
   void apply(const std::vector<double>& r, std::vector<double>& z);
 
   int level_count() const { return static_cast<int>(levels_.size()); }
@@ -52,6 +74,7 @@ private:
 
   const CellOperator<dim>& op(int level) const { return level == 0 ? fine_ : levels_[level].op; }
   void smooth(int level);
+  void gauss_seidel(int level, int colour);
   void vcycle(int level);
   void prolong_add(int coarse_level);
   void restrict_residual(int fine_level);
@@ -59,6 +82,8 @@ private:
   const CellOperator<dim>& fine_;
   Options options_;
   std::vector<Level> levels_;
+  std::vector<double> transfer_in_, transfer_out_;  //!< scratch of the axis-by-axis transfers
+  std::vector<double> checkerboard_;  //!< S = diag((-1)^(i+j)); empty unless 2D NodeCell
   std::vector<std::int64_t> bottom_cells_;  //!< fluid cells of the coarsest level
   Eigen::MatrixXd bottom_pinv_;
 };

@@ -14,6 +14,7 @@
 //!     max_iterations: 1000
 //!     on_failure: stop       # stop | warn: what a solve that misses the tolerance does
 //!   bodies:                  # fluid regions: {shape: box, lo, hi} or {shape: sphere, center,
+//!                            # radius}; optional particles_per_cell (k^dim), jitter, seed, velocity
 //!     - {shape: box, lo: [0, 0], hi: [0.1, 0.2], particles_per_cell: 4, velocity: [0, 0]}
 //! plus the shared keys (scene_settings.h) and walls/colliders (collider_config.h). Walls act
 //! on the fluid as prescribed node velocities; use `contact: sticky` (no-slip): the pressure
@@ -48,9 +49,9 @@ struct FluidScene {
 };
 
 //! The `fluid` map: density > 0, viscosity >= 0.
-FluidMaterial parse_fluid_material(const Config& fluid);
+FluidMaterial parse_fluid_material(const mpm::Config& fluid);
 //! The optional `pressure` map of `scene` (defaults: mgpcg, 1e-8, 1000 iterations, stop).
-stages::PressureSettings parse_pressure_settings(const Config& scene);
+stages::PressureSettings parse_pressure_settings(const mpm::Config& scene);
 
 //! A scene with no particles and the grid sized to the settings' domain.
 template <int dim>
@@ -65,14 +66,15 @@ void add_fluid_particles(FluidScene<dim>& scene, const std::vector<Vec<dim>>& po
 
 //! Seeds the optional `bodies` list of `scene` (box and sphere shapes).
 template <int dim>
-void seed_fluid_bodies(FluidScene<dim>& fluid, const Config& scene);
+void seed_fluid_bodies(FluidScene<dim>& fluid, const mpm::Config& scene);
 
 //! Reads settings, the fluid, the pressure keys, walls/colliders and bodies.
 template <int dim>
-FluidScene<dim> load_fluid_scene(const Config& scene);
+FluidScene<dim> load_fluid_scene(const mpm::Config& scene);
 
-//! The fluid pipeline for `scene`. Besides the particle CFL, dt <= wave_cfl sqrt(dx / |g|):
-//! a particle starting from rest falls less than wave_cfl^2 dx / 2 in one step.
+//! The fluid pipeline for `scene`. Besides the particle CFL, dt <= wave_cfl sqrt(dx / |g|)
+//! (a particle starting from rest falls less than wave_cfl^2 dx / 2 in one step) and
+//! dt <= wave_cfl dx / |v_c| for every moving collider c.
 template <int dim>
 mpm::Pipeline<mpm::MpmState<dim>> make_fluid_pipeline(const FluidScene<dim>& scene);
 

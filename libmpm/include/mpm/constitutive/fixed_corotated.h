@@ -19,6 +19,8 @@ namespace mpm::constitutive {
 template <int dim>
 struct FixedCorotated {
   static constexpr std::string_view name = "fixed_corotated";
+  //! Defined and restoring for det F <= 0 (Stomakhin et al. 2012): inverted elements recover.
+  static constexpr bool supports_inversion = true;
 
   double mu = 0.0;      //!< [Pa]
   double lambda = 0.0;  //!< [Pa]

@@ -21,6 +21,8 @@ namespace mpm::constitutive {
 template <int dim>
 struct HenckyStVK {
   static constexpr std::string_view name = "hencky_stvk";
+  //! Defined for det F < 0 through log|sigma| (a reflection carries no stress).
+  static constexpr bool supports_inversion = true;
 
   double mu = 0.0;      //!< [Pa]
   double lambda = 0.0;  //!< [Pa]

@@ -23,6 +23,8 @@ namespace mpm::constitutive {
 template <int dim>
 struct NeoHookean {
   static constexpr std::string_view name = "neo_hookean";
+  //! log J is undefined for det F <= 0: the stress stage stops naming the particle.
+  static constexpr bool supports_inversion = false;
   static constexpr double min_J = 1e-6;
 
   double mu = 0.0;      //!< [Pa]

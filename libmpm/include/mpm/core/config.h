@@ -66,6 +66,11 @@ public:
   template <int dim>
   Vec<dim> vector(const std::string& key, const Vec<dim>& fallback, Range range = Range::any()) const;
 
+  //! A required non-empty sequence of numbers, each within `range`.
+  std::vector<double> numbers(const std::string& key, Range range = Range::any()) const;
+  //! An optional sequence of scalars as text (absent: empty).
+  std::vector<std::string> texts(const std::string& key) const;
+
   Config child(const std::string& key) const;                    //!< required map
   std::optional<Config> optional_child(const std::string& key) const;
   std::vector<Config> list(const std::string& key) const;         //!< sequence of maps (may be absent: empty)

@@ -69,6 +69,7 @@ private:
   std::vector<std::pair<std::string, std::size_t>> memory_;
   std::vector<std::string> stage_names_;
   double wall_seconds_ = 0.0;
+  std::size_t particle_count_ = 0, grid_nodes_ = 0;
 };
 
 }  // namespace mpm

@@ -1,0 +1,3 @@
+list(APPEND COUPLING_SOURCES
+  src/drag/drag_law.cpp
+)

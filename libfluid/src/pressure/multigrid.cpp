@@ -1,0 +1,311 @@
+// Geometric multigrid V-cycle (definitions and choices in multigrid.h).
+#include <fluid/pressure/multigrid.h>
+
+#include "cell_kernels.h"
+
+#include <mpm/core/error.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <random>
+
+namespace fluid {
+
+namespace {
+
+//! Per axis, the two coarse cells a fine cell interpolates from, with weights 3/4 and 1/4;
+//! the 1/4 neighbour is clamped into the box (constant extrapolation).
+struct AxisWeights {
+  std::array<int, 2> coarse;
+  std::array<double, 2> weight;
+};
+inline AxisWeights axis_weights(int i, int coarse_cells, bool dirichlet) {
+  const int near = i >> 1;
+  const int far = near + ((i & 1) ? 1 : -1);
+  if (far >= 0 && far < coarse_cells) return {{near, far}, {0.75, 0.25}};
+  return {{near, near}, {0.75, dirichlet ? -0.25 : 0.25}};
+}
+
+//! One axis of the tensor-product transfer: prolongation (coarse -> fine along axis a, the
+//! 1D interpolation) or its exact transpose (fine -> coarse). `in_extent` / `out_extent` are
+//! the box sizes of in / out, which differ only along a.
+template <int dim>
+void transfer_axis(const std::vector<double>& in, const IVec<dim>& in_extent, std::vector<double>& out,
+                   const IVec<dim>& out_extent, int a, bool prolong, bool dirichlet) {
+  std::int64_t inner = 1, outer = 1;
+  for (int d = 0; d < a; ++d) inner *= in_extent[d];
+  for (int d = a + 1; d < dim; ++d) outer *= in_extent[d];
+  const int n_in = in_extent[a], n_out = out_extent[a];
+  const int n_fine = prolong ? n_out : n_in, n_coarse = prolong ? n_in : n_out;
+  out.assign(static_cast<std::size_t>(out_extent.template cast<std::int64_t>().prod()), 0.0);
+  for (std::int64_t o = 0; o < outer; ++o)
+    for (int i = 0; i < n_fine; ++i) {
+      const AxisWeights w = axis_weights(i, n_coarse, dirichlet);
+      const std::int64_t fine = (o * n_fine + i) * inner;
+      const std::int64_t near = (o * n_coarse + w.coarse[0]) * inner, far = (o * n_coarse + w.coarse[1]) * inner;
+      if (prolong) {
+        for (std::int64_t q = 0; q < inner; ++q) out[fine + q] = w.weight[0] * in[near + q] + w.weight[1] * in[far + q];
+      } else {
+        for (std::int64_t q = 0; q < inner; ++q) {
+          out[near + q] += w.weight[0] * in[fine + q];
+          out[far + q] += w.weight[1] * in[fine + q];
+        }
+      }
+    }
+}
+
+template <int dim>
+CellOperator<dim> coarsen(const CellOperator<dim>& fine) {
+  CellOperator<dim> coarse;
+  coarse.kind = fine.kind;
+  coarse.cells = (fine.cells.array() + 1) / 2;
+  coarse.dx = 2.0 * fine.dx;
+  coarse.type.assign(static_cast<std::size_t>(coarse.cell_count()), CellType::empty);
+  IVec<dim> c = IVec<dim>::Zero();
+  for (std::int64_t ci = 0; ci < fine.cell_count(); ++ci) {
+    if (fine.type[ci] == CellType::fluid) coarse.type[coarse.cell_index(c.array() / 2)] = CellType::fluid;
+    for (int a = 0; a < dim; ++a) {
+      if (++c[a] < fine.cells[a]) break;
+      c[a] = 0;
+    }
+  }
+  if (fine.kind == CellOperator<dim>::Kind::node_cell) {
+    coarse.beta.assign(static_cast<std::size_t>(coarse.node_count()), 0.0);
+    IVec<dim> n = IVec<dim>::Zero();
+    for (std::int64_t ni = 0; ni < coarse.node_count(); ++ni) {
+      const IVec<dim> fine_node = (2 * n).cwiseMin(fine.cells);
+      coarse.beta[ni] = fine.beta[fine.node_index(fine_node)];
+      for (int a = 0; a < dim; ++a) {
+        if (++n[a] <= coarse.cells[a]) break;
+        n[a] = 0;
+      }
+    }
+  }
+  return coarse;
+}
+
+double dot(const std::vector<double>& a, const std::vector<double>& b) {
+  double s = 0.0;
+  for (std::size_t i = 0; i < a.size(); ++i) s += a[i] * b[i];
+  return s;
+}
+
+//! lambda_max(D^-1 A) by 20 power iterations on the fluid cells (an estimate from below,
+//! hence the safety factor of the caller).
+template <int dim>
+double estimate_lambda_max(const CellOperator<dim>& op, const std::vector<double>& inverse_diagonal,
+                           std::vector<double>& scratch) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+  std::vector<double> v(inverse_diagonal.size()), w;
+  for (std::size_t i = 0; i < v.size(); ++i) v[i] = inverse_diagonal[i] > 0.0 ? uniform(rng) : 0.0;
+  double lambda = 0.0;
+  for (int it = 0; it < 20; ++it) {
+    const double norm = std::sqrt(dot(v, v));
+    if (norm == 0.0) return 1.0;
+    for (double& e : v) e /= norm;
+    detail::apply_operator(op, v, w, scratch);
+    for (std::size_t i = 0; i < w.size(); ++i) w[i] *= inverse_diagonal[i];
+    lambda = std::sqrt(dot(w, w));
+    v.swap(w);
+  }
+  return lambda;
+}
+
+}  // namespace
+
+template <int dim>
+Multigrid<dim>::Multigrid(const CellOperator<dim>& fine, const Options& options) : fine_(fine), options_(options) {
+  mpm::verify<mpm::InputError>(options.smoothing_sweeps >= 1, "Multigrid: smoothing_sweeps must be >= 1");
+  levels_.emplace_back();
+  auto fluid_cells = [](const CellOperator<dim>& o) {
+    return std::count(o.type.begin(), o.type.end(), CellType::fluid);
+  };
+  while (fluid_cells(op(level_count() - 1)) > options.max_coarse_cells &&
+         (op(level_count() - 1).cells.array() > 1).any()) {
+    Level next;
+    next.op = coarsen(op(level_count() - 1));
+    levels_.push_back(std::move(next));
+  }
+  for (int l = 0; l < level_count(); ++l) {
+    Level& level = levels_[l];
+    const auto n = static_cast<std::size_t>(op(l).cell_count());
+    op(l).diagonal(level.inverse_diagonal);
+    for (double& d : level.inverse_diagonal) d = d > 0.0 ? 1.0 / d : 0.0;
+    // Jacobi (NodeCell) only; 1.05: the power iteration approaches lambda_max from below.
+    if (op(l).kind == CellOperator<dim>::Kind::node_cell)
+      level.omega = 4.0 / (3.0 * 1.05 * estimate_lambda_max(op(l), level.inverse_diagonal, level.scratch));
+    level.b.assign(n, 0.0);
+    level.x.assign(n, 0.0);
+    level.r.assign(n, 0.0);
+  }
+  if (dim == 2 && fine.kind == CellOperator<dim>::Kind::node_cell) {
+    checkerboard_.resize(static_cast<std::size_t>(fine.cell_count()));
+    IVec<dim> c = IVec<dim>::Zero();
+    for (double& sign : checkerboard_) {
+      sign = c.sum() % 2 == 0 ? 1.0 : -1.0;
+      for (int a = 0; a < dim; ++a) {
+        if (++c[a] < fine.cells[a]) break;
+        c[a] = 0;
+      }
+    }
+  }
+  // Bottom: pseudo-inverse of the coarsest matrix over its fluid cells.
+  const CellOperator<dim>& bottom = op(level_count() - 1);
+  std::vector<std::int64_t> compact(static_cast<std::size_t>(bottom.cell_count()), -1);
+  for (std::int64_t c = 0; c < bottom.cell_count(); ++c)
+    if (bottom.type[c] == CellType::fluid) {
+      compact[c] = static_cast<std::int64_t>(bottom_cells_.size());
+      bottom_cells_.push_back(c);
+    }
+  const auto m = static_cast<Eigen::Index>(bottom_cells_.size());
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(m, m);
+  bottom.for_each_entry([&](std::int64_t row, std::int64_t col, double v) { A(compact[row], compact[col]) = v; });
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(A);
+  const Eigen::VectorXd& lambda = eigen.eigenvalues();
+  const double cutoff = 1e-10 * (m > 0 ? lambda.cwiseAbs().maxCoeff() : 0.0);
+  Eigen::VectorXd inverse(m);
+  for (Eigen::Index i = 0; i < m; ++i) inverse[i] = lambda[i] > cutoff ? 1.0 / lambda[i] : 0.0;
+  bottom_pinv_ = eigen.eigenvectors() * inverse.asDiagonal() * eigen.eigenvectors().transpose();
+}
+
+template <int dim>
+void Multigrid<dim>::smooth(int l) {
+  // Out of place (the product reads neighbours of x), fused with the product; r is the buffer.
+  Level& level = levels_[l];
+  detail::apply_operator_to<dim>(op(l), level.x, level.scratch, [&level](std::int64_t c, double Ax) {
+    level.r[c] = level.x[c] + level.omega * level.inverse_diagonal[c] * (level.b[c] - Ax);
+  });
+  level.x.swap(level.r);
+}
+
+template <int dim>
+void Multigrid<dim>::gauss_seidel(int l, int colour) {
+  // Poisson only: cells of one colour ((sum of coordinates) % 2) couple only to the other
+  // colour, so the update is in place and parallel over lines.
+  Level& level = levels_[l];
+  const CellOperator<dim>& o = op(l);
+  const double h2 = o.dx * o.dx;
+  const int nx = o.cells[0];
+  std::array<std::int64_t, dim> stride{};
+  stride[0] = 1;
+  for (int a = 1; a < dim; ++a) stride[a] = stride[a - 1] * o.cells[a - 1];
+  const CellType* type = o.type.data();
+  double* x = level.x.data();
+  const double* b = level.b.data();
+  detail::parallel_for_lines<dim>(o.cells, [&](const IVec<dim>& c, std::int64_t base) {
+    std::array<bool, dim> lower{}, upper{};
+    for (int a = 1; a < dim; ++a) {
+      lower[a] = c[a] > 0;
+      upper[a] = c[a] + 1 < o.cells[a];
+    }
+    for (int i = (colour + c.sum()) % 2; i < nx; i += 2) {
+      const std::int64_t ci = base + i;
+      if (type[ci] != CellType::fluid) continue;
+      double sum = h2 * b[ci];
+      if (i > 0 && type[ci - 1] == CellType::fluid) sum += x[ci - 1];
+      if (i + 1 < nx && type[ci + 1] == CellType::fluid) sum += x[ci + 1];
+      for (int a = 1; a < dim; ++a) {
+        if (lower[a] && type[ci - stride[a]] == CellType::fluid) sum += x[ci - stride[a]];
+        if (upper[a] && type[ci + stride[a]] == CellType::fluid) sum += x[ci + stride[a]];
+      }
+      x[ci] = sum / (2.0 * dim);
+    }
+  });
+}
+
+template <int dim>
+void Multigrid<dim>::restrict_residual(int l) {
+  Level& level = levels_[l];
+  detail::apply_operator_to<dim>(op(l), level.x, level.scratch,
+                                 [&level](std::int64_t c, double Ax) { level.r[c] = level.b[c] - Ax; });
+  // R = P^T / 2^dim, one axis at a time; coarse empty cells are not unknowns.
+  const CellOperator<dim>& c = op(l + 1);
+  IVec<dim> extent = op(l).cells;
+  std::vector<double>& in = transfer_in_;
+  std::vector<double>& out = transfer_out_;
+  in = level.r;
+  for (int a = 0; a < dim; ++a) {
+    IVec<dim> next = extent;
+    next[a] = c.cells[a];
+    transfer_axis<dim>(in, extent, out, next, a, false, c.kind == CellOperator<dim>::Kind::poisson);
+    in.swap(out);
+    extent = next;
+  }
+  std::vector<double>& coarse_b = levels_[l + 1].b;
+  const double scale = 1.0 / (1 << dim);
+  for (std::size_t i = 0; i < coarse_b.size(); ++i) coarse_b[i] = c.type[i] == CellType::fluid ? scale * in[i] : 0.0;
+}
+
+template <int dim>
+void Multigrid<dim>::prolong_add(int coarse_level) {
+  const CellOperator<dim>& f = op(coarse_level - 1);
+  IVec<dim> extent = op(coarse_level).cells;
+  std::vector<double>& in = transfer_in_;
+  std::vector<double>& out = transfer_out_;
+  in = levels_[coarse_level].x;
+  for (int a = 0; a < dim; ++a) {
+    IVec<dim> next = extent;
+    next[a] = f.cells[a];
+    transfer_axis<dim>(in, extent, out, next, a, true, f.kind == CellOperator<dim>::Kind::poisson);
+    in.swap(out);
+    extent = next;
+  }
+  std::vector<double>& xf = levels_[coarse_level - 1].x;
+  for (std::size_t i = 0; i < xf.size(); ++i)
+    if (f.type[i] == CellType::fluid) xf[i] += in[i];
+}
+
+template <int dim>
+void Multigrid<dim>::vcycle(int l) {
+  Level& level = levels_[l];
+  if (l == level_count() - 1) {
+    Eigen::VectorXd rhs(static_cast<Eigen::Index>(bottom_cells_.size()));
+    for (std::size_t i = 0; i < bottom_cells_.size(); ++i) rhs[static_cast<Eigen::Index>(i)] = level.b[bottom_cells_[i]];
+    const Eigen::VectorXd solution = bottom_pinv_ * rhs;
+    std::fill(level.x.begin(), level.x.end(), 0.0);
+    for (std::size_t i = 0; i < bottom_cells_.size(); ++i) level.x[bottom_cells_[i]] = solution[static_cast<Eigen::Index>(i)];
+    return;
+  }
+  const int sweeps = options_.smoothing_sweeps;
+  if (op(l).kind == CellOperator<dim>::Kind::poisson) {
+    // Symmetric red-black Gauss-Seidel: red-black before, black-red after.
+    std::fill(level.x.begin(), level.x.end(), 0.0);
+    for (int s = 0; s < sweeps; ++s) {
+      gauss_seidel(l, 0);
+      gauss_seidel(l, 1);
+    }
+    restrict_residual(l);
+    vcycle(l + 1);
+    prolong_add(l + 1);
+    for (int s = 0; s < sweeps; ++s) {
+      gauss_seidel(l, 1);
+      gauss_seidel(l, 0);
+    }
+    return;
+  }
+  for (std::size_t i = 0; i < level.x.size(); ++i) level.x[i] = level.omega * level.inverse_diagonal[i] * level.b[i];
+  for (int s = 1; s < sweeps; ++s) smooth(l);
+  restrict_residual(l);
+  vcycle(l + 1);
+  prolong_add(l + 1);
+  for (int s = 0; s < sweeps; ++s) smooth(l);
+}
+
+template <int dim>
+void Multigrid<dim>::apply(const std::vector<double>& r, std::vector<double>& z) {
+  levels_[0].b = r;
+  vcycle(0);
+  z = levels_[0].x;
+  if (checkerboard_.empty()) return;
+  // Second V-cycle on the checkerboard-modulated residual: M = V + S V S (see multigrid.h).
+  for (std::size_t i = 0; i < r.size(); ++i) levels_[0].b[i] = checkerboard_[i] * r[i];
+  vcycle(0);
+  for (std::size_t i = 0; i < z.size(); ++i) z[i] += checkerboard_[i] * levels_[0].x[i];
+}
+
+template class Multigrid<2>;
+template class Multigrid<3>;
+
+}  // namespace fluid

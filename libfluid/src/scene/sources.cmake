@@ -1,0 +1,3 @@
+list(APPEND FLUID_SOURCES
+  src/scene/fluid_scene.cpp
+)

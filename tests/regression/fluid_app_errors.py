@@ -1,0 +1,76 @@
+#!/usr/bin/env python3
+"""Bad input to a fluid app, run end to end: each case changes the value of one key in a copy
+of the default dam_break scene and must exit 2 with exactly one stderr line naming the scene
+file and the line of that key, the key path, the value and the accepted range, and must leave
+no --out folder.
+
+  fluid_app_errors.py --dam-break EXE --scene data/scenes/dam_break.yaml --work DIR
+"""
+import argparse
+import pathlib
+import re
+import shutil
+import subprocess
+import sys
+
+# (key path, new value, substrings the message must hold besides file:line and the key path)
+CASES = [
+    ("fluid.viscosity", "-1", ["-1", ">= 0"]),
+    ("fluid.density", "0", ["> 0"]),
+    ("time.cfl", "1.5", ["1.5", "(0, 1]"]),
+    ("pressure.solver", "magic", ["magic", "'cg'"]),
+    ("pressure.on_failure", "ignore", ["ignore", "'stop'", "'warn'"]),
+]
+
+
+def with_value(text, path, value):
+    """The scene text with the value of `section.key` replaced, and the 1-based line of it."""
+    section, key = path.split(".")
+    lines = text.splitlines()
+    in_section = False
+    for i, line in enumerate(lines):
+        if re.match(r"^\w", line):
+            in_section = line.startswith(section + ":")
+        elif in_section and re.match(rf"^\s+{key}:", line):
+            lines[i] = re.sub(rf"^(\s+{key}:)\s*[^#]*", rf"\g<1> {value}  ", line)
+            return "\n".join(lines) + "\n", i + 1
+    raise KeyError(path)
+
+
+def main():
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--dam-break", required=True)
+    parser.add_argument("--scene", required=True)
+    parser.add_argument("--work", required=True)
+    args = parser.parse_args()
+    work = pathlib.Path(args.work)
+    shutil.rmtree(work, ignore_errors=True)
+    work.mkdir(parents=True)
+    failures = 0
+    text = pathlib.Path(args.scene).read_text()
+    for i, (path, value, expected) in enumerate(CASES):
+        scene, line = with_value(text, path, value)
+        scene_file = work / f"case_{i}.yaml"
+        scene_file.write_text(scene)
+        out = work / f"case_{i}_out"
+        r = subprocess.run([args.dam_break, str(scene_file), "--out", str(out), "--quiet"],
+                           capture_output=True, text=True, timeout=60)
+        lines = r.stderr.strip().splitlines()
+        problems = []
+        if r.returncode != 2:
+            problems.append(f"exit {r.returncode}, expected 2")
+        if len(lines) != 1:
+            problems.append(f"{len(lines)} stderr lines, expected 1")
+        for sub in [f"case_{i}.yaml:{line}:", f"'{path}'"] + expected:
+            if sub not in r.stderr:
+                problems.append(f"message lacks {sub!r}")
+        if out.exists():
+            problems.append("the --out folder was created")
+        status = "ok" if not problems else "FAILED: " + "; ".join(problems)
+        print(f"{path} = {value}: {status}\n  {r.stderr.strip()}")
+        failures += bool(problems)
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,150 @@
+#include <coupling/drag/drag_law.h>
+#include <doctest/doctest.h>
+#include <mpm/core/config.h>
+#include <mpm/core/error.h>
+
+#include <cmath>
+#include <string>
+
+using namespace coupling::drag;
+
+namespace {
+
+// Water and fine sand: mu = 1e-3 Pa s, rho_w = 1000 kg/m^3, d = 0.2 mm.
+constexpr DragParameters kSand{2.0e-4, 1.0e-3, 1000.0};
+
+DragParameters with_diameter(double d) { return {d, kSand.viscosity, kSand.density}; }
+
+std::string input_error(const std::string& yaml) {
+  try {
+    parse_drag_law(mpm::Config::parse(yaml, "scene.yaml"));
+  } catch (const mpm::InputError& e) {
+    return e.what();
+  }
+  FAIL("expected an InputError");
+  return {};
+}
+
+}  // namespace
+
+// Expected values below are the published formulas evaluated by hand (Python, double), with the
+// inputs in the comment; they do not go through the library's Cd Re form.
+TEST_CASE("each law reproduces its published formula at hand-computed points") {
+  // Stokes: 18 mu n_s / d^2, n_s = 0.1.
+  CHECK(Stokes{kSand}.beta(0.9, 0.05) == doctest::Approx(45000.0).epsilon(1e-13));
+  // Schiller-Naumann: n_w = 0.9, u = 0.05 -> Re = 9, Cd = 24/9 (1 + 0.15 9^0.687),
+  // beta = 3/4 Cd n_s n_w rho_w u / d.
+  CHECK(SchillerNaumann{kSand}.beta(0.9, 0.05) == doctest::Approx(75539.95387620378).epsilon(1e-13));
+  // Schiller-Naumann above Re = 1000: d = 5 mm, n_w = 0.95, u = 1 -> Re = 4750, Cd = 0.44.
+  CHECK(SchillerNaumann{with_diameter(5e-3)}.beta(0.95, 1.0) == doctest::Approx(3135.0).epsilon(1e-13));
+  // Di Felice: n_w = 0.7, u = 0.05 -> Re = 7, chi = 3.17545874831, Cd = (0.63 + 4.8/sqrt 7)^2,
+  // beta = 3/4 Cd rho_w u n_s n_w^(2 - chi) / d.
+  CHECK(di_felice_exponent(7.0) == doctest::Approx(3.175458748311308).epsilon(1e-13));
+  CHECK(DiFelice{kSand}.beta(0.7, 0.05) == doctest::Approx(511078.18414055306).epsilon(1e-12));
+  // Di Felice near the minimum of chi: d = 1 mm, n_w = 0.6, u = 0.2 -> Re = 120.
+  CHECK(DiFelice{with_diameter(1e-3)}.beta(0.6, 0.2) == doctest::Approx(123210.15369682592).epsilon(1e-12));
+  // Gidaspow, Ergun branch: n_w = 0.6, u = 0.05: 150 n_s^2 mu / (n_w d^2) + 1.75 n_s rho_w u / d.
+  CHECK(Gidaspow{kSand}.beta(0.6, 0.05) == doctest::Approx(1175000.0).epsilon(1e-13));
+  // Gidaspow, Wen-Yu branch: n_w = 0.9, u = 0.05: Schiller-Naumann value above times 0.9^-2.65.
+  CHECK(Gidaspow{kSand}.beta(0.9, 0.05) == doctest::Approx(99869.77358843542).epsilon(1e-13));
+}
+
+TEST_CASE("the Stokes limit of every law has the documented n_w factors") {
+  const double stokes = Stokes{kSand}.beta(0.9, 0.0);
+  // Schiller-Naumann: exactly Stokes at zero slip, and within Re^0.687 of it at small slip.
+  CHECK(SchillerNaumann{kSand}.beta(0.9, 0.0) == doctest::Approx(stokes).epsilon(1e-15));
+  CHECK(SchillerNaumann{kSand}.beta(0.9, 1e-15) == doctest::Approx(stokes).epsilon(1e-8));
+  // Wen-Yu: Stokes n_w^-2.65.
+  CHECK(Gidaspow{kSand}.beta(0.9, 0.0) == doctest::Approx(stokes * std::pow(0.9, -2.65)).epsilon(1e-14));
+  // Di Felice: Cd Re -> 4.8^2 = 23.04 and chi -> 3.7: 17.28 mu n_s n_w^-2.7 / d^2.
+  const double di_felice_0 =
+      17.28 * kSand.viscosity * 0.1 * std::pow(0.9, -2.7) / (kSand.diameter * kSand.diameter);
+  CHECK(DiFelice{kSand}.beta(0.9, 0.0) == doctest::Approx(di_felice_0).epsilon(1e-14));
+  CHECK(DiFelice{kSand}.beta(0.9, 1e-16) == doctest::Approx(di_felice_0).epsilon(1e-7));
+}
+
+TEST_CASE("hindered settling implied at low Re: v_s / v_Stokes = n_w^2 beta_Stokes / beta") {
+  // Closed column, fluid displaced upward (n_w v_w + n_s v_s = 0), mixture-weight pressure
+  // gradient: n_s n_w (rho_s - rho_w) g = beta (v_w - v_s), v_s = n_w (v_s - v_w)
+  // => v_s = n_w^2 n_s (rho_s - rho_w) g / beta (docs/coupling.md).
+  for (const double n_w : {0.95, 0.85, 0.8}) {
+    const double stokes = Stokes{kSand}.beta(n_w, 0.0);
+    const auto ratio = [&](double beta) { return n_w * n_w * stokes / beta; };
+    CHECK(ratio(Stokes{kSand}.beta(n_w, 0.0)) == doctest::Approx(std::pow(n_w, 2.0)).epsilon(1e-14));
+    CHECK(ratio(Gidaspow{kSand}.beta(n_w, 0.0)) == doctest::Approx(std::pow(n_w, 4.65)).epsilon(1e-14));
+    CHECK(ratio(DiFelice{kSand}.beta(n_w, 0.0)) ==
+          doctest::Approx(std::pow(n_w, 4.7) * 24.0 / 23.04).epsilon(1e-14));
+  }
+}
+
+TEST_CASE("beta is finite and non-negative, zero without sediment, and nondecreasing in slip") {
+  for (const std::string& name : drag_law_names()) {
+    CAPTURE(name);
+    const DragLaw law = make_drag_law(name, kSand);
+    for (double n_w = 0.35; n_w <= 1.0; n_w += 0.01) {
+      double previous = 0.0;
+      for (double slip = 0.0; slip <= 20.0; slip = 2.0 * slip + 1e-6) {
+        const double b = beta(law, n_w, slip);
+        REQUIRE(std::isfinite(b));
+        REQUIRE(b >= 0.0);
+        if (name != "di_felice") REQUIRE(b >= previous);  // chi(Re) makes Di Felice non-monotone
+        previous = b;
+      }
+    }
+    CHECK(beta(law, 1.0, 0.3) == 0.0);
+  }
+}
+
+TEST_CASE("continuity and the published switches") {
+  // Schiller-Naumann: Cd jumps from 0.43829 to 0.44 at Re = 1000.
+  const double below = schiller_naumann_cd_re(1000.0 - 1e-9) / 1000.0,
+               above = schiller_naumann_cd_re(1000.0) / 1000.0;
+  CHECK(below == doctest::Approx(0.43828814001999694).epsilon(1e-9));
+  CHECK(above == doctest::Approx(0.44).epsilon(1e-15));
+  // Di Felice is smooth in n_w and in the slip (here across Re = 10^1.5, the minimum of chi).
+  const DiFelice df{kSand};
+  const double slip_min_chi = std::pow(10.0, 1.5) * kSand.viscosity / (0.8 * kSand.density * kSand.diameter);
+  CHECK(di_felice_exponent(std::pow(10.0, 1.5)) == doctest::Approx(3.05).epsilon(1e-14));
+  CHECK(df.beta(0.8, slip_min_chi * (1 + 1e-8)) == doctest::Approx(df.beta(0.8, slip_min_chi)).epsilon(1e-7));
+  CHECK(df.beta(0.8 + 1e-9, 0.1) == doctest::Approx(df.beta(0.8, 0.1)).epsilon(1e-7));
+  // Gidaspow: Ergun below n_w = 0.8, Wen-Yu from 0.8 on; at Re -> 0 Ergun is 7.5 mu/d^2 and
+  // Wen-Yu 3.6 0.8^-2.65 mu/d^2 there (ratio 1.15331).
+  const Gidaspow g{kSand};
+  CHECK(g.beta(std::nextafter(0.8, 0.0), 0.0) / g.beta(0.8, 0.0) ==
+        doctest::Approx(1.1533131083067483).epsilon(1e-9));
+  CHECK(g.beta(0.8, 0.05) ==
+        doctest::Approx(SchillerNaumann{kSand}.beta(0.8, 0.05) * std::pow(0.8, -2.65)).epsilon(1e-14));
+}
+
+TEST_CASE("parse_drag_law reads the law and validates every key") {
+  const DragLaw law = parse_drag_law(mpm::Config::parse(
+      "drag: {law: di_felice, grain_diameter: 3.0e-4}\nfluid: {density: 998, viscosity: 1.1e-3}\n",
+      "scene.yaml"));
+  CHECK(std::holds_alternative<DiFelice>(law));
+  CHECK(parameters(law).diameter == 3.0e-4);
+  CHECK(parameters(law).density == 998.0);
+  CHECK(parameters(law).viscosity == 1.1e-3);
+  CHECK(std::holds_alternative<SchillerNaumann>(parse_drag_law(mpm::Config::parse(
+      "drag: {grain_diameter: 1.0e-3}\nfluid: {density: 1000, viscosity: 1.0e-3}\n", "scene.yaml"))));
+
+  const std::string unknown =
+      input_error("drag: {law: ergun, grain_diameter: 1.0e-3}\nfluid: {density: 1000, viscosity: 1.0e-3}\n");
+  CHECK(unknown.find("scene.yaml:1") != std::string::npos);
+  CHECK(unknown.find("drag.law") != std::string::npos);
+  CHECK(unknown.find("ergun") != std::string::npos);
+  CHECK(unknown.find("gidaspow") != std::string::npos);
+
+  const std::string diameter =
+      input_error("drag:\n  law: stokes\n  grain_diameter: 0\nfluid: {density: 1000, viscosity: 1.0e-3}\n");
+  CHECK(diameter.find("scene.yaml:3") != std::string::npos);
+  CHECK(diameter.find("drag.grain_diameter") != std::string::npos);
+  CHECK(diameter.find("> 0") != std::string::npos);
+
+  const std::string viscosity =
+      input_error("drag: {law: stokes, grain_diameter: 1.0e-3}\nfluid:\n  density: 1000\n  viscosity: 0\n");
+  CHECK(viscosity.find("scene.yaml:4") != std::string::npos);
+  CHECK(viscosity.find("fluid.viscosity") != std::string::npos);
+
+  CHECK(input_error("fluid: {density: 1000, viscosity: 1.0e-3}\n").find("drag") != std::string::npos);
+  CHECK_THROWS_AS(make_drag_law("ergun", kSand), mpm::InputError);
+}

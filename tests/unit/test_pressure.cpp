@@ -1,0 +1,269 @@
+// Pressure operator and solver back-ends: the operator is symmetric positive semi-definite and
+// apply() matches its assembled matrix; the closed-box NodeCell operator has the checkerboard
+// null mode and b = -D u is orthogonal to it; every back-end projects to a discretely
+// divergence-free velocity and agrees with CHOLMOD; the multigrid V-cycle is symmetric; MGPCG
+// iteration counts stay flat under refinement (Poisson); failed solves say so.
+#include <fluid/pressure/model_problems.h>
+#include <fluid/pressure/multigrid.h>
+#include <fluid/pressure/pressure_solver.h>
+
+#include <mpm/core/error.h>
+
+#include <doctest/doctest.h>
+
+#include <Eigen/Dense>
+
+#include <cmath>
+#include <random>
+
+using namespace fluid;
+
+namespace {
+
+template <int dim>
+std::vector<double> random_fluid_vector(const CellOperator<dim>& op, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+  std::vector<double> x(static_cast<std::size_t>(op.cell_count()), 0.0);
+  for (std::size_t c = 0; c < x.size(); ++c)
+    if (op.type[c] == CellType::fluid) x[c] = uniform(rng);
+  return x;
+}
+
+double dot(const std::vector<double>& a, const std::vector<double>& b) {
+  double s = 0.0;
+  for (std::size_t i = 0; i < a.size(); ++i) s += a[i] * b[i];
+  return s;
+}
+double norm(const std::vector<double>& a) { return std::sqrt(dot(a, a)); }
+double max_abs(const std::vector<double>& a) {
+  double m = 0.0;
+  for (double v : a) m = std::max(m, std::abs(v));
+  return m;
+}
+
+template <int dim>
+Eigen::MatrixXd assemble(const CellOperator<dim>& op) {
+  const auto n = static_cast<Eigen::Index>(op.cell_count());
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(n, n);
+  op.for_each_entry([&](std::int64_t r, std::int64_t c, double v) { A(r, c) += v; });
+  return A;
+}
+
+template <int dim>
+std::vector<CellOperator<dim>> small_problems(int n) {
+  std::vector<CellOperator<dim>> ops;
+  for (auto kind : {OperatorKind<dim>::node_cell, OperatorKind<dim>::poisson}) {
+    ops.push_back(dam_break_problem<dim>(n, kind));
+    ops.push_back(closed_box_problem<dim>(n, kind));
+  }
+  return ops;
+}
+
+template <int dim>
+void check_operator(int n) {
+  for (const CellOperator<dim>& op : small_problems<dim>(n)) {
+    const Eigen::MatrixXd A = assemble(op);
+    const double scale = A.cwiseAbs().maxCoeff();
+    REQUIRE(scale > 0.0);
+    CHECK((A - A.transpose()).cwiseAbs().maxCoeff() <= 1e-14 * scale);
+    // apply() and diagonal() against the assembled matrix.
+    const std::vector<double> x = random_fluid_vector(op, 1), y = random_fluid_vector(op, 2);
+    std::vector<double> Ax, Ay, d;
+    op.apply(x, Ax);
+    op.apply(y, Ay);
+    const Eigen::VectorXd Ax_dense = A * Eigen::Map<const Eigen::VectorXd>(x.data(), static_cast<Eigen::Index>(x.size()));
+    for (std::size_t c = 0; c < x.size(); ++c) CHECK(std::abs(Ax[c] - Ax_dense[static_cast<Eigen::Index>(c)]) <= 1e-12 * scale);
+    op.diagonal(d);
+    for (std::size_t c = 0; c < d.size(); ++c)
+      CHECK(std::abs(d[c] - A(static_cast<Eigen::Index>(c), static_cast<Eigen::Index>(c))) <= 1e-14 * scale);
+    // x^T A y = y^T A x through the matrix-free product.
+    CHECK(std::abs(dot(x, Ay) - dot(y, Ax)) <= 1e-12 * norm(x) * norm(Ay));
+    // Positive semi-definite: the smallest eigenvalue is >= 0 up to round-off.
+    const Eigen::VectorXd lambda = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(A).eigenvalues();
+    CHECK(lambda.minCoeff() >= -1e-12 * lambda.maxCoeff());
+  }
+}
+
+//! (-1)^(sum of cell coordinates), the checkerboard of the Q1-P0 pairing.
+template <int dim>
+std::vector<double> checkerboard(const CellOperator<dim>& op) {
+  std::vector<double> q(static_cast<std::size_t>(op.cell_count()));
+  IVec<dim> c = IVec<dim>::Zero();
+  for (std::size_t i = 0; i < q.size(); ++i) {
+    q[i] = c.sum() % 2 == 0 ? 1.0 : -1.0;
+    for (int a = 0; a < dim; ++a) {
+      if (++c[a] < op.cells[a]) break;
+      c[a] = 0;
+    }
+  }
+  return q;
+}
+
+template <int dim>
+void check_null_mode(int n) {
+  const CellOperator<dim> op = closed_box_problem<dim>(n, OperatorKind<dim>::node_cell);
+  const std::vector<double> q = checkerboard(op);
+  std::vector<double> Aq, d;
+  op.apply(q, Aq);
+  op.diagonal(d);
+  CHECK(norm(Aq) <= 1e-12 * max_abs(d) * norm(q));
+  // b = -D u with u = 0 on the wall nodes is orthogonal to it: q^T D u = (D^T q)^T u = 0.
+  std::vector<double> b;
+  op.divergence(wall_consistent_velocity(op, 3), b);
+  CHECK(std::abs(dot(b, q)) <= 1e-12 * norm(b) * norm(q));
+  // ...which needs the wall condition: a velocity that moves through a wall is not orthogonal.
+  std::vector<Vec<dim>> leaking(static_cast<std::size_t>(op.node_count()), Vec<dim>::Zero());
+  leaking[0] = Vec<dim>::Ones();
+  op.divergence(leaking, b);
+  CHECK(std::abs(dot(b, q)) > 0.5 * max_abs(b));  // b is nonzero in the corner cell only
+  // The Poisson operator with p = 0 outside the box has no such mode.
+  const CellOperator<dim> poisson = closed_box_problem<dim>(n, OperatorKind<dim>::poisson);
+  poisson.apply(q, Aq);
+  CHECK(norm(Aq) > 1.0 / (poisson.dx * poisson.dx) * norm(q));
+}
+
+template <int dim>
+void check_projection(const CellOperator<dim>& op, const std::string& solver) {
+  CAPTURE(solver);
+  std::vector<Vec<dim>> u = wall_consistent_velocity(op, 5);
+  std::vector<double> b, p, div;
+  op.divergence(u, b);
+  SolveControl control;
+  control.relative_tolerance = 1e-11;
+  control.max_iterations = 20000;
+  const SolveResult result = make_pressure_solver<dim>(solver)->solve(op, b, p, control);
+  CHECK(result.converged);
+  CHECK(result.relative_residual <= 1e-10);
+  op.subtract_gradient(p, u);
+  op.divergence(u, div);
+  for (std::size_t c = 0; c < div.size(); ++c) CHECK(std::abs(div[c]) <= 1e-9 * max_abs(b));
+}
+
+template <int dim>
+void check_agreement(const CellOperator<dim>& op) {
+  std::vector<double> b, reference;
+  op.divergence(wall_consistent_velocity(op, 7), b);
+  SolveControl control;
+  control.relative_tolerance = 1e-13;
+  control.max_iterations = 20000;
+  REQUIRE(make_pressure_solver<dim>("cholmod")->solve(op, b, reference, control).converged);
+  for (const std::string& name : pressure_solver_names()) {
+    CAPTURE(name);
+    std::vector<double> p;
+    const SolveResult result = make_pressure_solver<dim>(name)->solve(op, b, p, control);
+    CHECK(result.relative_residual <= 1e-11);
+    double difference = 0.0;
+    for (std::size_t c = 0; c < p.size(); ++c) difference = std::max(difference, std::abs(p[c] - reference[c]));
+    CHECK(difference <= 1e-8 * max_abs(reference));
+  }
+}
+
+template <int dim>
+void check_vcycle_symmetry(const CellOperator<dim>& op) {
+  typename Multigrid<dim>::Options options;
+  options.max_coarse_cells = 16;  // a deep hierarchy
+  Multigrid<dim> multigrid(op, options);
+  REQUIRE(multigrid.level_count() >= 4);
+  const std::vector<double> x = random_fluid_vector(op, 11), y = random_fluid_vector(op, 12);
+  std::vector<double> Mx, My;
+  multigrid.apply(x, Mx);
+  multigrid.apply(y, My);
+  CHECK(std::abs(dot(x, My) - dot(y, Mx)) <= 1e-12 * norm(x) * norm(My));
+  CHECK(dot(x, Mx) > 0.0);
+  CHECK(dot(y, My) > 0.0);
+}
+
+template <int dim>
+int mgpcg_iterations(const CellOperator<dim>& op) {
+  std::vector<double> b, p;
+  op.divergence(wall_consistent_velocity(op, 13), b);
+  SolveControl control;
+  const SolveResult result = make_pressure_solver<dim>("mgpcg")->solve(op, b, p, control);
+  REQUIRE(result.converged);
+  return result.iterations;
+}
+
+}  // namespace
+
+TEST_CASE("pressure operator: symmetric, positive semi-definite, apply matches its matrix") {
+  check_operator<2>(8);
+  check_operator<3>(5);
+}
+
+TEST_CASE("NodeCell closed box: checkerboard null mode, b = -D u orthogonal to it") {
+  check_null_mode<2>(8);
+  check_null_mode<3>(6);
+}
+
+TEST_CASE("every back-end projects to a discretely divergence-free velocity") {
+  for (const std::string& name : pressure_solver_names()) {
+    check_projection(dam_break_problem<2>(24, OperatorKind<2>::node_cell), name);
+    check_projection(dam_break_problem<3>(10, OperatorKind<3>::node_cell), name);
+  }
+  // Closed box: A singular, b consistent.
+  for (const std::string name : {"mgpcg", "cg", "jacobi_pcg", "cholmod"}) {
+    check_projection(closed_box_problem<2>(16, OperatorKind<2>::node_cell), name);
+    check_projection(closed_box_problem<3>(8, OperatorKind<3>::node_cell), name);
+  }
+}
+
+TEST_CASE("every back-end agrees with CHOLMOD") {
+  check_agreement(dam_break_problem<2>(32, OperatorKind<2>::node_cell));
+  check_agreement(dam_break_problem<2>(32, OperatorKind<2>::poisson));
+  check_agreement(closed_box_problem<2>(32, OperatorKind<2>::poisson));
+  check_agreement(dam_break_problem<3>(12, OperatorKind<3>::node_cell));
+  check_agreement(closed_box_problem<3>(12, OperatorKind<3>::poisson));
+}
+
+TEST_CASE("multigrid V-cycle is symmetric and positive") {
+  for (auto kind : {OperatorKind<2>::node_cell, OperatorKind<2>::poisson}) {
+    check_vcycle_symmetry(dam_break_problem<2>(64, kind));
+    check_vcycle_symmetry(closed_box_problem<2>(64, kind));
+  }
+  for (auto kind : {OperatorKind<3>::node_cell, OperatorKind<3>::poisson}) {
+    check_vcycle_symmetry(dam_break_problem<3>(24, kind));
+    check_vcycle_symmetry(closed_box_problem<3>(24, kind));
+  }
+}
+
+// Left out: 3D NodeCell, whose iteration counts grow (multigrid.h explains why), and the
+// Poisson free surface, which grows by about one iteration per refinement (7 -> 10, 64^2 -> 256^2).
+TEST_CASE("MGPCG iteration count flat under refinement (2D NodeCell dam break, Poisson box)") {
+  const int coarse = mgpcg_iterations(dam_break_problem<2>(64, OperatorKind<2>::node_cell));
+  const int fine = mgpcg_iterations(dam_break_problem<2>(256, OperatorKind<2>::node_cell));
+  CAPTURE(coarse);
+  CAPTURE(fine);
+  CHECK(fine <= 1.2 * coarse);
+  const int coarse_2d = mgpcg_iterations(closed_box_problem<2>(64, OperatorKind<2>::poisson));
+  const int fine_2d = mgpcg_iterations(closed_box_problem<2>(256, OperatorKind<2>::poisson));
+  CAPTURE(coarse_2d);
+  CAPTURE(fine_2d);
+  CHECK(fine_2d <= 1.2 * coarse_2d);
+  const int coarse_3d = mgpcg_iterations(closed_box_problem<3>(16, OperatorKind<3>::poisson));
+  const int fine_3d = mgpcg_iterations(closed_box_problem<3>(32, OperatorKind<3>::poisson));
+  CAPTURE(coarse_3d);
+  CAPTURE(fine_3d);
+  CHECK(fine_3d <= 1.2 * coarse_3d);
+}
+
+TEST_CASE("a solve that runs out of iterations reports it") {
+  const CellOperator<2> op = dam_break_problem<2>(64, OperatorKind<2>::node_cell);
+  std::vector<double> b, p;
+  op.divergence(wall_consistent_velocity(op, 17), b);
+  SolveControl control;
+  control.max_iterations = 3;
+  for (const std::string name : {"mgpcg", "cg", "jacobi_pcg"}) {
+    CAPTURE(name);
+    const SolveResult result = make_pressure_solver<2>(name)->solve(op, b, p, control);
+    CHECK_FALSE(result.converged);
+    CHECK(result.iterations == 3);
+    CHECK(result.relative_residual > control.relative_tolerance);
+    p.clear();
+  }
+}
+
+TEST_CASE("make_pressure_solver: every listed name, unknown names rejected") {
+  for (const std::string& name : pressure_solver_names()) CHECK(make_pressure_solver<3>(name)->name() == name);
+  CHECK_THROWS_AS(make_pressure_solver<2>("pfmg"), mpm::InputError);
+}
