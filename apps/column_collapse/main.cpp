@@ -6,7 +6,7 @@
 //
 // summary.json: runout L_inf (deposit front distance from the back wall), final_height,
 // normalized_runout (L_inf - L0)/L0, duration (time until the kinetic energy falls below
-// 1e-6 of its peak). --check compares normalized_runout with the 2D runout law of Lube et
+// 1e-6 of its peak), runout_law_error |normalized - law| / law. --check compares normalized_runout with the 2D runout law of Lube et
 // al. 2005 (PRE 72, 041301): 1.2 a for a < 2.3, 1.9 a^(2/3) above, within +-50 % (the spread
 // between published experiments; data/reference/lube2005.md).
 #include <mpm/core/app.h>
@@ -97,7 +97,8 @@ int run(const CommandLine& cl, const Config& scene) {
   const double normalized = (runout - L0) / L0;
   runner.write_summary({{"runout", runout}, {"final_height", height}, {"normalized_runout", normalized},
                         {"duration", duration}, {"at_rest", at_rest ? 1.0 : 0.0},
-                        {"runout_law_lube2005", lube_runout_law(a)}});
+                        {"runout_law_lube2005", lube_runout_law(a)},
+                        {"runout_law_error", std::fabs(normalized - lube_runout_law(a)) / lube_runout_law(a)}});
   if (cl.check) {
     const double law = lube_runout_law(a);
     return check_value("normalized_runout", normalized, law, 0.5 * law) ? 0 : 1;
