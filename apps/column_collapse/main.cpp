@@ -11,6 +11,7 @@
 // between published experiments; data/reference/lube2005.md).
 #include <mpm/core/app.h>
 #include <mpm/core/runner.h>
+#include <mpm/geometry/body_config.h>
 #include <mpm/geometry/collider_config.h>
 #include <mpm/geometry/seeding.h>
 #include <mpm/solid/solid_scene.h>
@@ -65,7 +66,7 @@ int run(const CommandLine& cl, const Config& scene) {
   std::vector<Material<dim>> sand = {parse_material<dim>(scene.child("material"))};
   auto colliders = geometry::parse_colliders<dim>(scene, domain.lo, domain.hi, layer);
   solid::SolidScene<dim> solid = solid::make_solid_scene(settings, sand, colliders);
-  const int ppc = solid::particles_per_cell<dim>(column);
+  const int ppc = geometry::particles_per_cell<dim>(column);
   Vec<dim> hi = Vec<dim>::Zero();
   hi[0] = L0;
   hi[1] = H0;

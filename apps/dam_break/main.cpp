@@ -15,6 +15,7 @@
 
 #include <mpm/core/app.h>
 #include <mpm/core/runner.h>
+#include <mpm/geometry/body_config.h>
 #include <mpm/geometry/collider_config.h>
 #include <mpm/geometry/seeding.h>
 
@@ -73,7 +74,7 @@ int run(const CommandLine& cl, const Config& scene) {
   const double H = column.number("height_ratio", 2.0, Range::positive()) * a;
   const int cells = column.integer("cells_per_width", 20, 2, 4096);
   const double dx = a / cells;
-  const int ppc = column.integer("particles_per_cell", dim == 2 ? 4 : 8, 1, 1000);
+  const int ppc = geometry::particles_per_cell<dim>(column);
   const double length = column.number("tank_length", 5.0 * a, Range{a, 1e308, true, false});
   // Tall enough for the run-up on the far wall (about 2 H); nothing may leave the grid.
   const double height = column.number("tank_height", 3.0 * H, Range{H, 1e308, true, false});
@@ -93,12 +94,8 @@ int run(const CommandLine& cl, const Config& scene) {
   hi[0] = a;
   hi[1] = H;
   if constexpr (dim == 3) hi[2] = depth;
-  try {
-    fluid::add_fluid_particles<dim>(water, geometry::seed_box<dim>(Vec<dim>::Zero(), hi, dx, ppc, 0.0, 1),
-                                    geometry::particle_volume<dim>(dx, ppc), Vec<dim>::Zero(), "column");
-  } catch (const InputError& e) {
-    column.fail("particles_per_cell", e.what());
-  }
+  fluid::add_fluid_particles<dim>(water, geometry::seed_box<dim>(Vec<dim>::Zero(), hi, dx, ppc, 0.0, 1),
+                                  geometry::particle_volume<dim>(dx, ppc), Vec<dim>::Zero(), "column");
   scene.reject_unknown_keys();
 
   // 3. Run.

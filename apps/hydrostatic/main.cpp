@@ -15,6 +15,7 @@
 
 #include <mpm/core/app.h>
 #include <mpm/core/runner.h>
+#include <mpm/geometry/body_config.h>
 #include <mpm/geometry/collider_config.h>
 #include <mpm/geometry/seeding.h>
 
@@ -33,7 +34,7 @@ int run(const CommandLine& cl, const Config& scene) {
   const double h = tank.number("depth", Range::positive());
   const int cells = tank.integer("cells_per_depth", 16, 2, 4096);
   const double dx = h / cells;
-  const int ppc = tank.integer("particles_per_cell", dim == 2 ? 4 : 8, 1, 1000);
+  const int ppc = geometry::particles_per_cell<dim>(tank);
   const double layer = wall_layer(parse_kernel(scene), dx);
   DerivedDomain<dim> domain{Vec<dim>::Constant(-layer), Vec<dim>::Constant(W + layer), dx};
   domain.hi[1] = 1.5 * h + layer;
@@ -45,12 +46,8 @@ int run(const CommandLine& cl, const Config& scene) {
                                                           fluid::parse_pressure_settings(scene), colliders);
   Vec<dim> hi = Vec<dim>::Constant(W);
   hi[1] = h;
-  try {
-    fluid::add_fluid_particles<dim>(liquid, geometry::seed_box<dim>(Vec<dim>::Zero(), hi, dx, ppc, 0.0, 1),
-                                    geometry::particle_volume<dim>(dx, ppc), Vec<dim>::Zero(), "tank");
-  } catch (const InputError& e) {
-    tank.fail("particles_per_cell", e.what());
-  }
+  fluid::add_fluid_particles<dim>(liquid, geometry::seed_box<dim>(Vec<dim>::Zero(), hi, dx, ppc, 0.0, 1),
+                                  geometry::particle_volume<dim>(dx, ppc), Vec<dim>::Zero(), "tank");
   scene.reject_unknown_keys();
 
   // 3. Run.

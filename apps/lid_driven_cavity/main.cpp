@@ -15,6 +15,7 @@
 #include <mpm/core/app.h>
 #include <mpm/core/error.h>
 #include <mpm/core/runner.h>
+#include <mpm/geometry/body_config.h>
 #include <mpm/geometry/collider_config.h>
 #include <mpm/geometry/seeding.h>
 
@@ -56,7 +57,7 @@ int run2(const CommandLine& cl, const Config& scene) {
   const double U = cavity.number("lid_speed", 1.0, Range::positive());
   const double Re = cavity.number("reynolds", 100.0, Range::positive());
   const int cells = cavity.integer("cells", 32, 4, 4096);
-  const int ppc = cavity.integer("particles_per_cell", 4, 1, 1000);
+  const int ppc = geometry::particles_per_cell<2>(cavity);
   const double dx = L / cells;
   const double layer = wall_layer(parse_kernel(scene), dx);
   const DerivedDomain<2> domain{Vec<2>::Constant(-layer), Vec<2>::Constant(L + layer), dx};
@@ -72,12 +73,8 @@ int run2(const CommandLine& cl, const Config& scene) {
     scene.fail("walls", "the top of the cavity is the lid: set walls.y_max: open");
   fluid::FluidScene<2> fluid =
       fluid::make_fluid_scene(settings, liquid, fluid::parse_pressure_settings(scene), colliders);
-  try {
-    fluid::add_fluid_particles<2>(fluid, geometry::seed_box<2>(Vec<2>::Zero(), Vec<2>::Constant(L), dx, ppc, 0.0, 1),
-                                  geometry::particle_volume<2>(dx, ppc), Vec<2>::Zero(), "cavity");
-  } catch (const InputError& e) {
-    cavity.fail("particles_per_cell", e.what());
-  }
+  fluid::add_fluid_particles<2>(fluid, geometry::seed_box<2>(Vec<2>::Zero(), Vec<2>::Constant(L), dx, ppc, 0.0, 1),
+                                geometry::particle_volume<2>(dx, ppc), Vec<2>::Zero(), "cavity");
   scene.reject_unknown_keys();
 
   // 2. Run.

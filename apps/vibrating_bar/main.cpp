@@ -12,6 +12,7 @@
 // --check asserts error < bar.check_tolerance.
 #include <mpm/core/app.h>
 #include <mpm/core/runner.h>
+#include <mpm/geometry/body_config.h>
 #include <mpm/geometry/collider_config.h>
 #include <mpm/geometry/seeding.h>
 #include <mpm/solid/solid_scene.h>
@@ -55,7 +56,7 @@ int run(const CommandLine& cl, const Config& scene) {
     scene.child("material").fail("poisson_ratio", "the 1D bar solution needs poisson_ratio: 0");
   auto colliders = geometry::parse_colliders<dim>(scene, domain.lo, domain.hi, layer);
   solid::SolidScene<dim> solid = solid::make_solid_scene(settings, materials, colliders);
-  const int ppc = solid::particles_per_cell<dim>(bar);
+  const int ppc = geometry::particles_per_cell<dim>(bar);
   Vec<dim> hi = Vec<dim>::Constant(thickness);
   hi[0] = L;
   solid::add_particles<dim>(solid, geometry::seed_box<dim>(Vec<dim>::Zero(), hi, dx, ppc, 0.0, 1),

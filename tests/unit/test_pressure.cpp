@@ -214,6 +214,11 @@ TEST_CASE("every back-end agrees with CHOLMOD") {
   check_agreement(closed_box_problem<2>(32, OperatorKind<2>::poisson));
   check_agreement(dam_break_problem<3>(12, OperatorKind<3>::node_cell));
   check_agreement(closed_box_problem<3>(12, OperatorKind<3>::poisson));
+  // Odd cell counts: coarse levels round up and the transfers clamp at the last cell.
+  check_agreement(dam_break_problem<2>(27, OperatorKind<2>::node_cell));
+  check_agreement(closed_box_problem<2>(27, OperatorKind<2>::poisson));
+  check_agreement(dam_break_problem<3>(11, OperatorKind<3>::node_cell));
+  check_agreement(closed_box_problem<3>(11, OperatorKind<3>::poisson));
 }
 
 TEST_CASE("multigrid V-cycle is symmetric and positive") {
@@ -224,7 +229,10 @@ TEST_CASE("multigrid V-cycle is symmetric and positive") {
   for (auto kind : {OperatorKind<3>::node_cell, OperatorKind<3>::poisson}) {
     check_vcycle_symmetry(dam_break_problem<3>(24, kind));
     check_vcycle_symmetry(closed_box_problem<3>(24, kind));
+    check_vcycle_symmetry(dam_break_problem<3>(19, kind));  // odd counts at every level
   }
+  check_vcycle_symmetry(dam_break_problem<2>(45, OperatorKind<2>::node_cell));
+  check_vcycle_symmetry(closed_box_problem<2>(45, OperatorKind<2>::poisson));
 }
 
 // Left out: 3D NodeCell, whose iteration counts grow (multigrid.h explains why), and the
@@ -261,6 +269,25 @@ TEST_CASE("a solve that runs out of iterations reports it") {
     CHECK(result.relative_residual > control.relative_tolerance);
     p.clear();
   }
+}
+
+TEST_CASE("zero right-hand side and no fluid cells: p = 0, converged") {
+  CellOperator<2> op = dam_break_problem<2>(16, OperatorKind<2>::node_cell);
+  const std::vector<double> zero(static_cast<std::size_t>(op.cell_count()), 0.0);
+  for (int pass = 0; pass < 2; ++pass) {
+    for (const std::string& name : pressure_solver_names()) {
+      CAPTURE(name);
+      std::vector<double> p(zero.size(), 1.0);  // a nonzero initial guess
+      const SolveResult result = make_pressure_solver<2>(name)->solve(op, zero, p, SolveControl{});
+      CHECK(result.converged);
+      CHECK(max_abs(p) == 0.0);
+    }
+    std::fill(op.type.begin(), op.type.end(), CellType::empty);
+  }
+  Multigrid<2> multigrid(op);  // no fluid cells: M = 0
+  std::vector<double> z;
+  multigrid.apply(zero, z);
+  CHECK(max_abs(z) == 0.0);
 }
 
 TEST_CASE("make_pressure_solver: every listed name, unknown names rejected") {

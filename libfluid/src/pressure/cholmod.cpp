@@ -38,10 +38,7 @@ SolveResult CholmodSolver<dim>::solve(const CellOperator<dim>& op, const std::ve
   std::vector<std::int64_t> compact, cell_of;
   const std::int64_t n = detail::number_fluid_cells(op, compact, cell_of);
   SolveResult result;
-  if (n == 0) {
-    result.converged = true;
-    return result;
-  }
+  if (detail::solved_for_zero_rhs(b, p, result)) return result;
   // Upper triangle in compressed columns: column j = the entries of row j with column <= j
   // (A is symmetric), which for_each_entry delivers row by row, columns ascending.
   std::vector<int> column_start{0}, row_index;

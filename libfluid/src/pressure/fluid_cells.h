@@ -31,6 +31,16 @@ void prepare_guess(const CellOperator<dim>& op, std::vector<double>& p) {
     if (op.type[c] != CellType::fluid) p[c] = 0.0;
 }
 
+//! For b = 0 on the fluid cells the solution is p = 0 (there is no relative target to iterate
+//! to): sets p and result and returns true; otherwise returns false.
+inline bool solved_for_zero_rhs(const std::vector<double>& b, std::vector<double>& p, SolveResult& result) {
+  if (!std::all_of(b.begin(), b.end(), [](double v) { return v == 0.0; })) return false;
+  std::fill(p.begin(), p.end(), 0.0);
+  result = SolveResult{};
+  result.converged = true;
+  return true;
+}
+
 //! Compact numbering of the fluid cells (-1 for empty cells) and its inverse.
 template <int dim>
 std::int64_t number_fluid_cells(const CellOperator<dim>& op, std::vector<std::int64_t>& compact,

@@ -24,10 +24,7 @@ SolveResult HypreBoomerAmgSolver<dim>::solve(const CellOperator<dim>& op, const 
   std::vector<std::int64_t> compact, cell_of;
   const std::int64_t n = detail::number_fluid_cells(op, compact, cell_of);
   SolveResult result;
-  if (n == 0) {
-    result.converged = true;
-    return result;
-  }
+  if (detail::solved_for_zero_rhs(b, p, result)) return result;
 
   HYPRE_IJMatrix A;
   HYPRE_IJMatrixCreate(MPI_COMM_WORLD, 0, static_cast<HYPRE_BigInt>(n - 1), 0, static_cast<HYPRE_BigInt>(n - 1), &A);

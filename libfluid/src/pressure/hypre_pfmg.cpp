@@ -23,6 +23,8 @@ SolveResult HyprePfmgSolver<dim>::solve(const CellOperator<dim>& op, const std::
   detail::ensure_hypre_initialized();
   const std::vector<double> b = detail::fluid_rhs(op, b_in);
   detail::prepare_guess(op, p);
+  SolveResult result;
+  if (detail::solved_for_zero_rhs(b, p, result)) return result;
   const bool poisson = op.kind == CellOperator<dim>::Kind::poisson;
   const std::int64_t n = op.cell_count();
 
@@ -115,7 +117,6 @@ SolveResult HyprePfmgSolver<dim>::solve(const CellOperator<dim>& op, const std::
   HYPRE_StructPFMGSetNumPostRelax(pfmg, 1);
   HYPRE_StructPCGSetPrecond(solver, HYPRE_StructPFMGSolve, HYPRE_StructPFMGSetup, pfmg);
   HYPRE_StructPCGSetup(solver, A, hb, hx);
-  SolveResult result;
   result.setup_seconds = std::chrono::duration<double>(clock::now() - start).count();
   const auto solve_start = clock::now();
   HYPRE_StructPCGSolve(solver, A, hb, hx);

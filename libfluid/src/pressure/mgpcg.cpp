@@ -12,14 +12,17 @@ template <int dim>
 SolveResult MgpcgSolver<dim>::solve(const CellOperator<dim>& op, const std::vector<double>& b,
                                     std::vector<double>& p, const SolveControl& control) {
   const auto start = std::chrono::steady_clock::now();
-  Multigrid<dim> multigrid(op, options_);
+  const std::vector<double> rhs = detail::fluid_rhs(op, b);
   detail::prepare_guess(op, p);
+  SolveResult result;
+  if (detail::solved_for_zero_rhs(rhs, p, result)) return result;
+  Multigrid<dim> multigrid(op, options_);
   const double setup = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::vector<double> scratch;
-  SolveResult result = pcg(
+  result = pcg(
       [&](const std::vector<double>& x, std::vector<double>& y) { detail::apply_operator(op, x, y, scratch); },
       [&](const std::vector<double>& r, std::vector<double>& z) { multigrid.apply(r, z); },
-      detail::fluid_rhs(op, b), p, control);
+      rhs, p, control);
   result.setup_seconds = setup;
   return result;
 }

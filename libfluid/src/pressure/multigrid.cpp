@@ -160,11 +160,12 @@ Multigrid<dim>::Multigrid(const CellOperator<dim>& fine, const Options& options)
       bottom_cells_.push_back(c);
     }
   const auto m = static_cast<Eigen::Index>(bottom_cells_.size());
+  if (m == 0) return;  // no fluid cells: M = 0
   Eigen::MatrixXd A = Eigen::MatrixXd::Zero(m, m);
   bottom.for_each_entry([&](std::int64_t row, std::int64_t col, double v) { A(compact[row], compact[col]) = v; });
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(A);
   const Eigen::VectorXd& lambda = eigen.eigenvalues();
-  const double cutoff = 1e-10 * (m > 0 ? lambda.cwiseAbs().maxCoeff() : 0.0);
+  const double cutoff = 1e-10 * lambda.cwiseAbs().maxCoeff();
   Eigen::VectorXd inverse(m);
   for (Eigen::Index i = 0; i < m; ++i) inverse[i] = lambda[i] > cutoff ? 1.0 / lambda[i] : 0.0;
   bottom_pinv_ = eigen.eigenvectors() * inverse.asDiagonal() * eigen.eigenvectors().transpose();

@@ -3,6 +3,7 @@
 // z = M r, d = z + ((r.z)_new/(r.z)_old) d.
 #include <fluid/pressure/pcg.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 
@@ -22,9 +23,10 @@ SolveResult pcg(const LinearMap& A, const LinearMap& precondition, const std::ve
   const std::size_t n = b.size();
   if (p.size() != n) p.assign(n, 0.0);
   std::vector<double> r(n), z(n), d(n), Ad(n);
+  const double b_norm = std::sqrt(dot(b, b));
+  if (b_norm == 0.0) std::fill(p.begin(), p.end(), 0.0);  // the exact solution; no relative target exists
   A(p, Ad);
   for (std::size_t i = 0; i < n; ++i) r[i] = b[i] - Ad[i];
-  const double b_norm = std::sqrt(dot(b, b));
   const double target = std::max(control.relative_tolerance * b_norm, control.absolute_tolerance);
   SolveResult result;
   double r_norm = std::sqrt(dot(r, r));

@@ -8,6 +8,7 @@
 #include <mpm/core/stages/particles_to_grid.h>
 #include <mpm/core/stages/sort_particles.h>
 #include <mpm/core/stages/time_step_control.h>
+#include <mpm/geometry/body_config.h>
 #include <mpm/geometry/collider_config.h>
 #include <mpm/geometry/seeding.h>
 
@@ -42,40 +43,15 @@ stages::PressureSettings parse_pressure_settings(const Config& scene) {
 template <int dim>
 FluidScene<dim> make_fluid_scene(mpm::SceneSettings<dim> settings, FluidMaterial fluid,
                                  stages::PressureSettings pressure, mpm::geometry::ColliderSet<dim> colliders) {
-  FluidScene<dim> s{std::move(settings), fluid, std::move(pressure), std::move(colliders), {}};
-  s.state.grid = mpm::SparseGrid<dim>(s.settings.domain_lo, s.settings.domain_hi, s.settings.dx);
-  s.state.kernel = s.settings.kernel;
-  s.state.transfer = s.settings.transfer;
-  s.state.gravity = s.settings.gravity;
-  return s;
+  mpm::MpmState<dim> state = mpm::initial_state(settings);
+  return {std::move(settings), fluid, std::move(pressure), std::move(colliders), std::move(state)};
 }
 
-namespace {
-template <int dim>
-std::string point_text(const Vec<dim>& x) {
-  std::ostringstream s;
-  s << "(";
-  for (int a = 0; a < dim; ++a) s << (a ? ", " : "") << x[a];
-  s << ")";
-  return s.str();
-}
-
-//! Why the first position outside the domain is outside ("" when all are inside).
-template <int dim>
-std::string first_outside(const mpm::SceneSettings<dim>& settings, const std::vector<Vec<dim>>& positions) {
-  for (const Vec<dim>& x : positions)
-    for (int a = 0; a < dim; ++a)
-      if (!(x[a] >= settings.domain_lo[a] && x[a] <= settings.domain_hi[a]))
-        return "a particle at " + point_text<dim>(x) + " lies outside the domain " +
-               point_text<dim>(settings.domain_lo) + " - " + point_text<dim>(settings.domain_hi);
-  return "";
-}
-}  // namespace
 
 template <int dim>
 void add_fluid_particles(FluidScene<dim>& scene, const std::vector<Vec<dim>>& positions, double volume,
                          const Vec<dim>& velocity, const std::string& where) {
-  if (const std::string why = first_outside(scene.settings, positions); !why.empty())
+  if (const std::string why = mpm::first_outside_domain(scene.settings, positions).why; !why.empty())
     throw mpm::InputError(where + ": " + why);
   const double mass = scene.fluid.density * volume;
   for (const Vec<dim>& x : positions) scene.state.particles.push_back(x, velocity, mass, volume, 0);
@@ -83,27 +59,9 @@ void add_fluid_particles(FluidScene<dim>& scene, const std::vector<Vec<dim>>& po
 
 template <int dim>
 void seed_fluid_bodies(FluidScene<dim>& fluid, const Config& scene) {
-  const double dx = fluid.settings.dx;
   for (const Config& body : scene.list("bodies")) {
-    const int ppc = body.integer("particles_per_cell", dim == 2 ? 4 : 8, 1, 1000);
-    const double jitter = body.number("jitter", 0.0, Range::half_open(0.0, 1.0));
-    const auto seed = static_cast<std::uint64_t>(body.integer("seed", 1, 0, 1 << 30));
-    const Vec<dim> velocity = body.vector<dim>("velocity", Vec<dim>::Zero());
-    const std::string shape = body.choice("shape", "box", {"box", "sphere"});
-    std::vector<Vec<dim>> x;
-    try {
-      if (shape == "box")
-        x = mpm::geometry::seed_box<dim>(body.vector<dim>("lo"), body.vector<dim>("hi"), dx, ppc, jitter, seed);
-      else
-        x = mpm::geometry::seed_sphere<dim>(body.vector<dim>("center"), body.number("radius", Range::positive()),
-                                            dx, ppc, jitter, seed);
-    } catch (const mpm::InputError& e) {
-      body.fail("particles_per_cell", e.what());
-    }
-    if (x.empty()) body.fail("shape", "the body contains no particle at this resolution");
-    if (const std::string why = first_outside(fluid.settings, x); !why.empty())
-      body.fail(shape == "box" ? "hi" : "center", "expected the body inside the domain, but " + why);
-    add_fluid_particles(fluid, x, mpm::geometry::particle_volume<dim>(dx, ppc), velocity, body.path());
+    const mpm::geometry::BodyParticles<dim> b = mpm::geometry::seed_body_shape<dim>(body, fluid.settings);
+    add_fluid_particles(fluid, b.x, b.volume, body.vector<dim>("velocity", Vec<dim>::Zero()), body.path());
   }
 }
 

@@ -1,12 +1,35 @@
 #include <mpm/core/scene_settings.h>
 
 #include <cmath>
+#include <sstream>
 
 namespace mpm {
 
 template <int dim>
 int SceneSettings<dim>::frame_count() const {
   return static_cast<int>(std::llround(std::ceil(end_time / frame_dt - 1e-9)));
+}
+
+namespace {
+template <int dim>
+std::string point_text(const Vec<dim>& x) {
+  std::ostringstream s;
+  s << "(";
+  for (int a = 0; a < dim; ++a) s << (a ? ", " : "") << x[a];
+  s << ")";
+  return s.str();
+}
+}  // namespace
+
+template <int dim>
+OutsideDomain first_outside_domain(const SceneSettings<dim>& settings, const std::vector<Vec<dim>>& positions) {
+  for (const Vec<dim>& x : positions)
+    for (int a = 0; a < dim; ++a)
+      if (!(x[a] >= settings.domain_lo[a] && x[a] <= settings.domain_hi[a]))
+        return {"a particle at " + point_text<dim>(x) + " lies outside the domain " +
+                    point_text<dim>(settings.domain_lo) + " - " + point_text<dim>(settings.domain_hi),
+                x[a] < settings.domain_lo[a]};
+  return {};
 }
 
 int scene_dimension(const Config& scene) { return scene.integer("dim", 2, 2, 3); }
@@ -66,6 +89,8 @@ SceneSettings<dim> parse_scene_settings(const Config& scene, const std::optional
   return s;
 }
 
+template OutsideDomain first_outside_domain(const SceneSettings<2>&, const std::vector<Vec<2>>&);
+template OutsideDomain first_outside_domain(const SceneSettings<3>&, const std::vector<Vec<3>>&);
 template struct SceneSettings<2>;
 template struct SceneSettings<3>;
 template SceneSettings<2> parse_scene_settings<2>(const Config&, const std::optional<DerivedDomain<2>>&);

@@ -5,6 +5,7 @@
 #include <mpm/core/stages/particles_to_grid.h>
 #include <mpm/core/stages/sort_particles.h>
 #include <mpm/core/stages/time_step_control.h>
+#include <mpm/geometry/body_config.h>
 #include <mpm/geometry/collider_config.h>
 #include <mpm/geometry/seeding.h>
 #include <mpm/solid/solid_scene.h>
@@ -44,40 +45,11 @@ std::uint16_t material_index(const std::vector<Material<dim>>& materials, const 
   cfg.fail(key, "no material named '" + name + "' (materials: " + known + ")");
 }
 
-namespace {
-//! "(0.1, 0.2)"
-template <int dim>
-std::string point_text(const Vec<dim>& x) {
-  std::ostringstream s;
-  s << "(";
-  for (int a = 0; a < dim; ++a) s << (a ? ", " : "") << x[a];
-  s << ")";
-  return s.str();
-}
-
-//! The first position outside the domain box: why ("a particle at (1.0025, 0.2025) lies
-//! outside the domain (0, 0) - (1, 0.6)") and whether it lies below domain.lo; an empty
-//! `why` when every position lies inside.
-struct Outside {
-  std::string why;
-  bool below = false;
-};
-template <int dim>
-Outside first_outside_domain(const SceneSettings<dim>& settings, const std::vector<Vec<dim>>& positions) {
-  for (const Vec<dim>& x : positions)
-    for (int a = 0; a < dim; ++a)
-      if (!(x[a] >= settings.domain_lo[a] && x[a] <= settings.domain_hi[a]))
-        return {"a particle at " + point_text<dim>(x) + " lies outside the domain " +
-                    point_text<dim>(settings.domain_lo) + " - " + point_text<dim>(settings.domain_hi),
-                x[a] < settings.domain_lo[a]};
-  return {};
-}
-}  // namespace
 
 template <int dim>
 void add_particles(SolidScene<dim>& scene, const std::vector<Vec<dim>>& positions, double volume,
                    std::uint16_t m, const Vec<dim>& velocity, const std::string& where) {
-  if (const Outside outside = first_outside_domain(scene.settings, positions); !outside.why.empty())
+  if (const OutsideDomain outside = first_outside_domain(scene.settings, positions); !outside.why.empty())
     throw InputError(where + ": " + outside.why);
   Particles<dim>& P = scene.state.particles;
   P.enable_deformation();
@@ -85,47 +57,19 @@ void add_particles(SolidScene<dim>& scene, const std::vector<Vec<dim>>& position
   for (const Vec<dim>& x : positions) P.push_back(x, velocity, mass, volume, m);
 }
 
-template <int dim>
-int particles_per_cell(const Config& cfg) {
-  const int ppc = cfg.integer("particles_per_cell", dim == 2 ? 4 : 8, 1, 1000);
-  try {
-    geometry::lattice_points_per_axis<dim>(ppc);
-  } catch (const InputError& e) {
-    cfg.fail("particles_per_cell", e.what());
-  }
-  return ppc;
-}
-
 namespace {
 template <int dim>
 void seed_body(SolidScene<dim>& scene, const Config& body) {
-  const double dx = scene.settings.dx;
-  const int ppc = particles_per_cell<dim>(body);
-  const double jitter = body.number("jitter", 0.0, Range::half_open(0.0, 1.0));
-  const auto seed = static_cast<std::uint64_t>(body.integer("seed", 1, 0, 1 << 30));
+  const geometry::BodyParticles<dim> body_particles = geometry::seed_body_shape<dim>(body, scene.settings);
+  const std::vector<Vec<dim>>& x = body_particles.x;
   const std::uint16_t m = material_index(scene.materials, body.text("material"), body, "material");
   const Vec<dim> velocity = body.vector<dim>("velocity", Vec<dim>::Zero());
-  const std::string shape = body.choice("shape", "box", {"box", "sphere", "level_set"});
-  std::vector<Vec<dim>> x;
-  if (shape == "box")
-    x = geometry::seed_box<dim>(body.vector<dim>("lo"), body.vector<dim>("hi"), dx, ppc, jitter, seed);
-  else if (shape == "sphere")
-    x = geometry::seed_sphere<dim>(body.vector<dim>("center"), body.number("radius", Range::positive()), dx,
-                                   ppc, jitter, seed);
-  else
-    x = geometry::seed_level_set<dim>(geometry::parse_level_set<dim>(body), dx, ppc, jitter, seed);
-  if (x.empty()) body.fail("shape", "the body contains no particle at this resolution");
-  // Blame the key that placed the body, so the message carries its file position and value.
-  if (const Outside outside = first_outside_domain(scene.settings, x); !outside.why.empty())
-    body.fail(shape == "box" ? (outside.below ? "lo" : "hi") : shape == "sphere" ? "center" : "file",
-              "expected the body inside the domain, but " + outside.why);
   // A body may start deformed, F = diag(stretch), from a rest state of volume V / |det F| (a
   // crushed or inverted block), and spinning rigidly about its centroid.
   const Vec<dim> stretch = body.vector<dim>("stretch", Vec<dim>::Ones());
   if (!(stretch.array().abs() > 0.0).all()) body.fail("stretch", "every component must be nonzero");
   const std::size_t first = scene.state.particles.size();
-  add_particles(scene, x, geometry::particle_volume<dim>(dx, ppc) / std::fabs(stretch.prod()), m, velocity,
-                body.path());
+  add_particles(scene, x, body_particles.volume / std::fabs(stretch.prod()), m, velocity, body.path());
   Particles<dim>& P = scene.state.particles;
   Vec<dim> centroid = Vec<dim>::Zero();
   for (const Vec<dim>& p : x) centroid += p / static_cast<double>(x.size());
@@ -144,12 +88,8 @@ void seed_body(SolidScene<dim>& scene, const Config& body) {
 template <int dim>
 SolidScene<dim> make_solid_scene(SceneSettings<dim> settings, std::vector<Material<dim>> materials,
                                  geometry::ColliderSet<dim> colliders) {
-  SolidScene<dim> s{std::move(settings), std::move(materials), std::move(colliders), {}};
-  s.state.grid = SparseGrid<dim>(s.settings.domain_lo, s.settings.domain_hi, s.settings.dx);
-  s.state.kernel = s.settings.kernel;
-  s.state.transfer = s.settings.transfer;
-  s.state.gravity = s.settings.gravity;
-  return s;
+  MpmState<dim> state = initial_state(settings);
+  return {std::move(settings), std::move(materials), std::move(colliders), std::move(state)};
 }
 
 template <int dim>
@@ -199,7 +139,6 @@ double elastic_energy(const MpmState<dim>& state, const std::vector<Material<dim
 
 #define MPM_SOLID_SCENE(dim)                                                                       \
   template std::vector<Material<dim>> parse_materials<dim>(const Config&);                        \
-  template int particles_per_cell<dim>(const Config&);                                            \
   template std::uint16_t material_index(const std::vector<Material<dim>>&, const std::string&,    \
                                         const Config&, const std::string&);                       \
   template void add_particles(SolidScene<dim>&, const std::vector<Vec<dim>>&, double, std::uint16_t, \

@@ -7,6 +7,7 @@
 
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace mpm {
 
@@ -35,6 +36,16 @@ struct SceneSettings {
 
   int frame_count() const;
 };
+
+//! The first position outside the domain box of `settings`: why ("a particle at (1.0025,
+//! 0.2025) lies outside the domain (0, 0) - (1, 0.6)") and whether it lies below domain_lo;
+//! an empty `why` when every position lies inside. Seeding checks bodies with it.
+struct OutsideDomain {
+  std::string why;
+  bool below = false;
+};
+template <int dim>
+OutsideDomain first_outside_domain(const SceneSettings<dim>& settings, const std::vector<Vec<dim>>& positions);
 
 //! The interpolation kernel of `grid.kernel` (and `grid.particle_size` for uGIMP).
 Kernel parse_kernel(const Config& scene);

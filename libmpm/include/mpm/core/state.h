@@ -3,6 +3,7 @@
 #include <mpm/core/kernels.h>
 #include <mpm/core/particle_buckets.h>
 #include <mpm/core/particles.h>
+#include <mpm/core/scene_settings.h>
 #include <mpm/core/sparse_grid.h>
 #include <mpm/core/transfer.h>
 
@@ -21,5 +22,16 @@ struct MpmState {
   double dt_limit = 1e300;              //!< largest step allowed now (frame end) [s]
   Index step = 0;
 };
+
+//! An empty state for `settings`: the grid sized to the domain, kernel, transfer and gravity.
+template <int dim>
+MpmState<dim> initial_state(const SceneSettings<dim>& settings) {
+  MpmState<dim> s;
+  s.grid = SparseGrid<dim>(settings.domain_lo, settings.domain_hi, settings.dx);
+  s.kernel = settings.kernel;
+  s.transfer = settings.transfer;
+  s.gravity = settings.gravity;
+  return s;
+}
 
 }  // namespace mpm

@@ -28,10 +28,6 @@ struct SolidScene {
 template <int dim>
 std::vector<Material<dim>> parse_materials(const Config& scene);
 
-//! The `particles_per_cell` key of `cfg` (default 4 in 2D, 8 in 3D); must be k^dim.
-template <int dim>
-int particles_per_cell(const Config& cfg);
-
 //! Index of the material called `name`; InputError at `cfg`'s `key` when none is.
 template <int dim>
 std::uint16_t material_index(const std::vector<Material<dim>>& materials, const std::string& name,
