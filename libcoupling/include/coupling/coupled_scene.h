@@ -1,0 +1,78 @@
+#pragma once
+//! A coupled sediment-fluid scene and its pipeline (DESIGN.md, "the coupled step";
+//! docs/coupling.md). Either phase may be absent: a dry scene builds no fluid grid and no
+//! pressure solver, a clear-fluid scene no sediment stages.
+//!
+//! The coupled step, one Stage<CoupledState> each (OnPhase runs a phase's own stage):
+//!   time_step -> sort (both) -> p2g (both) -> volume_fraction -> stress_forces (continuum
+//!   sediment) -> grid_update (both; gravity, the sediment its stress) -> viscosity (fluid,
+//!   mu > 0) -> exchange -> boundary (both) -> mixture_pressure -> boundary (sediment)
+//!   -> deformation + plasticity (continuum sediment) -> g2p (both)
+#include <coupling/coupled_state.h>
+#include <coupling/drag/drag_law.h>
+#include <fluid/scene/fluid_scene.h>
+#include <mpm/core/pipeline.h>
+#include <mpm/core/scene_settings.h>
+#include <mpm/geometry/collider.h>
+#include <mpm/solid/material.h>
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace coupling {
+
+template <int dim>
+struct SedimentPhase {
+  double density = 2650.0;  //!< grain material density rho_s [kg/m^3]
+  //! Drucker-Prager (or any libmpm) continuum of the sediment; empty: discrete grains that
+  //! feel only gravity, buoyancy and drag (a dilute suspension).
+  std::vector<mpm::Material<dim>> materials;
+  double min_fluid_fraction = default_min_fluid_fraction;  //!< n_min of volume_fraction.h
+};
+
+template <int dim>
+struct CoupledScene {
+  mpm::SceneSettings<dim> settings;
+  mpm::geometry::ColliderSet<dim> colliders;
+  std::optional<fluid::FluidMaterial> fluid;  //!< nullopt: dry scene
+  fluid::stages::PressureSettings pressure;
+  std::optional<SedimentPhase<dim>> sediment;  //!< nullopt: clear fluid
+  std::optional<drag::DragLaw> drag;           //!< set iff both phases are
+  CoupledState<dim> state;
+};
+
+//! A scene without particles; a grid is allocated for each phase present. InputError when
+//! both phases are present without a drag law, or neither is.
+template <int dim>
+CoupledScene<dim> make_coupled_scene(mpm::SceneSettings<dim> settings,
+                                     mpm::geometry::ColliderSet<dim> colliders,
+                                     std::optional<fluid::FluidMaterial> fluid,
+                                     fluid::stages::PressureSettings pressure,
+                                     std::optional<SedimentPhase<dim>> sediment,
+                                     std::optional<drag::DragLaw> drag);
+
+//! Fluid particles of volume `volume` [m^dim] each, in a region of fluid fraction n_w (the
+//! particle mass is n_w rho_w V_p, Gao et al. 2018); InputError naming `where` when one lies
+//! outside the domain.
+template <int dim>
+void add_fluid_particles(CoupledScene<dim>& scene, const std::vector<mpm::Vec<dim>>& positions, double volume,
+                         double fluid_fraction, const mpm::Vec<dim>& velocity, const std::string& where);
+
+//! Sediment particles holding grain volume `grain_volume` [m^dim] each (mass rho_s V_p), of
+//! the scene's first sediment material when it has materials.
+template <int dim>
+void add_sediment_particles(CoupledScene<dim>& scene, const std::vector<mpm::Vec<dim>>& positions,
+                            double grain_volume, const mpm::Vec<dim>& velocity, const std::string& where);
+
+//! The coupled pipeline of the header comment for the phases `scene` holds.
+template <int dim>
+mpm::Pipeline<CoupledState<dim>> make_coupled_pipeline(const CoupledScene<dim>& scene);
+
+//! Steps `pipeline` until state.time reaches t_end (the last step ends exactly on it);
+//! NumericalError after `max_steps` steps.
+template <int dim>
+void advance(CoupledState<dim>& state, mpm::Pipeline<CoupledState<dim>>& pipeline, double t_end,
+             int max_steps = 1000000);
+
+}  // namespace coupling

@@ -1,0 +1,26 @@
+#pragma once
+//! The state of the coupled sediment-fluid step (DESIGN.md, "the coupled step"): one MpmState
+//! per phase, each with its own particles and sparse grid over the same lattice (same origin,
+//! dx and extent, so node k of one grid and the node with the same coordinate of the other
+//! coincide), plus the volume fractions and the shared clock.
+#include <coupling/volume_fraction.h>
+#include <mpm/core/state.h>
+#include <mpm/core/types.h>
+
+namespace coupling {
+
+template <int dim>
+struct CoupledState {
+  mpm::MpmState<dim> fluid;     //!< the liquid (fluid particles carry m_p = n_w rho_w V_p)
+  mpm::MpmState<dim> sediment;  //!< the grains (m_p = rho_s V_p, V_p the grain volume)
+  bool has_fluid = false;       //!< false: dry scene, `fluid` holds no grid
+  bool has_sediment = false;    //!< false: clear fluid, `sediment` holds no grid
+  //! n_s and n_w per storage node of the sediment grid (written every step by the fractions stage).
+  VolumeFractions fractions;
+  double time = 0.0;        //!< [s]
+  double dt = 0.0;          //!< step being taken [s]
+  double dt_limit = 1e300;  //!< largest step allowed now (frame end) [s]
+  mpm::Index step = 0;
+};
+
+}  // namespace coupling

@@ -1,0 +1,3 @@
+list(APPEND COUPLING_SOURCES
+  src/stages/coupled_stages.cpp
+)
