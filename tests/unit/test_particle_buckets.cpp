@@ -9,6 +9,8 @@
 
 #include <doctest/doctest.h>
 
+#include "random_particles.h"
+
 #include <algorithm>
 #include <cmath>
 #include <numeric>
@@ -17,22 +19,7 @@
 using namespace mpm;
 
 namespace {
-template <int dim>
-Particles<dim> random_cloud(std::size_t n, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  Particles<dim> P;
-  for (std::size_t p = 0; p < n; ++p) {
-    Vec<dim> x, v;
-    for (int a = 0; a < dim; ++a) {
-      x[a] = 0.2 + 0.6 * u(rng);
-      v[a] = u(rng) - 0.5;
-    }
-    P.push_back(x, v, 0.5 + u(rng), 1e-3, 0);
-    for (int a = 0; a < dim * dim; ++a) P.C.back().data()[a] = 2.0 * u(rng) - 1.0;
-  }
-  return P;
-}
+using test::random_cloud;
 
 // Every particle sits in the bucket of its block, each exactly once, buckets in block order.
 template <int dim>
@@ -57,7 +44,7 @@ void check_storage_orders() {
   const Kernel kernel = QuadraticBSpline{};
   SparseGrid<dim> grid(Vec<dim>::Zero(), Vec<dim>::Ones(), 1.0 / 32);
   ParticleBuckets<dim> buckets;
-  Particles<dim> P = random_cloud<dim>(20000, 11);  // random storage: scattered
+  Particles<dim> P = random_cloud<dim>(20000, Vec<dim>::Constant(0.2), Vec<dim>::Constant(0.8), 11);  // random storage: scattered
   CHECK(sort_into_buckets(P, kernel, grid, buckets));
   for (std::size_t i = 0; i < P.size(); ++i) REQUIRE(buckets.particle[i] == i);
   check_buckets(P, kernel, grid, buckets);
@@ -149,7 +136,7 @@ TEST_CASE("single-precision positions give the same buckets and a float P2G agre
 
 TEST_CASE("the lowest-indexed bad particle is reported, whatever the thread count") {
   SparseGrid<3> grid(Vec<3>::Zero(), Vec<3>::Ones(), 1.0 / 32);
-  Particles<3> P = random_cloud<3>(100000, 5);
+  Particles<3> P = random_cloud<3>(100000, Vec<3>::Constant(0.2), Vec<3>::Constant(0.8), 5);
   P.x[70000] = Vec<3>(2.0, 0.5, 0.5);
   P.x[12345] = Vec<3>(0.5, std::nan(""), 0.5);
   ParticleBuckets<3> buckets;

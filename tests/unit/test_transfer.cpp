@@ -8,29 +8,14 @@
 #include <Eigen/Geometry>
 #include <doctest/doctest.h>
 
+#include "random_particles.h"
+
 #include <random>
 
 using namespace mpm;
 
 namespace {
-template <int dim>
-Particles<dim> random_cloud(std::size_t n, const Vec<dim>& lo, const Vec<dim>& hi, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  Particles<dim> P;
-  for (std::size_t p = 0; p < n; ++p) {
-    Vec<dim> x, v;
-    for (int a = 0; a < dim; ++a) {
-      x[a] = lo[a] + (hi[a] - lo[a]) * u(rng);
-      v[a] = u(rng) - 0.5;
-    }
-    P.push_back(x, v, 0.5 + u(rng), 1e-3, 0);
-    Mat<dim> C;
-    for (int a = 0; a < dim * dim; ++a) C.data()[a] = 2.0 * u(rng) - 1.0;
-    P.C.back() = C;
-  }
-  return P;
-}
+using test::random_cloud;
 
 template <int dim>
 double cross(const Vec<dim>& a, const Vec<dim>& b, int axis) {

@@ -33,12 +33,11 @@ SolveResult CholmodSolver<dim>::solve(const CellOperator<dim>& op, const std::ve
                                       std::vector<double>& p, const SolveControl& control) {
   using clock = std::chrono::steady_clock;
   const auto start = clock::now();
-  const std::vector<double> b = detail::fluid_rhs(op, b_in);
-  detail::prepare_guess(op, p);
+  std::vector<double> b;
+  SolveResult result;
+  if (detail::begin_solve(op, b_in, p, b, result)) return result;
   std::vector<std::int64_t> compact, cell_of;
   const std::int64_t n = detail::number_fluid_cells(op, compact, cell_of);
-  SolveResult result;
-  if (detail::solved_for_zero_rhs(b, p, result)) return result;
   // Upper triangle in compressed columns: column j = the entries of row j with column <= j
   // (A is symmetric), which for_each_entry delivers row by row, columns ascending.
   std::vector<int> column_start{0}, row_index;

@@ -41,6 +41,16 @@ inline bool solved_for_zero_rhs(const std::vector<double>& b, std::vector<double
   return true;
 }
 
+//! The start of every solve that is not plain PCG: b restricted to the fluid cells (into
+//! `b`), p prepared as the initial guess; true when b = 0, with p = 0 and `result` final.
+template <int dim>
+bool begin_solve(const CellOperator<dim>& op, const std::vector<double>& b_in, std::vector<double>& p,
+                 std::vector<double>& b, SolveResult& result) {
+  b = fluid_rhs(op, b_in);
+  prepare_guess(op, p);
+  return solved_for_zero_rhs(b, p, result);
+}
+
 //! Compact numbering of the fluid cells (-1 for empty cells) and its inverse.
 template <int dim>
 std::int64_t number_fluid_cells(const CellOperator<dim>& op, std::vector<std::int64_t>& compact,

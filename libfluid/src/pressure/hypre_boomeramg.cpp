@@ -19,12 +19,11 @@ SolveResult HypreBoomerAmgSolver<dim>::solve(const CellOperator<dim>& op, const 
   using clock = std::chrono::steady_clock;
   const auto start = clock::now();
   detail::ensure_hypre_initialized();
-  const std::vector<double> b = detail::fluid_rhs(op, b_in);
-  detail::prepare_guess(op, p);
+  std::vector<double> b;
+  SolveResult result;
+  if (detail::begin_solve(op, b_in, p, b, result)) return result;
   std::vector<std::int64_t> compact, cell_of;
   const std::int64_t n = detail::number_fluid_cells(op, compact, cell_of);
-  SolveResult result;
-  if (detail::solved_for_zero_rhs(b, p, result)) return result;
 
   HYPRE_IJMatrix A;
   HYPRE_IJMatrixCreate(MPI_COMM_WORLD, 0, static_cast<HYPRE_BigInt>(n - 1), 0, static_cast<HYPRE_BigInt>(n - 1), &A);

@@ -21,10 +21,9 @@ SolveResult HyprePfmgSolver<dim>::solve(const CellOperator<dim>& op, const std::
   using clock = std::chrono::steady_clock;
   const auto start = clock::now();
   detail::ensure_hypre_initialized();
-  const std::vector<double> b = detail::fluid_rhs(op, b_in);
-  detail::prepare_guess(op, p);
+  std::vector<double> b;
   SolveResult result;
-  if (detail::solved_for_zero_rhs(b, p, result)) return result;
+  if (detail::begin_solve(op, b_in, p, b, result)) return result;
   const bool poisson = op.kind == CellOperator<dim>::Kind::poisson;
   const std::int64_t n = op.cell_count();
 

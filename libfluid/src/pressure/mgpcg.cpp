@@ -12,10 +12,9 @@ template <int dim>
 SolveResult MgpcgSolver<dim>::solve(const CellOperator<dim>& op, const std::vector<double>& b,
                                     std::vector<double>& p, const SolveControl& control) {
   const auto start = std::chrono::steady_clock::now();
-  const std::vector<double> rhs = detail::fluid_rhs(op, b);
-  detail::prepare_guess(op, p);
+  std::vector<double> rhs;
   SolveResult result;
-  if (detail::solved_for_zero_rhs(rhs, p, result)) return result;
+  if (detail::begin_solve(op, b, p, rhs, result)) return result;
   Multigrid<dim> multigrid(op, options_);
   const double setup = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::vector<double> scratch;
