@@ -1,10 +1,12 @@
-// Restart: a column collapse continued from a checkpoint reaches the same bits as the run that
-// was never interrupted. The run writes 10 frames with checkpoint_every = 4; a copy of its
-// output folder loses every file written after frame 4 (as if the run had died there) and is
-// continued with --restart checkpoint_0004.h5. Then every particle channel of the later
-// checkpoints (mpm::io::load_checkpoint) and every dataset of the later particles_NNNN.h5
-// (HDF5 C API) must be equal bit for bit, the .xdmf files byte for byte, and diagnostics.csv
-// row for row (17 significant digits, so equal text is equal bits) except the seconds_* timings.
+// Restart: a run continued from a checkpoint reaches the same bits as the run that was never
+// interrupted, for a solid app (column collapse, one phase) and a coupled one (settling: fluid
+// and sediment, one checkpoint holding both). The run writes 10 frames with checkpoint_every
+// = 4; a copy of its output folder loses every file written after frame 4 (as if the run had
+// died there) and is continued with --restart checkpoint_0004.h5. Then every particle channel
+// of every phase of the later checkpoints (mpm::io::load_checkpoint) and every dataset of the
+// later <series>_NNNN.h5 (HDF5 C API) must be equal bit for bit, the .xdmf files byte for
+// byte, and diagnostics.csv row for row (17 significant digits, so equal text is equal bits)
+// except the seconds_* timings.
 #include <mpm/io/checkpoint.h>
 
 #include <doctest/doctest.h>
@@ -30,12 +32,33 @@ namespace {
 const fs::path kWork = RESTART_WORK_DIR;
 constexpr int kFrames = 10, kCheckpointEvery = 4;
 
-//! Runs column_collapse on the reduced scene; its stderr goes to <out>.log. Returns the exit status.
-int run_column_collapse(const fs::path& out, const std::string& extra) {
-  const std::string command = std::string("'") + COLUMN_COLLAPSE_APP + "' '" + SEDIMENT_DATA_DIR +
-                              "/scenes/column_collapse.yaml' --quiet --set column.cells_per_width=10"
-                              " --set time.frame_dt=0.02 --set time.end=" +
-                              std::to_string(kFrames * 0.02) + " --set output.png=false" +
+//! An app and its reduced scene: 10 frames of frame_dt, the phases of its checkpoints and
+//! the particle series they are written to, and the results that depend on the final state
+//! only (duration-like results also depend on the history before the restart).
+struct RestartCase {
+  std::string app, scene, sets;
+  double frame_dt;
+  std::vector<std::string> phases, series, final_results;
+};
+
+const RestartCase kColumnCollapse{COLUMN_COLLAPSE_APP, "column_collapse.yaml", "--set column.cells_per_width=10",
+                                  0.02, {""}, {"particles"}, {"runout", "final_height", "normalized_runout"}};
+#ifdef SETTLING_APP
+const RestartCase kSettling{SETTLING_APP,
+                            "settling.yaml",
+                            "--set column.cells_per_width=16 --set measure.start=0",
+                            0.01,
+                            {"fluid", "sediment"},
+                            {"fluid", "sediment"},
+                            {"terminal_velocity_stokes", "hindered_velocity"}};
+#endif
+
+//! Runs the case's app; its stderr goes to <out>.log. Returns the exit status.
+int run_app(const RestartCase& c, const fs::path& out, const std::string& extra) {
+  const std::string command = "'" + c.app + "' '" + SEDIMENT_DATA_DIR + "/scenes/" + c.scene + "' --quiet " +
+                              c.sets + " --set time.frame_dt=" + std::to_string(c.frame_dt) +
+                              " --set time.end=" + std::to_string(kFrames * c.frame_dt) +
+                              " --set output.png=false" +
                               " --set output.checkpoint_every=" + std::to_string(kCheckpointEvery) +
                               " --out '" + out.string() + "' " + extra + " 2> '" + out.string() + ".log'";
   const int status = std::system(command.c_str());
@@ -61,11 +84,11 @@ bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
   return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
 }
 
-void check_checkpoints_equal(const fs::path& a, const fs::path& b) {
+void check_checkpoints_equal(const fs::path& a, const fs::path& b, const std::string& phase) {
   mpm::io::CheckpointHeader ha, hb;
-  const mpm::Particles<2> pa = mpm::io::load_checkpoint<2>(a, ha);
-  const mpm::Particles<2> pb = mpm::io::load_checkpoint<2>(b, hb);
-  INFO(a.filename().string());
+  const mpm::Particles<2> pa = mpm::io::load_checkpoint<2>(a, ha, phase);
+  const mpm::Particles<2> pb = mpm::io::load_checkpoint<2>(b, hb, phase);
+  INFO(a.filename().string() << " phase '" << phase << "'");
   CHECK(ha.frame == hb.frame);
   CHECK(ha.step == hb.step);
   CHECK(std::memcmp(&ha.time, &hb.time, sizeof(double)) == 0);
@@ -141,17 +164,19 @@ std::string numbered(const std::string& stem, int frame, const std::string& ext)
   return name;
 }
 
-void check_particle_state(const fs::path& full, const fs::path& restarted) {
+void check_particle_state(const RestartCase& c, const fs::path& full, const fs::path& restarted) {
   for (const int frame : {2 * kCheckpointEvery, kFrames})
-    check_checkpoints_equal(full / numbered("checkpoint", frame, ".h5"),
-                            restarted / numbered("checkpoint", frame, ".h5"));
-  for (int frame = kCheckpointEvery + 1; frame <= kFrames; ++frame) {
-    check_particle_files_equal(full / numbered("particles", frame, ".h5"),
-                               restarted / numbered("particles", frame, ".h5"));
-    CHECK(read_text(full / numbered("particles", frame, ".xdmf")) ==
-          read_text(restarted / numbered("particles", frame, ".xdmf")));
+    for (const std::string& phase : c.phases)
+      check_checkpoints_equal(full / numbered("checkpoint", frame, ".h5"),
+                              restarted / numbered("checkpoint", frame, ".h5"), phase);
+  for (const std::string& series : c.series) {
+    for (int frame = kCheckpointEvery + 1; frame <= kFrames; ++frame) {
+      check_particle_files_equal(full / numbered(series, frame, ".h5"), restarted / numbered(series, frame, ".h5"));
+      CHECK(read_text(full / numbered(series, frame, ".xdmf")) ==
+            read_text(restarted / numbered(series, frame, ".xdmf")));
+    }
+    CHECK(read_text(full / (series + ".xdmf")) == read_text(restarted / (series + ".xdmf")));
   }
-  CHECK(read_text(full / "particles.xdmf") == read_text(restarted / "particles.xdmf"));
 }
 
 void check_diagnostics_equal_but_timings(const fs::path& full, const fs::path& restarted) {
@@ -176,24 +201,20 @@ void check_diagnostics_equal_but_timings(const fs::path& full, const fs::path& r
   CHECK(rows == kFrames + 1);
 }
 
-//! The results that depend on the final state only (duration and at_rest also depend on the
-//! kinetic-energy history before the restart, which a restarted run does not see).
-void check_final_results_equal(const fs::path& full, const fs::path& restarted) {
+void check_final_results_equal(const RestartCase& c, const fs::path& full, const fs::path& restarted) {
   const auto a = nlohmann::json::parse(read_text(full / "summary.json"))["results"];
   const auto b = nlohmann::json::parse(read_text(restarted / "summary.json"))["results"];
-  for (const char* key : {"runout", "final_height", "normalized_runout"}) {
+  for (const std::string& key : c.final_results) {
     INFO(key);
     CHECK(a.at(key).get<double>() == b.at(key).get<double>());
   }
 }
 
-}  // namespace
-
-TEST_CASE("a run continued from a checkpoint is bit-identical to the uninterrupted run") {
-  const fs::path full = kWork / "uninterrupted", restarted = kWork / "restarted";
-  fs::remove_all(kWork);
-  fs::create_directories(kWork);
-  REQUIRE_MESSAGE(run_column_collapse(full, "") == 0, read_text(full.string() + ".log"));
+void check_restart(const RestartCase& c, const std::string& name) {
+  const fs::path full = kWork / name / "uninterrupted", restarted = kWork / name / "restarted";
+  fs::remove_all(kWork / name);
+  fs::create_directories(kWork / name);
+  REQUIRE_MESSAGE(run_app(c, full, "") == 0, read_text(full.string() + ".log"));
 
   // The copy loses what the run wrote after frame 4: later frames, checkpoints and the summary.
   fs::copy(full, restarted, fs::copy_options::recursive);
@@ -204,10 +225,19 @@ TEST_CASE("a run continued from a checkpoint is bit-identical to the uninterrupt
   for (const fs::path& file : later) fs::remove(file);
   REQUIRE_FALSE(fs::exists(restarted / numbered("checkpoint", kFrames, ".h5")));
   const fs::path checkpoint = restarted / numbered("checkpoint", kCheckpointEvery, ".h5");
-  REQUIRE_MESSAGE(run_column_collapse(restarted, "--restart '" + checkpoint.string() + "'") == 0,
+  REQUIRE_MESSAGE(run_app(c, restarted, "--restart '" + checkpoint.string() + "'") == 0,
                   read_text(restarted.string() + ".log"));
 
-  check_particle_state(full, restarted);
+  check_particle_state(c, full, restarted);
   check_diagnostics_equal_but_timings(full, restarted);
-  check_final_results_equal(full, restarted);
+  check_final_results_equal(c, full, restarted);
+}
+
+}  // namespace
+
+TEST_CASE("a run continued from a checkpoint is bit-identical to the uninterrupted run") {
+  SUBCASE("solid: column collapse") { check_restart(kColumnCollapse, "column_collapse"); }
+#ifdef SETTLING_APP
+  SUBCASE("coupled: settling column (fluid and sediment)") { check_restart(kSettling, "settling"); }
+#endif
 }

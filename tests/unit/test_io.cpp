@@ -213,7 +213,7 @@ TEST_CASE("every writer throws IoError naming its target and leaves no file when
                       folder / "particles_0000.h5"));
   CHECK(throws_naming(
       [&] {
-        io::save_checkpoint(folder / "c.h5", p, {2, 0, 0, 0.0, 0.0, ""});
+        io::save_checkpoint(folder / "c.h5", p, {2, 0, 0, 0.0, 0.0, "", {}});
       },
       folder / "c.h5"));
   CHECK(throws_naming([&] { io::write_png_preview(folder / "p.png", p, {}); }, folder / "p.png"));
@@ -231,7 +231,9 @@ TEST_CASE_TEMPLATE("checkpoint round trip is bit-identical", Dim, std::integral_
   for (const bool deformation : {false, true}) {
     CAPTURE(deformation);
     const Particles<dim> p = random_particles<dim>(50, deformation, 7);
-    const io::CheckpointHeader saved{dim, 12, 3456789012345, 0.1 + 0.2, 1.0 / 3.0, "sha256:abc"};
+    const io::CheckpointHeader saved{dim,         12,           3456789012345,
+                                     0.1 + 0.2,   1.0 / 3.0,    "sha256:abc",
+                                     {{"3.pressure/p", {0.1, -2.5e-300, 7.0}}, {"empty", {}}}};
     io::save_checkpoint(dir / "c.h5", p, saved);
     io::CheckpointHeader loaded;
     const Particles<dim> q = io::load_checkpoint<dim>(dir / "c.h5", loaded);
@@ -251,13 +253,31 @@ TEST_CASE_TEMPLATE("checkpoint round trip is bit-identical", Dim, std::integral_
     CHECK(loaded.time == saved.time);
     CHECK(loaded.dt_previous == saved.dt_previous);
     CHECK(loaded.scene_digest == saved.scene_digest);
+    CHECK(loaded.stage_data == saved.stage_data);
     CHECK(dir.entries() == std::vector<std::string>{"c.h5"});
+  }
+  SUBCASE("several phases in one file, each in its group") {
+    const Particles<dim> fluid = random_particles<dim>(30, false, 8), grains = random_particles<dim>(20, true, 9);
+    io::save_checkpoint<dim>(dir / "two.h5", {{"fluid", &fluid}, {"sediment", &grains}},
+                             {dim, 1, 2, 0.5, 1e-3, "d", {}});
+    io::CheckpointHeader header;
+    const Particles<dim> f = io::load_checkpoint<dim>(dir / "two.h5", header, "fluid");
+    const Particles<dim> g = io::load_checkpoint<dim>(dir / "two.h5", header, "sediment");
+    CHECK(same_bits(f.x, fluid.x));
+    CHECK(same_bits(f.C, fluid.C));
+    CHECK_FALSE(f.has_deformation());
+    CHECK(same_bits(g.v, grains.v));
+    CHECK(same_bits(g.F, grains.F));
+    CHECK(g.has_deformation());
+    CHECK_THROWS_WITH_AS(io::load_checkpoint<dim>(dir / "two.h5", header, "air"),
+                         doctest::Contains("no particle phase 'air'"), InputError);
+    CHECK_THROWS_AS(io::load_checkpoint<dim>(dir / "two.h5", header), InputError);
   }
   SUBCASE("an empty particle set keeps its deformation flag") {
     for (const bool deformation : {false, true}) {
       Particles<dim> empty;
       if (deformation) empty.enable_deformation();
-      io::save_checkpoint(dir / "empty.h5", empty, {dim, 0, 0, 0.0, 0.0, ""});
+      io::save_checkpoint(dir / "empty.h5", empty, {dim, 0, 0, 0.0, 0.0, "", {}});
       io::CheckpointHeader header;
       const Particles<dim> q = io::load_checkpoint<dim>(dir / "empty.h5", header);
       CHECK(q.size() == 0);
@@ -273,7 +293,7 @@ TEST_CASE("loading a wrong, missing or corrupt checkpoint throws naming the file
     return std::string(e.what()).find(file.string()) != std::string::npos;
   };
   io::CheckpointHeader header;
-  io::save_checkpoint(dir / "3d.h5", random_particles<3>(10, true, 1), {3, 1, 2, 0.5, 1e-3, "d"});
+  io::save_checkpoint(dir / "3d.h5", random_particles<3>(10, true, 1), {3, 1, 2, 0.5, 1e-3, "d", {}});
 
   try {
     io::load_checkpoint<2>(dir / "3d.h5", header);

@@ -7,13 +7,17 @@
 //!   time_step -> sort (both) -> p2g (both) -> volume_fraction -> stress_forces (continuum
 //!   sediment) -> grid_update (both; gravity, the sediment its stress) -> viscosity (fluid,
 //!   mu > 0) -> exchange -> boundary (both) -> mixture_pressure -> boundary (sediment)
-//!   -> deformation + plasticity (continuum sediment) -> g2p (both)
+//!   -> deformation + plasticity (continuum sediment) -> g2p (both) -> reclassify (a
+//!   continuum sediment with `switching`: stages/reclassify_sediment.h)
 #include <coupling/coupled_state.h>
 #include <coupling/drag/drag_law.h>
+#include <coupling/stages/reclassify_sediment.h>
 #include <fluid/scene/fluid_scene.h>
 #include <mpm/core/pipeline.h>
 #include <mpm/core/scene_settings.h>
 #include <mpm/geometry/collider.h>
+#include <mpm/core/stages/particle_source.h>
+#include <mpm/geometry/flow_boundary_config.h>
 #include <mpm/solid/material.h>
 
 #include <optional>
@@ -29,6 +33,9 @@ struct SedimentPhase {
   //! feel only gravity, buoyancy and drag (a dilute suspension).
   std::vector<mpm::Material<dim>> materials;
   double min_fluid_fraction = default_min_fluid_fraction;  //!< n_min of volume_fraction.h
+  //! Continuum <-> discrete switching (needs materials); nullopt: every particle keeps its
+  //! state and the pipeline has no reclassify stage.
+  std::optional<SedimentSwitching> switching;
 };
 
 template <int dim>
@@ -40,10 +47,16 @@ struct CoupledScene {
   std::optional<SedimentPhase<dim>> sediment;  //!< nullopt: clear fluid
   std::optional<drag::DragLaw> drag;           //!< set iff both phases are
   CoupledState<dim> state;
+  //! Inflow and outflow (flow_boundary_config.h), already applied to `colliders`: the inflow
+  //! emits fluid (fraction 1), the outflow removes particles of both phases.
+  mpm::geometry::FlowBoundaries<dim> flow;
+  //! The emitters of each phase (the inflow's among the fluid's), one source stage each.
+  std::vector<typename mpm::stages::ParticleSource<dim>::Settings> fluid_sources, sediment_sources;
 };
 
 //! A scene without particles; a grid is allocated for each phase present. InputError when
-//! both phases are present without a drag law, or neither is.
+//! both phases are present without a drag law, or neither is, or a sediment switches without
+//! a continuum material.
 template <int dim>
 CoupledScene<dim> make_coupled_scene(mpm::SceneSettings<dim> settings,
                                      mpm::geometry::ColliderSet<dim> colliders,
@@ -60,7 +73,8 @@ void add_fluid_particles(CoupledScene<dim>& scene, const std::vector<mpm::Vec<di
                          double fluid_fraction, const mpm::Vec<dim>& velocity, const std::string& where);
 
 //! Sediment particles holding grain volume `grain_volume` [m^dim] each (mass rho_s V_p), of
-//! the scene's first sediment material when it has materials.
+//! the scene's first sediment material when it has materials, discrete grains (material
+//! index discrete_grain) otherwise.
 template <int dim>
 void add_sediment_particles(CoupledScene<dim>& scene, const std::vector<mpm::Vec<dim>>& positions,
                             double grain_volume, const mpm::Vec<dim>& velocity, const std::string& where);

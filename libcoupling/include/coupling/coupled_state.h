@@ -7,6 +7,8 @@
 #include <mpm/core/state.h>
 #include <mpm/core/types.h>
 
+#include <vector>
+
 namespace coupling {
 
 template <int dim>
@@ -22,5 +24,15 @@ struct CoupledState {
   double dt_limit = 1e300;  //!< largest step allowed now (frame end) [s]
   mpm::Index step = 0;
 };
+
+//! The phases present, fluid first (mpm::PhaseRef): the Runner writes fluid_NNNN.h5 and
+//! sediment_NNNN.h5 and draws the fluid as a tint beneath the coloured grains.
+template <int dim>
+std::vector<mpm::PhaseRef<dim>> phases(CoupledState<dim>& s) {
+  std::vector<mpm::PhaseRef<dim>> out;
+  if (s.has_fluid) out.push_back({"fluid", &s.fluid.particles, &s.fluid.grid, !s.has_sediment});
+  if (s.has_sediment) out.push_back({"sediment", &s.sediment.particles, &s.sediment.grid, true});
+  return out;
+}
 
 }  // namespace coupling

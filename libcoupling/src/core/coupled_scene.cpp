@@ -6,6 +6,8 @@
 #include <mpm/core/stages/grid_boundary.h>
 #include <mpm/core/stages/grid_to_particles.h>
 #include <mpm/core/stages/grid_velocity_update.h>
+#include <mpm/core/stages/particle_sink.h>
+#include <mpm/core/stages/particle_source.h>
 #include <mpm/core/stages/particles_to_grid.h>
 #include <mpm/core/stages/sort_particles.h>
 #include <mpm/solid/stages/deformation_update.h>
@@ -28,6 +30,8 @@ CoupledScene<dim> make_coupled_scene(mpm::SceneSettings<dim> settings,
   mpm::verify<mpm::InputError>(fluid || sediment, "coupled scene: neither a fluid nor a sediment phase");
   mpm::verify<mpm::InputError>(!(fluid && sediment) || drag.has_value(),
                                "coupled scene: a fluid and a sediment phase need a drag law");
+  mpm::verify<mpm::InputError>(!sediment || !sediment->switching || !sediment->materials.empty(),
+                               "coupled scene: continuum/discrete switching needs a sediment material");
   CoupledState<dim> state;
   state.has_fluid = fluid.has_value();
   state.has_sediment = sediment.has_value();
@@ -38,7 +42,7 @@ CoupledScene<dim> make_coupled_scene(mpm::SceneSettings<dim> settings,
   }
   if (!(fluid && sediment)) drag.reset();
   return {std::move(settings), std::move(colliders), fluid, std::move(pressure), std::move(sediment), drag,
-          std::move(state)};
+          std::move(state), {}, {}, {}};
 }
 
 template <int dim>
@@ -62,8 +66,9 @@ void add_sediment_particles(CoupledScene<dim>& scene, const std::vector<mpm::Vec
   if (const std::string why = mpm::first_outside_domain(scene.settings, positions).why; !why.empty())
     throw mpm::InputError(where + ": " + why);
   const double mass = scene.sediment->density * grain_volume;
+  const std::uint16_t material = scene.sediment->materials.empty() ? discrete_grain : 0;
   for (const mpm::Vec<dim>& x : positions)
-    scene.state.sediment.particles.push_back(x, velocity, mass, grain_volume, 0);
+    scene.state.sediment.particles.push_back(x, velocity, mass, grain_volume, material);
 }
 
 template <int dim>
@@ -73,6 +78,7 @@ mpm::Pipeline<CoupledState<dim>> make_coupled_pipeline(const CoupledScene<dim>& 
   using stages::Phase;
   const bool wet = scene.fluid.has_value(), sandy = scene.sediment.has_value();
   const bool continuum = sandy && !scene.sediment->materials.empty();
+  const bool switching = continuum && scene.sediment->switching.has_value();
 
   // Free fall as a wave speed (fluid_scene.h) for both phases; a continuum sediment adds its
   // elastic wave speed.
@@ -104,12 +110,19 @@ mpm::Pipeline<CoupledState<dim>> make_coupled_pipeline(const CoupledScene<dim>& 
     if (sandy) on(Phase::sediment, make());
   };
   p.add(std::make_unique<stages::CoupledTimeStep<dim>>(dt, dt_sediment));
+  // Outflow (both phases), then the emitters, before the sort that rebuilds the buckets.
+  if (const auto regions = mpm::geometry::flow_sink_regions(scene.flow, scene.settings); !regions.empty())
+    both([&] { return std::make_unique<ms::ParticleSink<dim>>(regions); });
+  for (const auto& source : scene.fluid_sources) on(Phase::fluid, std::make_unique<ms::ParticleSource<dim>>(source));
+  for (const auto& source : scene.sediment_sources)
+    on(Phase::sediment, std::make_unique<ms::ParticleSource<dim>>(source));
   both([] { return std::make_unique<ms::SortParticles<dim>>(); });
   both([] { return std::make_unique<ms::ParticlesToGrid<dim>>(); });
   if (wet && sandy)
     p.add(std::make_unique<stages::VolumeFractionStage<dim>>(scene.fluid->density, scene.sediment->density,
                                                              scene.sediment->min_fluid_fraction));
-  if (continuum) on(Phase::sediment, std::make_unique<ms::StressForces<dim>>(scene.sediment->materials));
+  if (continuum)
+    on(Phase::sediment, std::make_unique<ms::StressForces<dim>>(scene.sediment->materials, switching));
   if (wet) on(Phase::fluid, std::make_unique<ms::GridVelocityUpdate<dim>>(false));
   if (sandy) on(Phase::sediment, std::make_unique<ms::GridVelocityUpdate<dim>>(continuum));
   if (wet && scene.fluid->viscosity > 0.0)
@@ -134,6 +147,9 @@ mpm::Pipeline<CoupledState<dim>> make_coupled_pipeline(const CoupledScene<dim>& 
       on(Phase::sediment, std::make_unique<ms::ReturnMap<dim>>(scene.sediment->materials));
   }
   both([] { return std::make_unique<ms::GridToParticles<dim>>(); });
+  if (switching)
+    p.add(std::make_unique<stages::ReclassifySediment<dim>>(*scene.sediment->switching, scene.sediment->density,
+                                                            0, wet));
   return p;
 }
 

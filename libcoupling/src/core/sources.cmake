@@ -3,4 +3,7 @@ list(APPEND COUPLING_SOURCES
   src/core/momentum_exchange.cpp
   src/core/coupled_scene.cpp
   src/core/settling_column.cpp
+  src/core/scene_loader.cpp
+  src/core/coupled_runner.cpp
+  src/core/bed_profile.cpp
 )

@@ -8,6 +8,9 @@
 
 #include <mpm/core/error.h>
 
+#include <algorithm>
+#include <utility>
+
 namespace fluid {
 
 namespace {
@@ -41,8 +44,20 @@ template <int dim>
 std::int64_t CellOperator<dim>::cell_count() const { return cells.template cast<std::int64_t>().prod(); }
 
 template <int dim>
+bool CellOperator<dim>::is_periodic() const {
+  return std::any_of(periodic.begin(), periodic.end(), [](bool p) { return p; });
+}
+
+template <int dim>
+IVec<dim> CellOperator<dim>::node_extent() const {
+  IVec<dim> n = cells;
+  for (int a = 0; a < dim; ++a) n[a] += periodic[a] ? 0 : 1;
+  return n;
+}
+
+template <int dim>
 std::int64_t CellOperator<dim>::node_count() const {
-  return (cells.array() + 1).template cast<std::int64_t>().prod();
+  return node_extent().template cast<std::int64_t>().prod();
 }
 
 template <int dim>
@@ -53,9 +68,10 @@ std::int64_t CellOperator<dim>::cell_index(const IVec<dim>& c) const {
 }
 
 template <int dim>
-std::int64_t CellOperator<dim>::node_index(const IVec<dim>& n) const {
+std::int64_t CellOperator<dim>::node_index(IVec<dim> n) const {
+  const IVec<dim> extent = node_extent();
   std::int64_t i = 0;
-  for (int a = dim - 1; a >= 0; --a) i = i * (cells[a] + 1) + n[a];
+  for (int a = dim - 1; a >= 0; --a) i = i * extent[a] + detail::wrap(n[a], extent[a], periodic[a]);
   return i;
 }
 
@@ -101,23 +117,43 @@ void CellOperator<dim>::diagonal(std::vector<double>& d) const {
   for_each_cell<dim>(cells, [&](const IVec<dim>& c, std::int64_t ci) {
     if (type[ci] != CellType::fluid) return;
     if (kind == Kind::poisson) {
-      d[ci] = 2.0 * dim / (dx * dx);
+      // A periodic axis of one cell makes the cell its own neighbour on both sides.
+      int self = 0;
+      for (int a = 0; a < dim; ++a) self += periodic[a] && cells[a] == 1;
+      d[ci] = 2.0 * (dim - self) / (dx * dx);
       return;
     }
-    for (int k = 0; k < corners<dim>; ++k) d[ci] += dim * s2 * beta[node_index(corner_node<dim>(c, k))];
+    // sum over the corner pairs (k, k') at the same node of beta s_k . s_k'; distinct corners
+    // share a node only on a periodic axis of one cell.
+    for (int k = 0; k < corners<dim>; ++k) {
+      const std::int64_t n = node_index(corner_node<dim>(c, k));
+      for (int k2 = 0; k2 < corners<dim>; ++k2) {
+        if (k2 != k && node_index(corner_node<dim>(c, k2)) != n) continue;
+        double dot = 0.0;
+        for (int a = 0; a < dim; ++a) dot += corner_sign(k, a) * corner_sign(k2, a);
+        d[ci] += s2 * beta[n] * dot;
+      }
+    }
   });
 }
 
 template <int dim>
 void CellOperator<dim>::for_each_entry(const std::function<void(std::int64_t, std::int64_t, double)>& f) const {
   const double s2 = 1.0 / ((1 << (2 * dim - 2)) * dx * dx);
+  std::vector<std::pair<std::int64_t, double>> row;
   for_each_cell<dim>(cells, [&](const IVec<dim>& c, std::int64_t ci) {
     if (type[ci] != CellType::fluid) return;
-    // Neighbours c + o, o in {-1, 0, 1}^dim, visited in ascending cell index (x fastest).
+    // Neighbours c + o, o in {-1, 0, 1}^dim (wrapped on periodic axes, where several o may
+    // name one cell: their values add), then sorted by cell index.
+    row.clear();
     IVec<dim> o = IVec<dim>::Constant(-1);
     for (int m = 0; m < mpm::ipow(3, dim); ++m) {
-      const IVec<dim> nb = c + o;
-      const bool inside = (nb.array() >= 0).all() && (nb.array() < cells.array()).all();
+      IVec<dim> nb = c + o;
+      bool inside = true;
+      for (int a = 0; a < dim; ++a) {
+        nb[a] = detail::wrap(nb[a], cells[a], periodic[a]);
+        inside = inside && nb[a] >= 0;
+      }
       if (inside && type[cell_index(nb)] == CellType::fluid) {
         double v = 0.0;
         if (kind == Kind::poisson) {
@@ -139,12 +175,19 @@ void CellOperator<dim>::for_each_entry(const std::function<void(std::int64_t, st
             v += s2 * beta[node_index(c + bits)] * dot;
           }
         }
-        if (v != 0.0) f(ci, cell_index(nb), v);
+        if (v != 0.0) row.emplace_back(cell_index(nb), v);
       }
       for (int a = 0; a < dim; ++a) {
         if (++o[a] <= 1) break;
         o[a] = -1;
       }
+    }
+    std::sort(row.begin(), row.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+    for (std::size_t e = 0; e < row.size();) {
+      double v = 0.0;
+      const std::int64_t column = row[e].first;
+      for (; e < row.size() && row[e].first == column; ++e) v += row[e].second;
+      if (v != 0.0) f(ci, column, v);
     }
   });
 }

@@ -1,6 +1,7 @@
 #pragma once
 //! Private: what every back-end does to b and p before it solves on the fluid cells only.
 #include <fluid/pressure/cell_operator.h>
+#include <fluid/pressure/null_space.h>
 #include <fluid/pressure/pressure_solver.h>
 
 #include "cell_kernels.h"
@@ -82,6 +83,30 @@ void measure_residual(const CellOperator<dim>& op, const std::vector<double>& b,
   // A factor 10 above the target covers the drift between a solver's own residual and ours.
   const double target = std::max(control.relative_tolerance * std::sqrt(b2), control.absolute_tolerance);
   result.converged = std::isfinite(r2) && result.absolute_residual <= 10.0 * target;
+}
+
+//! `op` with p = 0 in one pivot cell per null vector of null_space.h (the cells made empty), so
+//! that its matrix on the fluid cells is nonsingular for back-ends whose coarse levels cannot
+//! cope with a singular system (hypre: BoomerAMG-PCG stalled near 1e-7 on the periodic box).
+//! For b orthogonal to the null vectors the pivot rows then hold as well: A p = b on every cell.
+//! The pivots come from Gaussian elimination with partial pivoting on the basis, so the basis
+//! restricted to them is nonsingular.
+template <int dim>
+CellOperator<dim> pin_null_space(const CellOperator<dim>& op) {
+  CellOperator<dim> pinned = op;
+  std::vector<std::vector<double>> basis = null_space_basis(op);
+  for (std::size_t j = 0; j < basis.size(); ++j) {
+    const auto& q = basis[j];
+    std::size_t pivot = 0;
+    for (std::size_t c = 1; c < q.size(); ++c)
+      if (std::abs(q[c]) > std::abs(q[pivot])) pivot = c;
+    pinned.type[pivot] = CellType::empty;
+    for (std::size_t l = j + 1; l < basis.size(); ++l) {
+      const double factor = basis[l][pivot] / q[pivot];
+      for (std::size_t c = 0; c < q.size(); ++c) basis[l][c] -= factor * q[c];
+    }
+  }
+  return pinned;
 }
 
 }  // namespace fluid::detail

@@ -1,5 +1,6 @@
 // hypre IJ BoomerAMG-PCG back-end (see hypre_boomeramg.h). Rows are the fluid cells in
-// ascending cell order, filled from CellOperator::for_each_entry.
+// ascending cell order, filled from CellOperator::for_each_entry, less one pivot cell per null
+// vector of a singular operator (detail::pin_null_space), where p = 0.
 #include <fluid/pressure/hypre_boomeramg.h>
 
 #include "fluid_cells.h"
@@ -22,8 +23,9 @@ SolveResult HypreBoomerAmgSolver<dim>::solve(const CellOperator<dim>& op, const 
   std::vector<double> b;
   SolveResult result;
   if (detail::begin_solve(op, b_in, p, b, result)) return result;
+  const CellOperator<dim> pinned = detail::pin_null_space(op);
   std::vector<std::int64_t> compact, cell_of;
-  const std::int64_t n = detail::number_fluid_cells(op, compact, cell_of);
+  const std::int64_t n = detail::number_fluid_cells(pinned, compact, cell_of);
 
   HYPRE_IJMatrix A;
   HYPRE_IJMatrixCreate(MPI_COMM_WORLD, 0, static_cast<HYPRE_BigInt>(n - 1), 0, static_cast<HYPRE_BigInt>(n - 1), &A);
@@ -39,7 +41,7 @@ SolveResult HypreBoomerAmgSolver<dim>::solve(const CellOperator<dim>& op, const 
     columns.clear();
     values.clear();
   };
-  op.for_each_entry([&](std::int64_t row, std::int64_t col, double v) {
+  pinned.for_each_entry([&](std::int64_t row, std::int64_t col, double v) {
     if (compact[row] != current) {
       flush();
       current = compact[row];
@@ -95,6 +97,7 @@ SolveResult HypreBoomerAmgSolver<dim>::solve(const CellOperator<dim>& op, const 
   HYPRE_PCGGetNumIterations(solver, &iterations);
   result.iterations = static_cast<int>(iterations);
   HYPRE_IJVectorGetValues(hx, static_cast<HYPRE_Int>(n), rows.data(), x_values.data());
+  for (std::int64_t c = 0; c < pinned.cell_count(); ++c) p[c] = 0.0;  // the pivots: p = 0
   for (std::int64_t j = 0; j < n; ++j) p[cell_of[j]] = x_values[j];
   HYPRE_BoomerAMGDestroy(amg);
   HYPRE_ParCSRPCGDestroy(solver);

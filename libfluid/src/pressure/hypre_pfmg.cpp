@@ -1,5 +1,9 @@
 // hypre Struct PFMG-PCG back-end (see hypre_pfmg.h). The matrix rows are filled from
-// CellOperator::for_each_entry; the stencil offset of an entry is the cell offset col - row.
+// CellOperator::for_each_entry; the stencil offset of an entry is the cell offset col - row,
+// taken modulo the period on periodic axes (HYPRE_StructGridSetPeriodic wraps the stencil).
+// PFMG-PCG handles the singular periodic box in 2D as it is (pinning null-space pivots, as
+// BoomerAMG does, raised its iterations from 38 to 49); it breaks down on the 3D NodeCell
+// periodic box, whose null space is larger (multigrid.h), which docs/user_guide.md states.
 #include <fluid/pressure/hypre_pfmg.h>
 
 #include "fluid_cells.h"
@@ -64,7 +68,10 @@ SolveResult HyprePfmgSolver<dim>::solve(const CellOperator<dim>& op, const std::
   for (std::int64_t c = 0; c < n; ++c)
     if (op.type[c] != CellType::fluid) values[c * entries + diagonal] = 1.0;
   op.for_each_entry([&](std::int64_t row, std::int64_t col, double v) {
-    values[row * entries + stencil_entry(coordinates(col) - coordinates(row))] = v;
+    IVec<dim> o = coordinates(col) - coordinates(row);
+    for (int a = 0; a < dim; ++a)  // a wrapped neighbour across a periodic face
+      o[a] += o[a] > 1 ? -op.cells[a] : o[a] < -1 ? op.cells[a] : 0;
+    values[row * entries + stencil_entry(o)] = v;
   });
 
   std::array<HYPRE_Int, dim> lower{}, upper{};
@@ -72,6 +79,9 @@ SolveResult HyprePfmgSolver<dim>::solve(const CellOperator<dim>& op, const std::
   HYPRE_StructGrid grid;
   HYPRE_StructGridCreate(MPI_COMM_WORLD, dim, &grid);
   HYPRE_StructGridSetExtents(grid, lower.data(), upper.data());
+  std::array<HYPRE_Int, dim> period{};  // 0: not periodic
+  for (int a = 0; a < dim; ++a) period[a] = op.periodic[a] ? op.cells[a] : 0;
+  HYPRE_StructGridSetPeriodic(grid, period.data());
   HYPRE_StructGridAssemble(grid);
   HYPRE_StructStencil stencil;
   HYPRE_StructStencilCreate(dim, entries, &stencil);

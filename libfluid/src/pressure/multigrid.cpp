@@ -15,15 +15,15 @@ namespace fluid {
 namespace {
 
 //! Per axis, the two coarse cells a fine cell interpolates from, with weights 3/4 and 1/4;
-//! the 1/4 neighbour is clamped into the box (constant extrapolation).
+//! the 1/4 neighbour wraps on a periodic axis and is mirrored at a box face otherwise.
 struct AxisWeights {
   std::array<int, 2> coarse;
   std::array<double, 2> weight;
 };
-inline AxisWeights axis_weights(int i, int coarse_cells, bool dirichlet) {
+inline AxisWeights axis_weights(int i, int coarse_cells, bool dirichlet, bool periodic) {
   const int near = i >> 1;
-  const int far = near + ((i & 1) ? 1 : -1);
-  if (far >= 0 && far < coarse_cells) return {{near, far}, {0.75, 0.25}};
+  const int far = detail::wrap(near + ((i & 1) ? 1 : -1), coarse_cells, periodic);
+  if (far >= 0) return {{near, far}, {0.75, 0.25}};
   return {{near, near}, {0.75, dirichlet ? -0.25 : 0.25}};
 }
 
@@ -32,7 +32,7 @@ inline AxisWeights axis_weights(int i, int coarse_cells, bool dirichlet) {
 //! the box sizes of in / out, which differ only along a.
 template <int dim>
 void transfer_axis(const std::vector<double>& in, const IVec<dim>& in_extent, std::vector<double>& out,
-                   const IVec<dim>& out_extent, int a, bool prolong, bool dirichlet) {
+                   const IVec<dim>& out_extent, int a, bool prolong, bool dirichlet, bool periodic) {
   std::int64_t inner = 1, outer = 1;
   for (int d = 0; d < a; ++d) inner *= in_extent[d];
   for (int d = a + 1; d < dim; ++d) outer *= in_extent[d];
@@ -41,7 +41,7 @@ void transfer_axis(const std::vector<double>& in, const IVec<dim>& in_extent, st
   out.assign(static_cast<std::size_t>(out_extent.template cast<std::int64_t>().prod()), 0.0);
   for (std::int64_t o = 0; o < outer; ++o)
     for (int i = 0; i < n_fine; ++i) {
-      const AxisWeights w = axis_weights(i, n_coarse, dirichlet);
+      const AxisWeights w = axis_weights(i, n_coarse, dirichlet, periodic);
       const std::int64_t fine = (o * n_fine + i) * inner;
       const std::int64_t near = (o * n_coarse + w.coarse[0]) * inner, far = (o * n_coarse + w.coarse[1]) * inner;
       if (prolong) {
@@ -59,6 +59,7 @@ template <int dim>
 CellOperator<dim> coarsen(const CellOperator<dim>& fine) {
   CellOperator<dim> coarse;
   coarse.kind = fine.kind;
+  coarse.periodic = fine.periodic;
   coarse.cells = (fine.cells.array() + 1) / 2;
   coarse.dx = 2.0 * fine.dx;
   coarse.type.assign(static_cast<std::size_t>(coarse.cell_count()), CellType::empty);
@@ -72,12 +73,13 @@ CellOperator<dim> coarsen(const CellOperator<dim>& fine) {
   }
   if (fine.kind == CellOperator<dim>::Kind::node_cell) {
     coarse.beta.assign(static_cast<std::size_t>(coarse.node_count()), 0.0);
+    const IVec<dim> extent = coarse.node_extent();
     IVec<dim> n = IVec<dim>::Zero();
     for (std::int64_t ni = 0; ni < coarse.node_count(); ++ni) {
       const IVec<dim> fine_node = (2 * n).cwiseMin(fine.cells);
       coarse.beta[ni] = fine.beta[fine.node_index(fine_node)];
       for (int a = 0; a < dim; ++a) {
-        if (++n[a] <= coarse.cells[a]) break;
+        if (++n[a] < extent[a]) break;
         n[a] = 0;
       }
     }
@@ -118,12 +120,23 @@ double estimate_lambda_max(const CellOperator<dim>& op, const std::vector<double
 template <int dim>
 Multigrid<dim>::Multigrid(const CellOperator<dim>& fine, const Options& options) : fine_(fine), options_(options) {
   mpm::verify<mpm::InputError>(options.smoothing_sweeps >= 1, "Multigrid: smoothing_sweeps must be >= 1");
+  for (int a = 0; a < dim; ++a)
+    mpm::verify<mpm::InputError>(!fine.periodic[a] || fine.kind == CellOperator<dim>::Kind::node_cell ||
+                                     fine.cells[a] % 2 == 0,
+                                 "Multigrid: the red-black smoother of a periodic Poisson operator needs an even "
+                                 "cell count on every periodic axis");
   levels_.emplace_back();
   auto fluid_cells = [](const CellOperator<dim>& o) {
     return std::count(o.type.begin(), o.type.end(), CellType::fluid);
   };
-  while (fluid_cells(op(level_count() - 1)) > options.max_coarse_cells &&
-         (op(level_count() - 1).cells.array() > 1).any()) {
+  // A periodic axis halves only from an even count >= 4 (the wrap must pair fine cells
+  // 2j, 2j + 1 into coarse cell j, and two coarse cells keep the red-black colouring valid).
+  auto can_coarsen = [](const CellOperator<dim>& o) {
+    bool ok = (o.cells.array() > 1).any();
+    for (int a = 0; a < dim; ++a) ok = ok && (!o.periodic[a] || (o.cells[a] % 2 == 0 && o.cells[a] >= 4));
+    return ok;
+  };
+  while (fluid_cells(op(level_count() - 1)) > options.max_coarse_cells && can_coarsen(op(level_count() - 1))) {
     Level next;
     next.op = coarsen(op(level_count() - 1));
     levels_.push_back(std::move(next));
@@ -195,6 +208,24 @@ void Multigrid<dim>::gauss_seidel(int l, int colour) {
   const CellType* type = o.type.data();
   double* x = level.x.data();
   const double* b = level.b.data();
+  if (o.is_periodic()) {
+    // Even counts on periodic axes (checked at construction): the wrapped neighbours of a
+    // cell still have the other colour.
+    detail::parallel_for_lines<dim>(o.cells, [&](IVec<dim> c, std::int64_t base) {
+      for (c[0] = (colour + c.sum()) % 2; c[0] < nx; c[0] += 2) {  // c[0] = 0 on entry
+        const std::int64_t ci = base + c[0];
+        if (type[ci] != CellType::fluid) continue;
+        double sum = h2 * b[ci];
+        for (int a = 0; a < dim; ++a)
+          for (int side : {-1, 1}) {
+            const std::int64_t nb = detail::shifted_index<dim>(c, side * IVec<dim>::Unit(a), o.cells, o.periodic);
+            if (nb >= 0 && type[nb] == CellType::fluid) sum += x[nb];
+          }
+        x[ci] = sum / (2.0 * dim);
+      }
+    });
+    return;
+  }
   detail::parallel_for_lines<dim>(o.cells, [&](const IVec<dim>& c, std::int64_t base) {
     std::array<bool, dim> lower{}, upper{};
     for (int a = 1; a < dim; ++a) {
@@ -230,7 +261,7 @@ void Multigrid<dim>::restrict_residual(int l) {
   for (int a = 0; a < dim; ++a) {
     IVec<dim> next = extent;
     next[a] = c.cells[a];
-    transfer_axis<dim>(in, extent, out, next, a, false, c.kind == CellOperator<dim>::Kind::poisson);
+    transfer_axis<dim>(in, extent, out, next, a, false, c.kind == CellOperator<dim>::Kind::poisson, c.periodic[a]);
     in.swap(out);
     extent = next;
   }
@@ -249,7 +280,7 @@ void Multigrid<dim>::prolong_add(int coarse_level) {
   for (int a = 0; a < dim; ++a) {
     IVec<dim> next = extent;
     next[a] = f.cells[a];
-    transfer_axis<dim>(in, extent, out, next, a, true, f.kind == CellOperator<dim>::Kind::poisson);
+    transfer_axis<dim>(in, extent, out, next, a, true, f.kind == CellOperator<dim>::Kind::poisson, f.periodic[a]);
     in.swap(out);
     extent = next;
   }

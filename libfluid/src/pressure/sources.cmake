@@ -9,6 +9,7 @@ list(APPEND FLUID_SOURCES
   src/pressure/hypre_runtime.cpp
   src/pressure/hypre_pfmg.cpp
   src/pressure/hypre_boomeramg.cpp
+  src/pressure/null_space.cpp
   src/pressure/pressure_solver.cpp
   src/pressure/model_problems.cpp
 )

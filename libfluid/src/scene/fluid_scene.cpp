@@ -5,7 +5,10 @@
 #include <mpm/core/stages/grid_boundary.h>
 #include <mpm/core/stages/grid_to_particles.h>
 #include <mpm/core/stages/grid_velocity_update.h>
+#include <mpm/core/stages/particle_sink.h>
+#include <mpm/core/stages/particle_source.h>
 #include <mpm/core/stages/particles_to_grid.h>
+#include <mpm/core/stages/periodic_boundary.h>
 #include <mpm/core/stages/sort_particles.h>
 #include <mpm/core/stages/time_step_control.h>
 #include <mpm/geometry/body_config.h>
@@ -44,7 +47,7 @@ template <int dim>
 FluidScene<dim> make_fluid_scene(mpm::SceneSettings<dim> settings, FluidMaterial fluid,
                                  stages::PressureSettings pressure, mpm::geometry::ColliderSet<dim> colliders) {
   mpm::MpmState<dim> state = mpm::initial_state(settings);
-  return {std::move(settings), fluid, std::move(pressure), std::move(colliders), std::move(state)};
+  return {std::move(settings), fluid, std::move(pressure), std::move(colliders), std::move(state), {}};
 }
 
 
@@ -70,8 +73,11 @@ FluidScene<dim> load_fluid_scene(const Config& scene) {
   mpm::SceneSettings<dim> settings = mpm::parse_scene_settings<dim>(scene);
   auto colliders = mpm::geometry::parse_colliders<dim>(scene, settings.domain_lo, settings.domain_hi,
                                                         mpm::wall_layer(settings.kernel, settings.dx));
+  mpm::geometry::FlowBoundaries<dim> flow = mpm::geometry::parse_flow_boundaries<dim>(scene, settings);
+  mpm::geometry::add_flow_boundaries(flow, colliders);
   FluidScene<dim> s = make_fluid_scene(std::move(settings), parse_fluid_material(scene.child("fluid")),
                                        parse_pressure_settings(scene), std::move(colliders));
+  s.flow = std::move(flow);
   seed_fluid_bodies(s, scene);
   return s;
 }
@@ -91,15 +97,25 @@ mpm::Pipeline<mpm::MpmState<dim>> make_fluid_pipeline(const FluidScene<dim>& sce
   mpm::Pipeline<mpm::MpmState<dim>> p({"particle.x", "particle.v", "particle.C", "particle.mass",
                                        "particle.volume0", "particle.material"});
   p.add(std::make_unique<ms::TimeStepControl<dim>>(dt));
+  // Outflow, then inflow, before the sort that rebuilds the buckets.
+  if (auto regions = mpm::geometry::flow_sink_regions(scene.flow, scene.settings); !regions.empty())
+    p.add(std::make_unique<ms::ParticleSink<dim>>(std::move(regions)));
+  if (scene.flow.inflow)
+    p.add(std::make_unique<ms::ParticleSource<dim>>(
+        mpm::geometry::inflow_source(*scene.flow.inflow, scene.settings, scene.fluid.density)));
   p.add(std::make_unique<ms::SortParticles<dim>>());
   p.add(std::make_unique<ms::ParticlesToGrid<dim>>());
+  const bool periodic = scene.state.grid.is_periodic();
+  if (periodic) p.add(std::make_unique<ms::PeriodicFold<dim>>());
   p.add(std::make_unique<ms::GridVelocityUpdate<dim>>(false));
   if (scene.fluid.viscosity > 0.0)
     p.add(std::make_unique<stages::ImplicitViscosity<dim>>(scene.fluid.viscosity / scene.fluid.density,
                                                            scene.colliders, SolveControl{1e-10, 0.0, 1000}));
   p.add(std::make_unique<ms::GridBoundary<dim>>(scene.colliders));
   p.add(std::make_unique<stages::PressureProjection<dim>>(scene.fluid.density, scene.colliders, scene.pressure));
+  if (periodic) p.add(std::make_unique<ms::PeriodicFill<dim>>());
   p.add(std::make_unique<ms::GridToParticles<dim>>());
+  if (periodic) p.add(std::make_unique<ms::PeriodicWrap<dim>>());
   return p;
 }
 
@@ -113,6 +129,19 @@ void add_pressure_columns(mpm::Runner<dim>& runner, mpm::Pipeline<mpm::MpmState<
                     [projection](const mpm::MpmState<dim>&) { return projection->last_result().relative_residual; });
 }
 
+template <int dim>
+void add_flow_columns(mpm::Runner<dim>& runner, mpm::Pipeline<mpm::MpmState<dim>>& pipeline) {
+  const auto* source = pipeline.template find<mpm::stages::ParticleSource<dim>>();
+  const auto* sink = pipeline.template find<mpm::stages::ParticleSink<dim>>();
+  runner.add_column("inflow_mass", [source](const mpm::MpmState<dim>&) { return source ? source->emitted_mass() : 0.0; });
+  runner.add_column("outflow_mass", [sink](const mpm::MpmState<dim>&) { return sink ? sink->removed_mass() : 0.0; });
+  runner.add_column("fluid_mass", [](const mpm::MpmState<dim>& s) {
+    double m = 0.0;
+    for (const double mp : s.particles.mass) m += mp;
+    return m;
+  });
+}
+
 #define FLUID_SCENE(dim)                                                                                   \
   template FluidScene<dim> make_fluid_scene(mpm::SceneSettings<dim>, FluidMaterial, stages::PressureSettings, \
                                             mpm::geometry::ColliderSet<dim>);                              \
@@ -121,7 +150,8 @@ void add_pressure_columns(mpm::Runner<dim>& runner, mpm::Pipeline<mpm::MpmState<
   template void seed_fluid_bodies(FluidScene<dim>&, const Config&);                                        \
   template FluidScene<dim> load_fluid_scene<dim>(const Config&);                                           \
   template mpm::Pipeline<mpm::MpmState<dim>> make_fluid_pipeline(const FluidScene<dim>&);                  \
-  template void add_pressure_columns(mpm::Runner<dim>&, mpm::Pipeline<mpm::MpmState<dim>>&);
+  template void add_pressure_columns(mpm::Runner<dim>&, mpm::Pipeline<mpm::MpmState<dim>>&);                \
+  template void add_flow_columns(mpm::Runner<dim>&, mpm::Pipeline<mpm::MpmState<dim>>&);
 FLUID_SCENE(2)
 FLUID_SCENE(3)
 

@@ -37,8 +37,11 @@ void ImplicitViscosity<dim>::run(mpm::MpmState<dim>& s) {
   constexpr int nb = 2 * dim;
   std::vector<mpm::Index> unknown(g.node_storage(), -1);
   std::vector<std::size_t> node;
+  // On a periodic grid the unknowns are the canonical nodes and neighbours wrap (the ghosts
+  // get the result from stage periodic_fill).
+  const bool periodic = g.is_periodic();
   for (std::size_t k = 0; k < g.node_storage(); ++k)
-    if (g.mass[k] > 0.0 && !fixed[k]) {
+    if (g.mass[k] > 0.0 && !fixed[k] && (!periodic || g.periodic_image(g.node_coord(k)) == g.node_coord(k))) {
       unknown[k] = static_cast<mpm::Index>(node.size());
       node.push_back(k);
     }
@@ -54,6 +57,7 @@ void ImplicitViscosity<dim>::run(mpm::MpmState<dim>& s) {
       neighbour[u][j] = -1;
       IVec<dim> other = coord;
       other[j / 2] += j % 2 ? 1 : -1;
+      other = g.periodic_image(other);
       const bool inside = (other.array() >= 0).all() && (other.array() < g.node_counts().array()).all();
       const mpm::Index m = inside ? g.node_index(other) : -1;
       if (m < 0 || g.mass[m] <= 0.0) continue;

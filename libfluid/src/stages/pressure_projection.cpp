@@ -4,7 +4,9 @@
 // the grid. In order:
 //   1. fluid cells: c is fluid iff it holds a particle, c = floor((x_p - origin) / dx), and
 //      at least one of its corners is free (below); the operator box is the bounding box of
-//      the cells holding particles (every other cell: p = 0);
+//      the cells holding particles (every other cell: p = 0), and the whole period on a
+//      periodic axis of the grid, where the operator wraps (its nodes are the canonical ones;
+//      stage periodic_fill hands their velocities to the ghosts);
 //   2. per node i of the box: u_i = n_w v_i^* + n_s v_{s,i}^*  (n_w = 1, n_s = 0 single phase),
 //      beta_i = dt (n_w / rho_w + n_s / rho_s) for nodes with mass that no obstacle prescribes,
 //      beta_i = 0 otherwise (prescribed nodes keep their boundary velocity: wall normals are
@@ -12,21 +14,22 @@
 //   3. solve D B D^T p = -D u (cell_operator.h), initial guess the previous pressure, after
 //      removing from b its components along the null vectors of A in the span of the
 //      constant and the checkerboards prod_{a in S} (-1)^{c_a}, |S| >= 2 (the Q1-P0 modes),
-//      which exist in regions closed by walls (a full cavity). A moving lid drives the
-//      checkerboard, so without this b is not in the range of A;
+//      which exist in regions closed by walls (a full cavity) or periodic axes. A moving lid
+//      drives the checkerboard, so without this b is not in the range of A. The same
+//      components are removed from p after the solve: this fixes the pressure level
+//      (null_space.h; zero mean over a fully periodic box). Besides the relative tolerance the
+//      solve stops at the round-off level of D u (1e-14 sqrt(cells) 2 dim max|u| / dx);
 //   4. v_i <- v_i^* + (dt / rho_w) (D^T p)_i = v_i^* - (dt / rho_w) (G p)_i, so that
 //      D (n_w v_w + n_s v_s) = 0 in every fluid cell once the coupling applies the solid's part.
 // A solve that misses its tolerance warns or stops (pressure.on_failure) with iterations and
 // residual; it is never silent.
+#include <fluid/pressure/null_space.h>
 #include <fluid/stages/prescribed_nodes.h>
 #include <fluid/stages/pressure_projection.h>
 
 #include <mpm/core/error.h>
 
-#include <Eigen/Eigenvalues>
-
 #include <algorithm>
-#include <bit>
 #include <cmath>
 #include <iostream>
 #include <sstream>
@@ -42,12 +45,13 @@ PressureProjection<dim>::PressureProjection(double density, mpm::geometry::Colli
       solver_(make_pressure_solver<dim>(settings_.solver)) {}
 
 namespace {
+//! Grid cell holding x; on a periodic axis the canonical cell (in [periodic_lo, + period)).
 template <int dim>
 IVec<dim> cell_of(const mpm::SparseGrid<dim>& g, const Vec<dim>& x) {
   IVec<dim> c;
   for (int a = 0; a < dim; ++a)
     c[a] = std::clamp(static_cast<int>(std::floor((x[a] - g.origin()[a]) / g.dx())), 0, g.node_counts()[a] - 2);
-  return c;
+  return g.periodic_image(c);
 }
 
 //! Calls f(local coordinate, local index) for every point of a box with `n` points per axis.
@@ -64,64 +68,6 @@ void for_each_point(const IVec<dim>& n, Fn&& f) {
   }
 }
 
-//! b minus its projection on the null space of A within the span V of the constant and the
-//! checkerboards (on the fluid cells): the null vectors V alpha solve (V^T A V) alpha = 0, as A
-//! is positive semi-definite. Combinations matter: one emptied cell of a closed cavity leaves
-//! the constant of the other checkerboard colour in the null space.
-template <int dim>
-void make_consistent(const CellOperator<dim>& op, std::vector<double>& b) {
-  std::vector<std::vector<double>> V;
-  for (int S = 0; S < (1 << dim); ++S) {
-    if (std::popcount(static_cast<unsigned>(S)) == 1) continue;
-    std::vector<double> v(b.size(), 0.0);
-    for_each_point<dim>(op.cells, [&](const IVec<dim>& c, std::int64_t i) {
-      if (op.type[i] != CellType::fluid) return;
-      int parity = 0;
-      for (int a = 0; a < dim; ++a) parity += ((S >> a) & 1) * c[a];
-      v[i] = parity % 2 ? -1.0 : 1.0;
-    });
-    V.push_back(std::move(v));
-  }
-  const int m = static_cast<int>(V.size());
-  auto dot = [](const std::vector<double>& x, const std::vector<double>& y) {
-    double d = 0.0;
-    for (std::size_t i = 0; i < x.size(); ++i) d += x[i] * y[i];
-    return d;
-  };
-  Eigen::MatrixXd G(m, m), N(m, m);  // V^T A V and V^T V
-  std::vector<double> Av;
-  for (int j = 0; j < m; ++j) {
-    op.apply(V[j], Av);
-    for (int i = 0; i < m; ++i) {
-      G(i, j) = dot(V[i], Av);
-      N(i, j) = dot(V[i], V[j]);
-    }
-  }
-  // Generalised eigenproblem G alpha = lambda N alpha (N: the candidates' Gram matrix, SPD
-  // while the fluid cells are not all of one colour; a tiny ridge keeps it so).
-  N += 1e-12 * N.trace() * Eigen::MatrixXd::Identity(m, m);
-  const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eig(G, N);
-  const double largest = eig.eigenvalues().cwiseAbs().maxCoeff();
-  std::vector<std::vector<double>> basis;
-  for (int k = 0; k < m; ++k) {
-    if (std::abs(eig.eigenvalues()[k]) > 1e-10 * largest && largest > 0.0) continue;
-    std::vector<double> v(b.size(), 0.0);
-    for (int j = 0; j < m; ++j)
-      for (std::size_t i = 0; i < v.size(); ++i) v[i] += eig.eigenvectors()(j, k) * V[j][i];
-    for (const auto& q : basis) {
-      const double vq = dot(v, q);
-      for (std::size_t i = 0; i < v.size(); ++i) v[i] -= vq * q[i];
-    }
-    const double norm = std::sqrt(dot(v, v));
-    if (norm <= 1e-8) continue;
-    for (double& x : v) x /= norm;
-    basis.push_back(std::move(v));
-  }
-  for (const auto& q : basis) {
-    const double bq = dot(b, q);
-    for (std::size_t i = 0; i < b.size(); ++i) b[i] -= bq * q[i];
-  }
-}
 }  // namespace
 
 template <int dim>
@@ -130,12 +76,18 @@ void PressureProjection<dim>::run(mpm::MpmState<dim>& s) {
   const auto& X = s.particles.x;
   if (X.empty()) return;
 
-  // 1. Fluid cells and their bounding box.
+  // 1. Fluid cells and their bounding box (the whole period along periodic axes).
   IVec<dim> lo = cell_of(g, X[0]), hi = lo;
   for (const Vec<dim>& x : X) {
     const IVec<dim> c = cell_of(g, x);
     lo = lo.cwiseMin(c);
     hi = hi.cwiseMax(c);
+  }
+  for (int a = 0; a < dim; ++a) {
+    op_.periodic[a] = g.period()[a] > 0;
+    if (!op_.periodic[a]) continue;
+    lo[a] = g.periodic_lo()[a];
+    hi[a] = lo[a] + g.period()[a] - 1;
   }
   const IVec<dim> old_lo = box_lo_, old_cells = op_.cells;
   std::vector<double> old_p;
@@ -154,7 +106,7 @@ void PressureProjection<dim>::run(mpm::MpmState<dim>& s) {
   u_.assign(static_cast<std::size_t>(nodes), Vec<dim>::Zero());
   std::vector<mpm::Index> storage(static_cast<std::size_t>(nodes), -1);
   const double fluid_beta = s.dt / density_;
-  for_each_point<dim>(op_.cells + IVec<dim>::Ones(), [&](const IVec<dim>& n, std::int64_t i) {
+  for_each_point<dim>(op_.node_extent(), [&](const IVec<dim>& n, std::int64_t i) {
     const mpm::Index k = g.node_index(lo + n);
     storage[i] = k;
     if (k < 0) return;
@@ -179,7 +131,8 @@ void PressureProjection<dim>::run(mpm::MpmState<dim>& s) {
 
   // 3. Solve, starting from the previous pressure where the boxes overlap.
   op_.divergence(u_, b_);
-  make_consistent(op_, b_);
+  const std::vector<std::vector<double>> null_space = null_space_basis(op_);
+  remove_components(null_space, b_);
   p_.assign(static_cast<std::size_t>(op_.cell_count()), 0.0);
   for_each_point<dim>(op_.cells, [&](const IVec<dim>& c, std::int64_t i) {
     const IVec<dim> old = c + lo - old_lo;
@@ -188,7 +141,16 @@ void PressureProjection<dim>::run(mpm::MpmState<dim>& s) {
     for (int a = dim - 1; a >= 0; --a) j = j * old_cells[a] + old[a];
     p_[i] = old_p[j];
   });
-  result_ = solver_->solve(op_, b_, p_, settings_.control);
+  // A discretely divergence-free u leaves b at round-off, which no relative tolerance can reach
+  // (and whose parts along null vectors outside the candidates, as in 3D periodic boxes, are
+  // inconsistent): the solve also stops at 1e-14 of the scale of the terms of D u.
+  double speed = 0.0;
+  for (const Vec<dim>& u : u_) speed = std::max(speed, u.cwiseAbs().maxCoeff());
+  SolveControl control = settings_.control;
+  control.absolute_tolerance = std::max(
+      control.absolute_tolerance, 1e-14 * std::sqrt(static_cast<double>(op_.cell_count())) * 2.0 * dim * speed / g.dx());
+  result_ = solver_->solve(op_, b_, p_, control);
+  remove_components(null_space, p_);
   if (!result_.converged) {
     std::ostringstream why;
     why << "stage '" << name() << "': pressure solver '" << solver_->name() << "' did not converge in "

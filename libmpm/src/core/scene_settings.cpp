@@ -25,7 +25,8 @@ template <int dim>
 OutsideDomain first_outside_domain(const SceneSettings<dim>& settings, const std::vector<Vec<dim>>& positions) {
   for (const Vec<dim>& x : positions)
     for (int a = 0; a < dim; ++a)
-      if (!(x[a] >= settings.domain_lo[a] && x[a] <= settings.domain_hi[a]))
+      if (!(x[a] >= settings.domain_lo[a] &&
+            (settings.periodic[a] ? x[a] < settings.domain_hi[a] : x[a] <= settings.domain_hi[a])))
         return {"a particle at " + point_text<dim>(x) + " lies outside the domain " +
                     point_text<dim>(settings.domain_lo) + " - " + point_text<dim>(settings.domain_hi),
                 x[a] < settings.domain_lo[a]};
@@ -43,6 +44,37 @@ Kernel parse_kernel(const Config& scene) {
   return UGimp{0.5 * grid->number("particle_size", 1.0, Range{0.0, 1.0, true, false})};
 }
 
+namespace {
+//! The optional `periodic` flags; each periodic axis must hold whole cells and no wall faces.
+template <int dim>
+std::array<bool, dim> parse_periodic(const Config& scene, const SceneSettings<dim>& s) {
+  std::array<bool, dim> periodic{};
+  const std::vector<std::string> flags = scene.texts("periodic");
+  if (flags.empty()) return periodic;
+  if (flags.size() != static_cast<std::size_t>(dim))
+    scene.fail("periodic", "needs one flag per axis (" + std::to_string(dim) + "), got " + std::to_string(flags.size()));
+  const std::optional<Config> walls = scene.optional_child("walls");
+  for (int a = 0; a < dim; ++a) {
+    if (flags[a] != "true" && flags[a] != "false")
+      scene.fail("periodic", "entry " + std::to_string(a) + " is '" + flags[a] + "' (accepted: true, false)");
+    periodic[a] = flags[a] == "true";
+    if (!periodic[a]) continue;
+    const double cells = (s.domain_hi[a] - s.domain_lo[a]) / s.dx;
+    if (std::abs(cells - std::round(cells)) > 1e-9 * cells || std::round(cells) < 4)
+      scene.fail("periodic", std::string("axis ") + "xyz"[a] + " is periodic, so hi - lo must be a whole number (>= 4) of cells dx; it is " +
+                                 std::to_string(cells) + " cells");
+    if (!walls) continue;
+    const std::string contact = walls->text("contact", "separate");  // parse_contact's default
+    for (const char* side : {"_min", "_max"}) {
+      const std::string key = std::string(1, "xyz"[a]) + side;
+      if (walls->text(key, contact) != "open")
+        walls->fail(key, std::string("axis ") + "xyz"[a] + " is periodic: it has no walls (set " + key + ": open)");
+    }
+  }
+  return periodic;
+}
+}  // namespace
+
 template <int dim>
 SceneSettings<dim> parse_scene_settings(const Config& scene, const std::optional<DerivedDomain<dim>>& derived) {
   SceneSettings<dim> s;
@@ -58,6 +90,7 @@ SceneSettings<dim> parse_scene_settings(const Config& scene, const std::optional
       if (s.domain_hi[a] <= s.domain_lo[a]) domain.fail("hi", "must exceed domain.lo on every axis");
     s.dx = scene.child("grid").number("dx", Range::positive());
   }
+  s.periodic = parse_periodic<dim>(scene, s);
   s.kernel = parse_kernel(scene);
 
   if (auto transfer = scene.optional_child("transfer")) {

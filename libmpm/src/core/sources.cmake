@@ -14,4 +14,7 @@ list(APPEND MPM_CORE_SOURCES
   src/core/stages/grid_boundary.cpp
   src/core/stages/grid_to_particles.cpp
   src/core/stages/time_step_control.cpp
+  src/core/stages/particle_source.cpp
+  src/core/stages/particle_sink.cpp
+  src/core/stages/periodic_boundary.cpp
 )

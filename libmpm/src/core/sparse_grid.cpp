@@ -1,19 +1,29 @@
 #include <mpm/core/error.h>
 #include <mpm/core/sparse_grid.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
 namespace mpm {
 
 template <int dim>
-SparseGrid<dim>::SparseGrid(const Vec<dim>& lo, const Vec<dim>& hi, double dx)
+SparseGrid<dim>::SparseGrid(const Vec<dim>& lo, const Vec<dim>& hi, double dx, const std::array<bool, dim>& periodic)
     : dx_(dx), origin_(lo) {
   verify<InputError>(dx > 0.0 && std::isfinite(dx), "grid spacing dx must be > 0");
   double blocks = 1.0;
   for (int a = 0; a < dim; ++a) {
     verify<InputError>(hi[a] > lo[a], "grid domain must have hi > lo on every axis");
     node_counts_[a] = static_cast<int>(std::ceil((hi[a] - lo[a]) / dx - 1e-9)) + 1;
+    if (periodic[a]) {
+      const double cells = (hi[a] - lo[a]) / dx;
+      period_[a] = static_cast<int>(std::lround(cells));
+      verify<InputError>(period_[a] >= 2 && std::abs(cells - period_[a]) <= 1e-9 * cells,
+                         "a periodic axis needs a whole number (>= 2) of cells: (hi - lo) / dx = " +
+                             std::to_string(cells));
+      origin_[a] -= periodic_margin * dx;
+      node_counts_[a] = period_[a] + 1 + 2 * periodic_margin;
+    }
     block_counts_[a] = (node_counts_[a] + block_size - 1) / block_size + 1;
     blocks *= block_counts_[a];
   }
@@ -26,6 +36,24 @@ template <int dim>
 void SparseGrid<dim>::activate(const std::vector<int>& block_ids) {
   for (int id : active_) slot_[id] = -1;
   active_ = block_ids;
+  if (is_periodic()) {
+    const IVec<dim> lo = periodic_lo(), hi = lo + period_;
+    for (int id : block_ids) {
+      const IVec<dim> first = block_coord(id) * block_size;
+      const IVec<dim> last = first + IVec<dim>::Constant(block_size - 1);
+      bool ghost = false;
+      for (int a = 0; a < dim; ++a) ghost = ghost || (period_[a] > 0 && (first[a] < lo[a] || last[a] >= hi[a]));
+      if (!ghost) continue;
+      for (int local = 0; local < nodes_per_block; ++local) {
+        IVec<dim> node;
+        for (int a = 0; a < dim; ++a) node[a] = first[a] + ((local >> (a * block_bits)) & (block_size - 1));
+        const IVec<dim> image = periodic_image(node);
+        if (image != node) active_.push_back(block_id(image));
+      }
+    }
+    std::sort(active_.begin(), active_.end());
+    active_.erase(std::unique(active_.begin(), active_.end()), active_.end());
+  }
   for (std::size_t s = 0; s < active_.size(); ++s) slot_[active_[s]] = static_cast<int>(s);
   const std::size_t n = active_.size() * nodes_per_block;
   mass.assign(n, 0.0);

@@ -1,6 +1,6 @@
 //! Grid-node collision treatment (Gao et al. 2017, sec. 3.2 step 4), for a node x_i with
 //! updated velocity v_i inside an obstacle moving at v_c:
-//!   phi(x_i, t) = phi0(x_i - v_c t) <= 0
+//!   phi(x_i, t) = phi0(x_i - v_c t) <= 0   (phi0(x_i) for a fixed shape, Motion::fixed)
 //!   v_i <- v_c + contact(v_i - v_c, n(x_i, t))      (contact.h: sticky, slip, separate + Coulomb)
 #include <mpm/geometry/collider.h>
 
@@ -23,20 +23,25 @@ void verify_friction(const Contact& contact) {
 }  // namespace
 
 template <int dim>
-Collider<dim>::Collider(Shape<dim> shape, const Contact& contact, const Vec<dim>& velocity)
-    : shape_(std::move(shape)), contact_(contact), velocity_(velocity) {
+Collider<dim>::Collider(Shape<dim> shape, const Contact& contact, const Vec<dim>& velocity, Motion motion)
+    : shape_(std::move(shape)), contact_(contact), velocity_(velocity), motion_(motion) {
   verify_friction(contact);
 }
 
 template <int dim>
+Vec<dim> Collider<dim>::shape_position(const Vec<dim>& x, double t) const {
+  return motion_ == Motion::translating ? Vec<dim>(x - t * velocity_) : x;
+}
+
+template <int dim>
 double Collider<dim>::phi(const Vec<dim>& x, double t) const {
-  const Vec<dim> x0 = x - t * velocity_;
+  const Vec<dim> x0 = shape_position(x, t);
   return std::visit([&](const auto& shape) { return shape.phi(x0); }, shape_);
 }
 
 template <int dim>
 Vec<dim> Collider<dim>::normal(const Vec<dim>& x, double t) const {
-  const Vec<dim> x0 = x - t * velocity_;
+  const Vec<dim> x0 = shape_position(x, t);
   return std::visit([&](const auto& shape) { return shape.normal(x0); }, shape_);
 }
 

@@ -5,6 +5,7 @@ list(APPEND MPM_CORE_SOURCES
   src/geometry/collider_config.cpp
   src/geometry/seeding.cpp
   src/geometry/body_config.cpp
+  src/geometry/flow_boundary_config.cpp
 )
 # OpenVDB is private to mpm_core and confined to level_set_vdb.cpp. Without it, the level-set
 # loaders throw an InputError that says how to configure a build that has them.

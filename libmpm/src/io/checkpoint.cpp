@@ -6,6 +6,7 @@
 #include "channel_sizes.h"
 #include "hdf5_file.h"
 
+#include <sstream>
 #include <utility>
 
 namespace mpm::io {
@@ -28,41 +29,61 @@ double* doubles(std::vector<Matrix>& channel) {
   return channel.empty() ? nullptr : channel.front().data();
 }
 
+//! "x" of the unnamed phase, "fluid/x" of the phase "fluid"; likewise for root attributes.
+std::string dataset(const std::string& phase, const std::string& name) {
+  return phase.empty() ? name : phase + "/" + name;
+}
+std::string attribute(const std::string& phase, const std::string& name) {
+  return phase.empty() ? name : phase + "." + name;
+}
+
 }  // namespace
 
 template <int dim>
-void save_checkpoint(const std::filesystem::path& path, const Particles<dim>& p,
+void save_checkpoint(const std::filesystem::path& path, const std::vector<CheckpointPhase<dim>>& phases,
                      const CheckpointHeader& header) {
-  detail::verify_channel_sizes(p, path);
-  const hsize_t n = p.size(), nf = p.has_deformation() ? n : 0, d = dim, dd = dim * dim;
   AtomicFile out(path);
   {
     using detail::Hdf5File;
     Hdf5File file(out.temp_path(), Hdf5File::Mode::create, path);
-    file.write("x", doubles(p.x), {n, d});
-    file.write("v", doubles(p.v), {n, d});
-    file.write("C", doubles(p.C), {n, dd});
-    file.write("mass", p.mass.data(), {n});
-    file.write("volume0", p.volume0.data(), {n});
-    file.write("material", p.material.data(), {n});
-    file.write("F", doubles(p.F), {nf, dd});
-    file.write("plastic", p.plastic.data(), {nf});
+    for (const auto& [name, particles] : phases) {
+      const Particles<dim>& p = *particles;
+      detail::verify_channel_sizes(p, path);
+      const hsize_t n = p.size(), nf = p.has_deformation() ? n : 0, d = dim, dd = dim * dim;
+      const auto at = [&](const char* channel) { return dataset(name, channel); };
+      file.write(at("x"), doubles(p.x), {n, d});
+      file.write(at("v"), doubles(p.v), {n, d});
+      file.write(at("C"), doubles(p.C), {n, dd});
+      file.write(at("mass"), p.mass.data(), {n});
+      file.write(at("volume0"), p.volume0.data(), {n});
+      file.write(at("material"), p.material.data(), {n});
+      file.write(at("F"), doubles(p.F), {nf, dd});
+      file.write(at("plastic"), p.plastic.data(), {nf});
+      file.write_attribute<std::int32_t>(attribute(name, "deformation"), p.has_deformation());
+    }
     file.write_attribute("format", std::string(kFormat));
     file.write_attribute("version", kVersion);
     file.write_attribute<std::int32_t>("dim", dim);
-    file.write_attribute<std::int32_t>("deformation", p.has_deformation());
     file.write_attribute<std::int32_t>("frame", header.frame);
     file.write_attribute<std::int64_t>("step", header.step);
     file.write_attribute("time", header.time);
     file.write_attribute("dt_previous", header.dt_previous);
     file.write_attribute("scene_digest", header.scene_digest);
+    std::string names;
+    for (const auto& [name, values] : header.stage_data) {
+      verify<InputError>(name.find('\n') == std::string::npos, "checkpoint: stage data name with a newline");
+      file.write("stages/" + name, values.data(), {values.size()});
+      names += (names.empty() ? "" : "\n") + name;
+    }
+    file.write_attribute("stage_data", names);
     file.close();
   }
   out.commit();
 }
 
 template <int dim>
-Particles<dim> load_checkpoint(const std::filesystem::path& path, CheckpointHeader& header) {
+Particles<dim> load_checkpoint(const std::filesystem::path& path, CheckpointHeader& header,
+                               const std::string& phase) {
   using detail::Hdf5File;
   const Hdf5File file(path, Hdf5File::Mode::read);
   const std::string name = "'" + path.string() + "'";
@@ -85,12 +106,25 @@ Particles<dim> load_checkpoint(const std::filesystem::path& path, CheckpointHead
   loaded.time = file.read_attribute<double>("time");
   loaded.dt_previous = file.read_attribute<double>("dt_previous");
   loaded.scene_digest = file.read_string_attribute("scene_digest");
+  if (file.has_attribute("stage_data")) {
+    std::stringstream names(file.read_string_attribute("stage_data"));
+    for (std::string entry; std::getline(names, entry);) {
+      const detail::Shape shape = file.shape("stages/" + entry);
+      if (shape.size() != 1) throw IoError("checkpoint " + name + " is corrupt: stages/" + entry + " is not 1D");
+      std::vector<double> values(shape[0]);
+      file.read("stages/" + entry, values.data(), shape);
+      loaded.stage_data.emplace_back(entry, std::move(values));
+    }
+  }
 
-  const detail::Shape x_shape = file.shape("x");
+  if (!file.has_attribute(attribute(phase, "deformation")))
+    throw InputError("checkpoint " + name + " holds no particle phase '" + phase + "'");
+  const auto at = [&](const char* channel) { return dataset(phase, channel); };
+  const detail::Shape x_shape = file.shape(at("x"));
   if (x_shape.size() != 2)
     throw IoError("checkpoint " + name + " is corrupt: dataset x is not N x " +
                   std::to_string(dim));
-  const bool deformation = file.read_attribute<std::int32_t>("deformation") != 0;
+  const bool deformation = file.read_attribute<std::int32_t>(attribute(phase, "deformation")) != 0;
   const hsize_t n = x_shape[0], nf = deformation ? n : 0, d = dim, dd = dim * dim;
 
   Particles<dim> p;
@@ -104,23 +138,23 @@ Particles<dim> load_checkpoint(const std::filesystem::path& path, CheckpointHead
   p.material.resize(n);
   p.F.resize(nf);
   p.plastic.resize(nf);
-  file.read("x", doubles(p.x), {n, d});
-  file.read("v", doubles(p.v), {n, d});
-  file.read("C", doubles(p.C), {n, dd});
-  file.read("mass", p.mass.data(), {n});
-  file.read("volume0", p.volume0.data(), {n});
-  file.read("material", p.material.data(), {n});
-  file.read("F", doubles(p.F), {nf, dd});
-  file.read("plastic", p.plastic.data(), {nf});
+  file.read(at("x"), doubles(p.x), {n, d});
+  file.read(at("v"), doubles(p.v), {n, d});
+  file.read(at("C"), doubles(p.C), {n, dd});
+  file.read(at("mass"), p.mass.data(), {n});
+  file.read(at("volume0"), p.volume0.data(), {n});
+  file.read(at("material"), p.material.data(), {n});
+  file.read(at("F"), doubles(p.F), {nf, dd});
+  file.read(at("plastic"), p.plastic.data(), {nf});
   header = std::move(loaded);
   return p;
 }
 
-template void save_checkpoint<2>(const std::filesystem::path&, const Particles<2>&,
+template void save_checkpoint<2>(const std::filesystem::path&, const std::vector<CheckpointPhase<2>>&,
                                  const CheckpointHeader&);
-template void save_checkpoint<3>(const std::filesystem::path&, const Particles<3>&,
+template void save_checkpoint<3>(const std::filesystem::path&, const std::vector<CheckpointPhase<3>>&,
                                  const CheckpointHeader&);
-template Particles<2> load_checkpoint<2>(const std::filesystem::path&, CheckpointHeader&);
-template Particles<3> load_checkpoint<3>(const std::filesystem::path&, CheckpointHeader&);
+template Particles<2> load_checkpoint<2>(const std::filesystem::path&, CheckpointHeader&, const std::string&);
+template Particles<3> load_checkpoint<3>(const std::filesystem::path&, CheckpointHeader&, const std::string&);
 
 }  // namespace mpm::io

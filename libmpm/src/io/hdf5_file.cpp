@@ -82,8 +82,12 @@ void Hdf5File::write_raw(const std::string& dataset, hid_t file_type, hid_t memo
   const Handle space(H5Screate_simple(static_cast<int>(shape.size()), shape.data(), nullptr),
                      H5Sclose);
   if (!space.valid()) fail("cannot describe dataset '" + dataset + "' of shape " + describe(shape));
+  // "fluid/x" creates the group "fluid" on the way (checkpoints of several phases).
+  const Handle links(H5Pcreate(H5P_LINK_CREATE), H5Pclose);
+  if (!links.valid() || H5Pset_create_intermediate_group(links, 1) < 0)
+    fail("cannot set up the creation of dataset '" + dataset + "'");
   const Handle set(
-      H5Dcreate2(file_, dataset.c_str(), file_type, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
+      H5Dcreate2(file_, dataset.c_str(), file_type, space, links, H5P_DEFAULT, H5P_DEFAULT),
       H5Dclose);
   if (!set.valid()) fail("cannot create dataset '" + dataset + "'");
   const bool empty = std::find(shape.begin(), shape.end(), hsize_t{0}) != shape.end();

@@ -49,7 +49,8 @@ public:
   Hdf5File(const Hdf5File&) = delete;
   Hdf5File& operator=(const Hdf5File&) = delete;
 
-  //! Writes a dataset of `shape` from contiguous row-major `data`.
+  //! Writes a dataset of `shape` from contiguous row-major `data`; a path "group/name"
+  //! creates the group.
   template <class T>
   void write(const std::string& dataset, const T* data, const Shape& shape) {
     write_raw(dataset, Hdf5Type<T>::file(), Hdf5Type<T>::memory(), data, shape);

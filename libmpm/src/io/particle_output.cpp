@@ -84,11 +84,11 @@ std::string xdmf_document(const std::string& grids) {
 
 }  // namespace
 
-std::string particle_file_name(int frame) {
+std::string particle_file_name(int frame, const std::string& stem) {
   verify<InputError>(frame >= 0, "particle output: frame " + std::to_string(frame) + " < 0");
-  char name[32];
-  std::snprintf(name, sizeof name, "particles_%04d.h5", frame);
-  return name;
+  char number[16];
+  std::snprintf(number, sizeof number, "_%04d.h5", frame);
+  return stem + number;
 }
 
 template <int dim>
@@ -137,11 +137,11 @@ void write_particles(const std::filesystem::path& h5_path, const Particles<dim>&
 }
 
 void write_time_series_xdmf(const std::filesystem::path& dir,
-                            const std::vector<std::pair<int, double>>& frames) {
+                            const std::vector<std::pair<int, double>>& frames, const std::string& stem) {
   std::string grids =
       "    <Grid Name=\"particles\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
   for (const auto& [frame, time] : frames) {
-    const std::string name = particle_file_name(frame);
+    const std::string name = particle_file_name(frame, stem);
     const detail::Hdf5File file(dir / name, detail::Hdf5File::Mode::read);
     const detail::Shape position = file.shape("position");
     if (position.size() != 2 || position[1] != 3)
@@ -150,7 +150,7 @@ void write_time_series_xdmf(const std::filesystem::path& dir,
     grids += frame_grid(name, position[0], file.has("J"), time, "      ");
   }
   grids += "    </Grid>\n";
-  write_file_atomically(dir / "particles.xdmf", xdmf_document(grids));
+  write_file_atomically(dir / (stem + ".xdmf"), xdmf_document(grids));
 }
 
 template void write_particles<2>(const std::filesystem::path&, const Particles<2>&, double, int);

@@ -17,7 +17,6 @@
 namespace mpm::io {
 namespace {
 
-using Rgb = std::array<std::uint8_t, 3>;
 
 //! viridis (van der Walt & Smith, matplotlib 2015) at 9 equally spaced stops: perceptually
 //! uniform and readable in grey scale and by colour-blind viewers.
@@ -163,9 +162,8 @@ private:
 }  // namespace
 
 template <int dim>
-void write_png_preview(const std::filesystem::path& path, const Particles<dim>& p,
+void write_png_preview(const std::filesystem::path& path, const std::vector<PreviewLayer<dim>>& layers,
                        const PreviewOptions& options) {
-  detail::verify_channel_sizes(p, path);
   const auto& lo = options.domain_lo;
   const auto& hi = options.domain_hi;
   const double extent_x = hi[0] - lo[0], extent_y = hi[1] - lo[1];
@@ -174,8 +172,6 @@ void write_png_preview(const std::filesystem::path& path, const Particles<dim>& 
       "png preview: the domain must have hi > lo in x and y");
   verify<InputError>(options.width_px >= 1 && options.width_px <= kMaxPixels,
                      "png preview: width_px must be in [1, " + std::to_string(kMaxPixels) + "]");
-  verify<InputError>(std::isfinite(options.point_radius_px) && options.point_radius_px >= 0,
-                     "png preview: point_radius_px must be finite and >= 0");
   const int width = options.width_px;
   const double height_exact = width * extent_y / extent_x;
   verify<InputError>(height_exact <= kMaxPixels,
@@ -183,33 +179,60 @@ void write_png_preview(const std::filesystem::path& path, const Particles<dim>& 
                          std::to_string(kMaxPixels) + " px");
   const int height = std::max(1, static_cast<int>(std::lround(height_exact)));
 
-  const std::vector<double> values = attribute(p, options.color_by);
-  const auto [value_lo, value_hi] = color_range(values, options);
-
-  // Painter's order: a particle with a non-finite position has no place in the image (and
-  // would break the sort), so it is left out.
-  std::vector<std::size_t> order;
-  for (std::size_t i = 0; i < p.size(); ++i)
-    if (p.x[i].allFinite()) order.push_back(i);
-  if constexpr (dim == 3)
-    std::stable_sort(order.begin(), order.end(),
-                     [&](std::size_t a, std::size_t b) { return p.x[a][2] < p.x[b][2]; });
+  // One colour range over every layer coloured by the attribute, so that equal values look
+  // equal in all of them.
+  std::vector<std::vector<double>> values(layers.size());
+  std::vector<double> all;
+  for (std::size_t l = 0; l < layers.size(); ++l) {
+    const PreviewLayer<dim>& layer = layers[l];
+    detail::verify_channel_sizes(*layer.particles, path);
+    verify<InputError>(std::isfinite(layer.point_radius_px) && layer.point_radius_px >= 0,
+                       "png preview: point_radius_px must be finite and >= 0");
+    if (layer.colour) continue;
+    values[l] = attribute(*layer.particles, options.color_by);
+    all.insert(all.end(), values[l].begin(), values[l].end());
+  }
+  const auto [value_lo, value_hi] = color_range(all, options);
 
   Image image(width, height);
   const double scale_x = width / extent_x, scale_y = height / extent_y;
-  for (const std::size_t i : order) {
-    const double v = values[i];
-    const double t = value_hi > value_lo ? (v - value_lo) / (value_hi - value_lo) : 0.5;
-    image.splat((p.x[i][0] - lo[0]) * scale_x, (hi[1] - p.x[i][1]) * scale_y,
-                options.point_radius_px, std::isfinite(v) ? viridis(t) : kMagenta);
+  for (std::size_t l = 0; l < layers.size(); ++l) {
+    const Particles<dim>& p = *layers[l].particles;
+    // Painter's order: a particle with a non-finite position has no place in the image (and
+    // would break the sort), so it is left out.
+    std::vector<std::size_t> order;
+    for (std::size_t i = 0; i < p.size(); ++i)
+      if (p.x[i].allFinite()) order.push_back(i);
+    if constexpr (dim == 3)
+      std::stable_sort(order.begin(), order.end(),
+                       [&](std::size_t a, std::size_t b) { return p.x[a][2] < p.x[b][2]; });
+    for (const std::size_t i : order) {
+      Rgb colour = layers[l].colour ? *layers[l].colour : kMagenta;
+      if (!layers[l].colour && std::isfinite(values[l][i])) {
+        const double t = value_hi > value_lo ? (values[l][i] - value_lo) / (value_hi - value_lo) : 0.5;
+        colour = viridis(t);
+      }
+      image.splat((p.x[i][0] - lo[0]) * scale_x, (hi[1] - p.x[i][1]) * scale_y, layers[l].point_radius_px,
+                  colour);
+    }
   }
   image.frame(kFrame);
   image.write(path);
 }
 
+template <int dim>
+void write_png_preview(const std::filesystem::path& path, const Particles<dim>& p,
+                       const PreviewOptions& options) {
+  write_png_preview<dim>(path, {{&p, std::nullopt, options.point_radius_px}}, options);
+}
+
 template void write_png_preview<2>(const std::filesystem::path&, const Particles<2>&,
                                    const PreviewOptions&);
 template void write_png_preview<3>(const std::filesystem::path&, const Particles<3>&,
+                                   const PreviewOptions&);
+template void write_png_preview<2>(const std::filesystem::path&, const std::vector<PreviewLayer<2>>&,
+                                   const PreviewOptions&);
+template void write_png_preview<3>(const std::filesystem::path&, const std::vector<PreviewLayer<3>>&,
                                    const PreviewOptions&);
 
 }  // namespace mpm::io

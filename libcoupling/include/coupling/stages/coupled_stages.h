@@ -103,6 +103,8 @@ class MixtureProjection final : public mpm::Stage<CoupledState<dim>> {
     return {"fluid.grid.velocity", "sediment.grid.velocity", "fluid.cell.pressure"};
   }
   void run(CoupledState<dim>& s) override;
+  mpm::CarriedData carried() const override { return projection_.carried(); }
+  void restore(const mpm::CarriedData& data) override { projection_.restore(data); }
 
   const fluid::stages::PressureProjection<dim>& projection() const { return projection_; }
 

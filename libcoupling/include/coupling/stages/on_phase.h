@@ -31,6 +31,8 @@ class OnPhase final : public mpm::Stage<CoupledState<dim>> {
   std::vector<std::string> reads() const override { return prefixed(stage_->reads()); }
   std::vector<std::string> writes() const override { return prefixed(stage_->writes()); }
   void run(CoupledState<dim>& s) override { stage_->run(phase_state(s, phase_)); }
+  mpm::CarriedData carried() const override { return stage_->carried(); }
+  void restore(const mpm::CarriedData& data) override { stage_->restore(data); }
 
   Phase phase() const { return phase_; }
   mpm::Stage<mpm::MpmState<dim>>& stage() { return *stage_; }

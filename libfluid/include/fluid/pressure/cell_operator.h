@@ -19,8 +19,15 @@
 //!      (A p)_c = sum_{faces f of c} (p_c - p_nb) / dx^2, neighbour outside the box or empty: p_nb = 0.
 //! Both are stored as a cell-type mask plus per-node (NodeCell) coefficients; solvers apply A
 //! matrix-free and may assemble it (CHOLMOD, hypre) through for_each_entry.
+//!
+//! Periodic axes: cell c + cells[a] e_a is cell c and node n + cells[a] e_a is node n, so the
+//! box has cells[a] nodes along a (no face) and every stencil wraps; a periodic axis needs at
+//! least 2 cells. A fully periodic box of fluid cells has no p = 0 cell: A is singular with the
+//! constants (and, for NodeCell with even counts, the checkerboards) as null vectors; b must be
+//! in the range of A (null_space.h makes it so and fixes the pressure level).
 #include <mpm/core/types.h>
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <vector>
@@ -40,18 +47,24 @@ struct CellOperator {
   double dx = 1.0;                      //!< [m]
   std::vector<CellType> type;           //!< per cell, x fastest
   std::vector<double> beta;             //!< per node, x fastest (NodeCell only)
+  std::array<bool, dim> periodic{};     //!< per axis (see above)
 
+  bool is_periodic() const;
+  //! Nodes per axis: cells + 1, or cells on a periodic axis.
+  IVec<dim> node_extent() const;
   std::int64_t cell_count() const;
   std::int64_t node_count() const;
   std::int64_t cell_index(const IVec<dim>& c) const;  //!< x fastest
-  std::int64_t node_index(const IVec<dim>& n) const;
+  //! x fastest; on a periodic axis node cells[a] is node 0.
+  std::int64_t node_index(IVec<dim> n) const;
 
   //! y = A x over all cells (y_c = 0 for empty cells; x is read only at fluid cells).
   void apply(const std::vector<double>& x, std::vector<double>& y) const;
   //! The diagonal of A (0 for empty cells).
   void diagonal(std::vector<double>& d) const;
   //! Calls f(row cell, column cell, value) for every nonzero of A between fluid cells,
-  //! row by row, columns ascending (for assembly by direct and algebraic solvers).
+  //! row by row, columns ascending, each column once (for assembly by direct and algebraic
+  //! solvers).
   void for_each_entry(const std::function<void(std::int64_t, std::int64_t, double)>& f) const;
 
   //! rhs of the projection: b_c = -(D u)_c for fluid cells, 0 elsewhere (u per node, x fastest).

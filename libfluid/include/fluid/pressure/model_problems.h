@@ -1,7 +1,7 @@
 #pragma once
 //! Standard pressure problems shared by the tests and bench_pressure, so both measure the same
 //! systems. All live in the unit box [0, 1]^dim with n cells per axis (dx = 1/n) and walls
-//! (beta = 0 on every node of the box faces).
+//! (beta = 0 on every node of the box faces that are not periodic).
 #include <fluid/pressure/cell_operator.h>
 
 #include <vector>
@@ -22,6 +22,16 @@ CellOperator<dim> dam_break_problem(int n, OperatorKind<dim> kind);
 //! and checkerboard modes), the Poisson one (p = 0 outside the box) is not.
 template <int dim>
 CellOperator<dim> closed_box_problem(int n, OperatorKind<dim> kind);
+
+//! Every cell fluid, every axis periodic, no walls (beta > 0 on every node): A is singular
+//! (constants; for NodeCell with even n also the checkerboards).
+template <int dim>
+CellOperator<dim> periodic_box_problem(int n, OperatorKind<dim> kind);
+
+//! A periodic channel: x periodic, walls on the other faces, water in the lower half of the
+//! last axis below a free surface (A nonsingular).
+template <int dim>
+CellOperator<dim> periodic_channel_problem(int n, OperatorKind<dim> kind);
 
 //! A pseudo-random nodal velocity [m/s] that is 0 on beta = 0 (wall) nodes, so that
 //! b = -D u lies in the range of A (the wall velocity is prescribed, here at rest).

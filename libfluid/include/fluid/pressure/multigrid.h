@@ -36,6 +36,11 @@
 //!    semicoarsened coarse spaces per family; this V-cycle does not have them, and 3D NodeCell
 //!    iteration counts grow with N (docs/performance.md). The same correction with the four
 //!    3D sign patterns was tried and does not help (231 vs 173 iterations at 16^3).
+//!  * Periodic axes: stencils, transfers (the 1/4 neighbour wraps) and smoothers wrap; such an
+//!    axis halves only from an even count >= 4, so coarsening stops at the first odd count
+//!    (power-of-two periods coarsen fully). The Poisson red-black smoother needs even
+//!    periodic counts on the fine level. The bottom pseudo-inverse covers the constant null
+//!    mode of a fully periodic box.
 //! The post-smoother is the adjoint of the pre-smoother and R = c P^T, so the V-cycle is a
 //! symmetric positive semi-definite linear map and CG stays valid.
 #include <fluid/pressure/cell_operator.h>

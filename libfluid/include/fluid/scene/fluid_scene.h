@@ -1,7 +1,9 @@
 #pragma once
 //! Assembles a free-surface LANS fluid scene from a scene file (DESIGN.md):
-//!   time_step -> sort -> p2g -> grid_update (gravity) -> viscosity (only when mu > 0)
+//!   time_step -> [sink -> source] -> sort -> p2g -> grid_update (gravity) -> viscosity (only when mu > 0)
 //!   -> boundary -> pressure -> g2p (and advection)
+//! with periodic_fold after p2g, periodic_fill before g2p and periodic_wrap after it when the
+//! scene has a periodic axis (mpm/core/stages/periodic_boundary.h).
 //! The projection leaves every node that a wall or collider prescribes untouched, so the
 //! boundary conditions still hold after it and no second boundary stage is needed.
 //!
@@ -16,7 +18,8 @@
 //!   bodies:                  # fluid regions: {shape: box, lo, hi} or {shape: sphere, center,
 //!                            # radius}; optional particles_per_cell (k^dim), jitter, seed, velocity
 //!     - {shape: box, lo: [0, 0], hi: [0.1, 0.2], particles_per_cell: 4, velocity: [0, 0]}
-//! plus the shared keys (scene_settings.h) and walls/colliders (collider_config.h). Walls act
+//! plus the shared keys (scene_settings.h), walls/colliders (collider_config.h) and the optional
+//! inflow/outflow (flow_boundary_config.h): the sink and source stages exist only with them. Walls act
 //! on the fluid as prescribed node velocities; use `contact: sticky` (no-slip): the pressure
 //! does not act on nodes inside a wall, so the tangential velocity a slip wall leaves there
 //! would not be corrected.
@@ -28,6 +31,7 @@
 #include <mpm/core/scene_settings.h>
 #include <mpm/core/state.h>
 #include <mpm/geometry/collider.h>
+#include <mpm/geometry/flow_boundary_config.h>
 
 #include <string>
 #include <vector>
@@ -46,6 +50,7 @@ struct FluidScene {
   stages::PressureSettings pressure;
   mpm::geometry::ColliderSet<dim> colliders;
   mpm::MpmState<dim> state;  //!< particles seeded, grid sized to the domain
+  mpm::geometry::FlowBoundaries<dim> flow;  //!< inflow/outflow (already applied to `colliders`)
 };
 
 //! The `fluid` map: density > 0, viscosity >= 0.
@@ -68,7 +73,7 @@ void add_fluid_particles(FluidScene<dim>& scene, const std::vector<Vec<dim>>& po
 template <int dim>
 void seed_fluid_bodies(FluidScene<dim>& fluid, const mpm::Config& scene);
 
-//! Reads settings, the fluid, the pressure keys, walls/colliders and bodies.
+//! Reads settings, the fluid, the pressure keys, walls/colliders, inflow/outflow and bodies.
 template <int dim>
 FluidScene<dim> load_fluid_scene(const mpm::Config& scene);
 
@@ -82,5 +87,10 @@ mpm::Pipeline<mpm::MpmState<dim>> make_fluid_pipeline(const FluidScene<dim>& sce
 //! of each frame) for the projection stage of `pipeline`.
 template <int dim>
 void add_pressure_columns(mpm::Runner<dim>& runner, mpm::Pipeline<mpm::MpmState<dim>>& pipeline);
+
+//! Adds the diagnostics columns inflow_mass (emitted since the start) and outflow_mass (removed
+//! since the start; checkpoints carry it) [kg], 0 without an inflow or outflow, and fluid_mass (particles) [kg].
+template <int dim>
+void add_flow_columns(mpm::Runner<dim>& runner, mpm::Pipeline<mpm::MpmState<dim>>& pipeline);
 
 }  // namespace fluid

@@ -2,7 +2,9 @@
 //! The pressure projection of the LANS fluid on the semi-staggered grid (DESIGN.md; Gao et al.
 //! 2018): after the explicit update and the boundary conditions, makes the node velocity field
 //! discretely divergence-free in every fluid cell, with p = 0 in empty cells (free surface)
-//! and no pressure impulse on nodes whose velocity a wall or collider prescribes.
+//! and no pressure impulse on nodes whose velocity a wall or collider prescribes. On a grid
+//! with periodic axes the operator spans the whole period along them and wraps; it reads and
+//! writes the canonical nodes only (the pipeline adds periodic_fill before G2P).
 #include <fluid/pressure/cell_operator.h>
 #include <fluid/pressure/pressure_solver.h>
 
@@ -45,6 +47,24 @@ public:
   std::vector<std::string> reads() const override { return {"grid.mass", "grid.velocity", "particle.x"}; }
   std::vector<std::string> writes() const override { return {"grid.velocity", "cell.pressure"}; }
   void run(mpm::MpmState<dim>& s) override;
+  //! The last pressure, the initial guess of the next solve, with its box ("box": origin and
+  //! cells per axis), so that a restarted run solves from the same guess.
+  mpm::CarriedData carried() const override {
+    std::vector<double> box;
+    for (int a = 0; a < dim; ++a) box.push_back(box_lo_[a]);
+    for (int a = 0; a < dim; ++a) box.push_back(op_.cells[a]);
+    return {{"pressure", p_}, {"box", box}};
+  }
+  void restore(const mpm::CarriedData& data) override {
+    for (const auto& [name, values] : data) {
+      if (name == "pressure") p_ = values;
+      if (name == "box" && values.size() == 2 * dim)
+        for (int a = 0; a < dim; ++a) {
+          box_lo_[a] = static_cast<int>(values[a]);
+          op_.cells[a] = static_cast<int>(values[dim + a]);
+        }
+    }
+  }
 
   //! Couples the projection to a second phase (nullptr: single phase). The pointer must stay
   //! valid while the stage runs. The stage updates only v_w; the coupling applies

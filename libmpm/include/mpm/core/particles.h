@@ -10,6 +10,7 @@
 #include <tbb/parallel_for.h>
 
 #include <cstddef>
+#include <cstdint>
 #include <string>
 #include <utility>
 #include <vector>
@@ -54,7 +55,8 @@ struct Particles {
     plastic.assign(size(), 0.0);
   }
 
-  //! Reorders every non-empty channel so that new index i holds old index order[i].
+  //! Reorders every non-empty channel so that new index i holds old index order[i]; an
+  //! `order` shorter than size() keeps only the particles it lists.
   void permute(const std::vector<std::uint32_t>& order) {
     apply_permutation(x, order);
     apply_permutation(v, order);
@@ -64,6 +66,19 @@ struct Particles {
     apply_permutation(material, order);
     apply_permutation(F, order);
     apply_permutation(plastic, order);
+  }
+
+  //! Removes every particle p with flagged[p] != 0 (flagged.size() == size()) from every
+  //! non-empty channel; the others keep their order (stable). O(N): one scan for the kept
+  //! indices, then the parallel gather of permute(). Returns the number removed.
+  std::size_t erase_flagged(const std::vector<std::uint8_t>& flagged) {
+    std::vector<std::uint32_t> kept;
+    kept.reserve(size());
+    for (std::size_t p = 0; p < size(); ++p)
+      if (!flagged[p]) kept.push_back(static_cast<std::uint32_t>(p));
+    const std::size_t removed = size() - kept.size();
+    if (removed > 0) permute(kept);
+    return removed;
   }
 
   //! Bytes held per channel, for the memory report of a run.

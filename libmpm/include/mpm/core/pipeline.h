@@ -48,16 +48,42 @@ public:
     }
   }
 
+  //! The carried data of every stage, each name prefixed "<stage index>.<stage name>/".
+  CarriedData carried() const {
+    CarriedData all;
+    for (std::size_t s = 0; s < stages_.size(); ++s)
+      for (auto& [name, values] : stages_[s]->carried()) all.emplace_back(prefix(s) + name, std::move(values));
+    return all;
+  }
+  //! Hands every stage its entries of `all` (as carried() wrote them, prefix removed).
+  void restore(const CarriedData& all) {
+    for (std::size_t s = 0; s < stages_.size(); ++s) {
+      CarriedData mine;
+      for (const auto& [name, values] : all)
+        if (name.rfind(prefix(s), 0) == 0) mine.emplace_back(name.substr(prefix(s).size()), values);
+      stages_[s]->restore(mine);
+    }
+  }
+
   const StageTimes& times() const { return times_; }
   std::vector<std::string> stage_names() const { return times_.names; }
   template <class StageType>
   StageType* find() {
+    const auto all = find_all<StageType>();
+    return all.empty() ? nullptr : all.front();
+  }
+  //! Every stage of type StageType, in pipeline order.
+  template <class StageType>
+  std::vector<StageType*> find_all() {
+    std::vector<StageType*> found;
     for (auto& s : stages_)
-      if (auto* p = dynamic_cast<StageType*>(s.get())) return p;
-    return nullptr;
+      if (auto* p = dynamic_cast<StageType*>(s.get())) found.push_back(p);
+    return found;
   }
 
 private:
+  std::string prefix(std::size_t s) const { return std::to_string(s) + "." + stages_[s]->name() + "/"; }
+
   std::vector<std::string> initial_;
   std::vector<std::unique_ptr<Stage<State>>> stages_;
   StageTimes times_;

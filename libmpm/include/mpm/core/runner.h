@@ -4,6 +4,13 @@
 //! diagnostics.csv (one row per frame, a seconds column per stage), checkpoint_NNNN.h5,
 //! summary.json; a progress line with ETA on stderr and, at the end, the per-stage time
 //! table and the memory held per field.
+//!
+//! A state of several particle phases (libcoupling's CoupledState, through its `phases`
+//! function, state.h) writes one particle series per phase named after it (fluid_NNNN.h5 +
+//! fluid.xdmf, sediment_NNNN.h5 + sediment.xdmf), draws them all in one preview, sums the
+//! diagnostics over the phases and adds a mass_<phase> column per phase, and stores every
+//! phase in one checkpoint. The definitions are in detail/runner_impl.h; libmpm instantiates
+//! Runner<dim> for MpmState, libcoupling for its state.
 #include <mpm/core/command_line.h>
 #include <mpm/core/config.h>
 #include <mpm/core/pipeline.h>
@@ -20,10 +27,9 @@
 
 namespace mpm {
 
-template <int dim>
+template <int dim, class State = MpmState<dim>>
 class Runner {
 public:
-  using State = MpmState<dim>;
   using Column = std::function<double(const State&)>;
 
   Runner(std::string app_name, CommandLine command_line, const Config& scene,
@@ -45,12 +51,12 @@ public:
   const std::filesystem::path& out_dir() const { return out_; }
 
 private:
-  std::vector<std::string> columns(const Pipeline<State>& pipeline) const;
+  std::vector<std::string> columns(State& state, const Pipeline<State>& pipeline) const;
   std::string scene_digest() const;
-  int open_output(State& state, const Pipeline<State>& pipeline);  // returns the first frame to run
-  void append_diagnostics(const State& state, int frame, const Pipeline<State>& pipeline);
+  int open_output(State& state, Pipeline<State>& pipeline);  // returns the first frame to run
+  void append_diagnostics(State& state, int frame, const Pipeline<State>& pipeline);
   void advance(State& state, Pipeline<State>& pipeline, double t_end, int frame);
-  void write_frame(const State& state, int frame);
+  void write_frame(State& state, int frame);
   void progress(const State& state, int frame, bool last) const;
 
   std::string app_;

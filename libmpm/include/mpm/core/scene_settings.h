@@ -5,6 +5,7 @@
 #include <mpm/core/kernels.h>
 #include <mpm/core/transfer.h>
 
+#include <array>
 #include <optional>
 #include <string>
 #include <vector>
@@ -23,6 +24,9 @@ template <int dim>
 struct SceneSettings {
   Vec<dim> domain_lo, domain_hi;  //!< [m]
   double dx = 0.0;                //!< grid spacing [m]
+  //! Per axis: the domain is [lo, hi) with (hi - lo) / dx whole cells and no walls; what
+  //! leaves through hi enters through lo (stages/periodic_boundary.h).
+  std::array<bool, dim> periodic{};
   Kernel kernel;
   TransferScheme transfer;
   double end_time = 1.0;          //!< [s]
@@ -37,7 +41,8 @@ struct SceneSettings {
   int frame_count() const;
 };
 
-//! The first position outside the domain box of `settings`: why ("a particle at (1.0025,
+//! The first position outside the domain box of `settings` (half-open [lo, hi) on periodic
+//! axes): why ("a particle at (1.0025,
 //! 0.2025) lies outside the domain (0, 0) - (1, 0.6)") and whether it lies below domain_lo;
 //! an empty `why` when every position lies inside. Seeding checks bodies with it.
 struct OutsideDomain {
@@ -62,6 +67,9 @@ struct DerivedDomain {
 
 //! Reads the shared keys. With `derived`, the domain and grid.dx come from the app and the
 //! keys 'domain' and 'grid.dx' are not read (so a scene that sets them gets "unknown key").
+//! `periodic: [true, false]` (one flag per axis, default all false) makes axes periodic: the
+//! domain must then hold a whole number (>= 4) of cells along them, and a `walls` map must
+//! leave their faces open (x_min: open, x_max: open).
 template <int dim>
 SceneSettings<dim> parse_scene_settings(const Config& scene,
                                         const std::optional<DerivedDomain<dim>>& derived = std::nullopt);

@@ -8,8 +8,16 @@
 //!
 //! Node channels are structure-of-arrays over all allocated nodes: node n of block b is at
 //! b * nodes_per_block + n. Channels a scene does not use stay empty (lean scenes).
+//!
+//! Periodic axes: the domain [lo, hi) holds N = (hi - lo) / dx cells and node j + N is node j.
+//! The grid keeps `periodic_margin` ghost nodes beyond both ends of such an axis, so that the
+//! stencil of every particle in [lo, hi) stays inside the grid; a ghost's canonical node
+//! (periodic_image) lies in [lo, hi). The allocated set is closed under images: activate() adds
+//! the block of the image of every allocated ghost node, so that the periodic stages
+//! (stages/periodic_boundary.h) can fold ghosts onto their images and fill them back.
 #include <mpm/core/types.h>
 
+#include <array>
 #include <cstddef>
 #include <string>
 #include <utility>
@@ -24,14 +32,37 @@ public:
   static constexpr int block_size = 1 << block_bits;          //!< B nodes per axis
   static constexpr int nodes_per_block = ipow(block_size, dim);
 
+  //! Ghost nodes beyond each end of a periodic axis: covers the widest kernel (cubic B-spline,
+  //! nodes floor(xi) - 1 .. floor(xi) + 2 for xi in [0, N)).
+  static constexpr int periodic_margin = 3;
+
   SparseGrid() = default;
-  //! Grid covering the box [lo, hi] with spacing dx [m]; nodes at lo + i dx.
-  SparseGrid(const Vec<dim>& lo, const Vec<dim>& hi, double dx);
+  //! Grid covering the box [lo, hi] with spacing dx [m]; nodes at lo + i dx, and on the axes
+  //! with `periodic` set, (hi - lo) / dx whole cells and periodic_margin ghost nodes each side.
+  SparseGrid(const Vec<dim>& lo, const Vec<dim>& hi, double dx, const std::array<bool, dim>& periodic = {});
 
   double dx() const { return dx_; }
   const Vec<dim>& origin() const { return origin_; }
   const IVec<dim>& node_counts() const { return node_counts_; }  //!< nodes per axis
   const IVec<dim>& block_counts() const { return block_counts_; }
+
+  //! Cells per period along each axis, 0 on the axes that are not periodic.
+  const IVec<dim>& period() const { return period_; }
+  bool is_periodic() const { return (period_.array() > 0).any(); }
+  //! First canonical node per axis: periodic_margin on periodic axes, 0 elsewhere.
+  IVec<dim> periodic_lo() const {
+    return (period_.array() > 0).select(IVec<dim>::Constant(periodic_margin), IVec<dim>::Zero());
+  }
+  //! The canonical node of `node`: wrapped into [periodic_lo, periodic_lo + period) on periodic
+  //! axes, unchanged elsewhere.
+  IVec<dim> periodic_image(IVec<dim> node) const {
+    for (int a = 0; a < dim; ++a)
+      if (period_[a] > 0) {
+        const int j = (node[a] - periodic_margin) % period_[a];
+        node[a] = periodic_margin + (j < 0 ? j + period_[a] : j);
+      }
+    return node;
+  }
 
   //! Linear id of the block containing node `node` in the dense block table.
   int block_id(const IVec<dim>& node) const {
@@ -46,8 +77,9 @@ public:
   }
   int table_size() const { return static_cast<int>(slot_.size()); }
 
-  //! Replaces the allocated set by the given block ids (sorted, unique) and zeroes mass and
-  //! velocity; other channels are (re)allocated on request.
+  //! Replaces the allocated set by the given block ids (sorted, unique), plus on a periodic
+  //! grid the blocks of the images of their ghost nodes, and zeroes mass and velocity; other
+  //! channels are (re)allocated on request.
   void activate(const std::vector<int>& block_ids);
   //! Storage slot of block `id`, or -1 when it is not allocated.
   int slot(int id) const { return slot_[id]; }
@@ -76,6 +108,7 @@ private:
   Vec<dim> origin_ = Vec<dim>::Zero();
   IVec<dim> node_counts_ = IVec<dim>::Zero();
   IVec<dim> block_counts_ = IVec<dim>::Zero();
+  IVec<dim> period_ = IVec<dim>::Zero();
   std::vector<int> slot_;    // dense table: block id -> storage slot or -1
   std::vector<int> active_;  // storage slot -> block id
 };

@@ -22,12 +22,19 @@ namespace mpm::geometry {
 template <int dim>
 using Shape = std::variant<HalfSpace<dim>, Box<dim>, Sphere<dim>, Cylinder<dim>, LevelSetShape<dim>>;
 
+//! How a collider's velocity acts: it moves the shape, or the shape stays and only the material
+//! on it moves (an inlet that prescribes the inflow velocity, a conveyor belt).
+enum class Motion { translating, fixed };
+
 template <int dim>
 class Collider {
 public:
-  //! `velocity` [m/s] translates the shape: it is at x + velocity * t at time t [s].
+  //! `velocity` [m/s] is the obstacle's velocity: with Motion::translating the shape is at
+  //! x + velocity * t at time t [s]; with Motion::fixed it stays at x and nodes inside still
+  //! get the contact condition relative to `velocity`.
   //! Throws InputError when the friction coefficient is negative or not finite.
-  Collider(Shape<dim> shape, const Contact& contact, const Vec<dim>& velocity = Vec<dim>::Zero());
+  Collider(Shape<dim> shape, const Contact& contact, const Vec<dim>& velocity = Vec<dim>::Zero(),
+           Motion motion = Motion::translating);
 
   double phi(const Vec<dim>& x, double t) const;       //!< [m], negative inside the obstacle
   Vec<dim> normal(const Vec<dim>& x, double t) const;  //!< unit, out of the obstacle
@@ -43,6 +50,8 @@ private:
   Shape<dim> shape_;
   Contact contact_;
   Vec<dim> velocity_;
+  Motion motion_;
+  Vec<dim> shape_position(const Vec<dim>& x, double t) const;  // x in the frame of the shape
 };
 
 enum class Side { lower, upper };

@@ -17,17 +17,19 @@
 
 namespace mpm::io {
 
-//! "particles_0007.h5": the file name of a frame, as write_time_series_xdmf expects it.
-std::string particle_file_name(int frame);
+//! "particles_0007.h5": the file name of a frame, as write_time_series_xdmf expects it. A
+//! state of several phases writes one series per phase, named after it ("sediment_0007.h5").
+std::string particle_file_name(int frame, const std::string& stem = "particles");
 
 //! Writes h5_path and its sidecar (same stem, .xdmf); time in [s].
 template <int dim>
 void write_particles(const std::filesystem::path& h5_path, const Particles<dim>& p, double time,
                      int frame);
 
-//! Writes dir/particles.xdmf, a temporal collection of `frames` (frame number, time [s]). Each
-//! frame's grid is described from dir/particle_file_name(frame), which must exist.
+//! Writes dir/<stem>.xdmf, a temporal collection of `frames` (frame number, time [s]). Each
+//! frame's grid is described from dir/particle_file_name(frame, stem), which must exist.
 void write_time_series_xdmf(const std::filesystem::path& dir,
-                            const std::vector<std::pair<int, double>>& frames);
+                            const std::vector<std::pair<int, double>>& frames,
+                            const std::string& stem = "particles");
 
 }  // namespace mpm::io

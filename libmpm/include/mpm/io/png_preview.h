@@ -9,9 +9,11 @@
 #include <mpm/core/particles.h>
 
 #include <array>
+#include <cstdint>
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace mpm::io {
 
@@ -26,6 +28,25 @@ struct PreviewOptions {
   std::optional<std::array<double, 2>> color_range;
 };
 
+//! An 8-bit RGB colour.
+using Rgb = std::array<std::uint8_t, 3>;
+
+//! One particle set of a picture of several phases. Layers are drawn in list order, each over
+//! the ones before (so list the fluid before the grains it carries); a layer with a fixed
+//! `colour` is drawn in it, the others are coloured by PreviewOptions::color_by over one
+//! range shared by all of them.
+template <int dim>
+struct PreviewLayer {
+  const Particles<dim>* particles = nullptr;
+  std::optional<Rgb> colour;
+  double point_radius_px = 2.0;
+};
+
+template <int dim>
+void write_png_preview(const std::filesystem::path& path, const std::vector<PreviewLayer<dim>>& layers,
+                       const PreviewOptions& options);
+
+//! A single particle set, drawn with options.point_radius_px.
 //! Throws InputError for invalid options (also for J or plastic without deformation) and
 //! IoError when the file cannot be written.
 template <int dim>

@@ -25,7 +25,9 @@ void check_not_inverted(const Particles<dim>& P, std::size_t m, std::string_view
 template <int dim>
 void StressForces<dim>::run(MpmState<dim>& s) {
   Particles<dim>& P = s.particles;
-  weighted_stress_.resize(P.size());
+  // The material loops below write only listed materials: stress-free particles keep zero.
+  if (stress_free_particles_) weighted_stress_.assign(P.size(), Mat<dim>::Zero());
+  else weighted_stress_.resize(P.size());
   for (std::size_t m = 0; m < materials_.size(); ++m) {
     std::visit([&](const auto& model) {
       using Model = std::decay_t<decltype(model)>;

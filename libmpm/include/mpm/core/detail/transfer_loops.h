@@ -11,9 +11,12 @@
 //! multiply and a few adds on its channels, where the textbook loop forms a weight product
 //! and a matrix-vector product per node. Particles are set up in chunks (in_chunks).
 //! spread and collect are forced inline: called, they pass the coefficients through memory.
+//! G2P's bucket loop is compiled twice, for the build's baseline and for AVX2, and the CPU
+//! picks one at run time (with_simd): the binary stays portable (-march=x86-64-v2).
 #include <mpm/core/detail/bucket_loops.h>
 
 #include <algorithm>
+#include <cstring>
 
 namespace mpm::detail {
 
@@ -39,8 +42,8 @@ void prefetch(const Object& object) {
 //! broken where particles changed buckets) ahead of the loads.
 constexpr std::ptrdiff_t chunk_size = 16;
 template <class Prefetch, class Prepare, class Finish>
-void in_chunks(const std::uint32_t* first, const std::uint32_t* last, Prefetch&& prefetch,
-               Prepare&& prepare, Finish&& finish) {
+[[gnu::always_inline]] inline void in_chunks(const std::uint32_t* first, const std::uint32_t* last,
+                                             Prefetch&& prefetch, Prepare&& prepare, Finish&& finish) {
   const std::ptrdiff_t n = last - first;
   for (std::ptrdiff_t i = 0; i < std::min(n, chunk_size); ++i) prefetch(first[i]);
   for (std::ptrdiff_t i = 0; i < n; i += chunk_size) {
@@ -49,6 +52,46 @@ void in_chunks(const std::uint32_t* first, const std::uint32_t* last, Prefetch&&
     for (std::ptrdiff_t j = i; j < end; ++j) prepare(first[j], static_cast<int>(j - i));
     for (std::ptrdiff_t j = i; j < end; ++j) finish(first[j], static_cast<int>(j - i));
   }
+}
+
+//! n values of T in one GCC/Clang vector: the compiler maps it onto the widest registers
+//! the function's target has (4 doubles: two SSE registers in the baseline code, one AVX
+//! register in the AVX2 code of with_simd). Eigen's fixed-size types pick their packets
+//! when the library is compiled, so they stay on SSE even in a function compiled for AVX2.
+template <class T, int n> struct PackOf;
+template <> struct PackOf<double, 2> { typedef double type __attribute__((vector_size(16))); };
+template <> struct PackOf<double, 4> { typedef double type __attribute__((vector_size(32))); };
+template <> struct PackOf<float, 2> { typedef float type __attribute__((vector_size(8))); };
+template <> struct PackOf<float, 4> { typedef float type __attribute__((vector_size(16))); };
+template <class T, int n>
+using Pack = typename PackOf<T, n>::type;
+
+//! By reference: a 32-byte vector passed by value has a different ABI with and without AVX.
+template <class P, class T>
+[[gnu::always_inline]] inline void load_pack(P& p, const T* values) {
+  std::memcpy(&p, values, sizeof p);
+}
+
+#if defined(__GNUC__) && defined(__x86_64__)
+template <class Fn, class... Args>
+[[gnu::target("avx2")]] void call_avx2(const Fn& fn, Args... args) { fn(args...); }
+inline bool cpu_has_avx2() { return __builtin_cpu_supports("avx2"); }
+#else
+inline bool cpu_has_avx2() { return false; }
+#endif
+
+//! fn(args...) in AVX2 code when `avx2` (cpu_has_avx2(), asked once per transfer), else in
+//! the baseline code. fn must be always_inline, down to its hot loops, so that its body is
+//! compiled into each caller for that caller's target. Without FMA: the AVX2 code does the
+//! operations of the baseline code in the same order, so results are bit for bit the same.
+template <class Fn, class... Args>
+[[gnu::always_inline]] inline void with_simd(bool avx2, const Fn& fn, Args... args) {
+#if defined(__GNUC__) && defined(__x86_64__)
+  if (avx2) return call_avx2(fn, args...);
+#else
+  (void)avx2;
+#endif
+  fn(args...);
 }
 
 //! Adds w (c[0] + sum_a rel_a c[a+1]) for every stencil node into the patch (Ch values per
@@ -97,17 +140,19 @@ template <class Acc, class X>
   else acc += x;
 }
 
-//! Moments of the node values v (Ch values apart in the patch) over the stencil:
-//! s = sum w v and t[a] = sum w n_a v with the integer node offsets n_a = rel_a - rel_a[0],
-//! so sum w rel_a v = t[a] + rel_a[0] s. Integer offsets turn the moments into sums of the
-//! products w v: a node costs one multiply and a few adds.
+//! Moments of the node values v (Ch values apart in the patch; Lanes = Pack<T, Ch>) over the
+//! stencil: s = sum w v and t[a] = sum w n_a v with the integer node offsets
+//! n_a = rel_a - rel_a[0], so sum w rel_a v = t[a] + rel_a[0] s. Integer offsets turn the
+//! moments into sums of the products w v: a node costs one multiply and a few adds.
 template <int Ch, int dim, int S, class T, class Lanes>
 [[gnu::always_inline]] inline void collect(const Stencil<dim, S, T>& st, const T* patch, Lanes& s,
                                            Lanes (&t)[dim]) {
   constexpr int W = patch_width<dim>;
   const auto row = [&](int offset, Lanes& m0, Lanes& m1) {  // sum w v and sum n_0 w v along axis 0
     for (int i = 0; i < S; ++i) {
-      const Lanes wv = st.w[0][i] * Eigen::Map<const Lanes>(patch + (offset + i) * Ch);
+      Lanes v;
+      load_pack(v, patch + (offset + i) * Ch);
+      const Lanes wv = st.w[0][i] * v;
       accumulate(i == 0, m0, wv);
       if (i > 0) accumulate(i == 1, m1, T(i) * wv);
     }
@@ -177,26 +222,23 @@ void g2p(PS& P, const ParticleBuckets<dim>& buckets, const K& kernel, const Spar
   // APIC reads the velocity padded to a whole number of SIMD packets (the extra lane repeats
   // component 0 and is ignored), so the stencil sums are packet operations.
   constexpr int lanes = flip || dim != 3 ? int(Ch) : 4;
-  using Lanes = Eigen::Matrix<T, lanes, 1>;
   std::array<BasicChannelView<T>, lanes> read;
   for (int c = 0; c < lanes; ++c) read[c] = channels[c < int(Ch) ? c : 0];
   const T inv_dx = static_cast<T>(1.0 / grid.dx());
-  gather_buckets<dim, lanes>(grid, buckets, read,
-                             [&](const std::uint32_t* first, const std::uint32_t* last,
-                                 const PatchFrame<dim>& f, const T* patch) {
+  const auto bucket = [&](const std::uint32_t* first, const std::uint32_t* last,
+                          const PatchFrame<dim>* f, const T* patch) __attribute__((always_inline)) {
     Stencil<dim, K::support, T> st[chunk_size];
     T inv_D[chunk_size][dim];  // APIC D_p^-1 [1/cells^2]; its division overlaps in the set-up
-    in_chunks(first, last, [&](std::uint32_t p) {
+    in_chunks(first, last, [&](std::uint32_t p) __attribute__((always_inline)) {
       prefetch(P.x[p]);
       prefetch(P.v[p]);
       if constexpr (!flip) prefetch(P.C[p]);
-    }, [&](std::uint32_t p, int q) {
-      st[q].template compute<flip>(kernel, f.cells(P.x[p]), f.origin);
+    }, [&](std::uint32_t p, int q) __attribute__((always_inline)) {
+      st[q].template compute<flip>(kernel, f->cells(P.x[p]), f->origin);
       if constexpr (!flip) st[q].inverse_inertia(inv_D[q]);
-    }, [&](std::uint32_t p, int q) {
-      VecT v_pic;
+    }, [&](std::uint32_t p, int q) __attribute__((always_inline)) {
       if constexpr (flip) {
-        v_pic.setZero();
+        VecT v_pic = VecT::Zero();
         VecT dv = VecT::Zero();
         st[q].for_each_node([&](int node, T w, const VecT&, const VecT&) {
           const Eigen::Map<const VecT> vi(patch + node * lanes);
@@ -204,16 +246,27 @@ void g2p(PS& P, const ParticleBuckets<dim>& buckets, const K& kernel, const Spar
           dv.noalias() += w * (vi - Eigen::Map<const VecT>(patch + node * lanes + dim));
         });
         P.v[p] = flip_ratio * (P.v[p] + dv) + (1 - flip_ratio) * v_pic;
+        P.x[p] += dt * v_pic;
       } else {
+        using Lanes = Pack<T, lanes>;
         Lanes s, t[dim];  // B_p = sum w v (x_i - x_p)^T [cells]: column a is t[a] + rel_a[0] s
         collect<lanes>(st[q], patch, s, t);
-        for (int a = 0; a < dim; ++a)
-          P.C[p].col(a) = (t[a] + st[q].rel[a][0] * s).template head<dim>() * (inv_D[q][a] * inv_dx);
-        v_pic = s.template head<dim>();
-        P.v[p] = v_pic;
+        for (int a = 0; a < dim; ++a) {
+          const Lanes column = (t[a] + st[q].rel[a][0] * s) * (inv_D[q][a] * inv_dx);
+          for (int b = 0; b < dim; ++b) P.C[p](b, a) = column[b];
+        }
+        for (int b = 0; b < dim; ++b) {
+          P.v[p][b] = s[b];
+          P.x[p][b] += dt * s[b];
+        }
       }
-      P.x[p] += dt * v_pic;
     });
+  };
+  const bool avx2 = cpu_has_avx2();
+  gather_buckets<dim, lanes>(grid, buckets, read,
+                             [&](const std::uint32_t* first, const std::uint32_t* last,
+                                 const PatchFrame<dim>& f, const T* patch) {
+    with_simd(avx2, bucket, first, last, &f, patch);
   });
 }
 

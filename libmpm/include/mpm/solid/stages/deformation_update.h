@@ -4,7 +4,8 @@
 
 namespace mpm::stages {
 
-//! Updates the elastic deformation gradient with the grid velocity gradient.
+//! Updates the elastic deformation gradient with the grid velocity gradient, of every particle
+//! (stress_free_material ones too: their owner resets F, so the loop stays branch-free).
 template <int dim>
 class DeformationUpdate final : public Stage<MpmState<dim>> {
 public:

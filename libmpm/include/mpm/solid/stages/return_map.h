@@ -6,7 +6,8 @@
 namespace mpm::stages {
 
 //! Projects the trial elastic deformation of plastic materials back onto their yield surface.
-//! A scene whose materials are all elastic does not add this stage.
+//! A scene whose materials are all elastic does not add this stage. Particles of an index
+//! outside the list (stress_free_material) are left alone.
 template <int dim>
 class ReturnMap final : public Stage<MpmState<dim>> {
 public:

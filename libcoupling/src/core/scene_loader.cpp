@@ -1,0 +1,183 @@
+#include <coupling/scene_loader.h>
+#include <coupling/stages/reclassify_sediment.h>
+#include <mpm/core/error.h>
+#include <mpm/geometry/body_config.h>
+#include <mpm/geometry/collider_config.h>
+#include <mpm/geometry/seeding.h>
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <optional>
+#include <unordered_set>
+#include <vector>
+
+namespace coupling {
+
+namespace {
+
+//! The pores of one sediment body: the sub-cells of its seeding lattice (spacing dx / k,
+//! seeding.h) that hold one of its particles. Jitter keeps a particle inside its sub-cell, so
+//! a point lies in the body (to the lattice's resolution) when its sub-cell is listed.
+template <int dim>
+class Pores {
+ public:
+  Pores(const std::vector<mpm::Vec<dim>>& grains, double spacing, double packing)
+      : spacing_(spacing), packing_(packing) {
+    for (const mpm::Vec<dim>& x : grains) cells_.insert(key(x));
+  }
+  bool contain(const mpm::Vec<dim>& x) const { return cells_.count(key(x)) > 0; }
+  double packing() const { return packing_; }
+
+ private:
+  // 21 bits per axis, offset so that negative sub-cells pack too (2^20 sub-cells each way).
+  std::uint64_t key(const mpm::Vec<dim>& x) const {
+    std::uint64_t k = 0;
+    for (int a = 0; a < dim; ++a)
+      k = (k << 21) | static_cast<std::uint64_t>(static_cast<std::int64_t>(std::floor(x[a] / spacing_)) + (1 << 20));
+    return k;
+  }
+  double spacing_, packing_;
+  std::unordered_set<std::uint64_t> cells_;
+};
+
+}  // namespace
+
+template <int dim>
+SedimentPhase<dim> parse_sediment_phase(const mpm::Config& sediment) {
+  using mpm::Range;
+  SedimentPhase<dim> s;
+  if (sediment.has("youngs_modulus")) {
+    s.materials.push_back(mpm::parse_material<dim>(sediment));
+    s.density = s.materials.front().density;
+  } else {
+    s.density = sediment.number("density", Range::positive());
+  }
+  s.min_fluid_fraction =
+      sediment.number("min_fluid_fraction", default_min_fluid_fraction, Range{0.0, 1.0, true, false});
+  if (const std::optional<mpm::Config> keys = sediment.optional_child("switching")) {
+    if (s.materials.empty())
+      sediment.fail("switching", "switching needs a continuum sediment (youngs_modulus and the other keys of a "
+                                 "material)");
+    SedimentSwitching t;
+    t.dilute_below = keys->number("dilute_below", t.dilute_below, Range::open(0.0, 1.0));
+    t.dense_above = keys->number("dense_above", t.dense_above, Range::open(t.dilute_below, 1.0));
+    s.switching = t;
+  }
+  return s;
+}
+
+template <int dim>
+CoupledScene<dim> load_coupled_scene(const mpm::Config& scene) {
+  using mpm::Range;
+  using Vec = mpm::Vec<dim>;
+  mpm::SceneSettings<dim> settings = mpm::parse_scene_settings<dim>(scene);
+  auto colliders = mpm::geometry::parse_colliders<dim>(scene, settings.domain_lo, settings.domain_hi,
+                                                        mpm::wall_layer(settings.kernel, settings.dx));
+  mpm::geometry::FlowBoundaries<dim> flow = mpm::geometry::parse_flow_boundaries<dim>(scene, settings);
+  mpm::geometry::add_flow_boundaries(flow, colliders);
+  std::optional<fluid::FluidMaterial> water;
+  fluid::stages::PressureSettings pressure;
+  if (const std::optional<mpm::Config> f = scene.optional_child("fluid")) {
+    water = fluid::parse_fluid_material(*f);
+    pressure = fluid::parse_pressure_settings(scene);
+  }
+  const std::optional<mpm::Config> sediment = scene.optional_child("sediment");
+  std::optional<SedimentPhase<dim>> sand;
+  if (sediment) sand = parse_sediment_phase<dim>(*sediment);
+  if (!water && !sand) scene.fail("fluid", "a coupled scene needs a `fluid` map, a `sediment` map or both");
+  std::optional<drag::DragLaw> drag;
+  if (water && sand) drag = drag::parse_drag_law(scene);
+  if (flow.inflow && !water) scene.fail("inflow", "the inflow emits fluid, but the scene has no `fluid` map");
+  CoupledScene<dim> out =
+      make_coupled_scene<dim>(std::move(settings), std::move(colliders), water, pressure, sand, drag);
+  out.flow = std::move(flow);
+
+  // The grain volume fraction of a body leaves the pore fluid at least n_min.
+  std::optional<Range> packing;
+  std::optional<double> default_packing;
+  if (sand) {
+    packing = Range{0.0, 1.0 - sand->min_fluid_fraction, true, false};
+    if (sediment->has("packing_fraction")) default_packing = sediment->number("packing_fraction", *packing);
+  }
+
+  const std::vector<mpm::Config> bodies = scene.list("bodies");
+  std::vector<std::string> phase;
+  for (const mpm::Config& body : bodies) {
+    if (!body.has("phase")) body.fail("phase", "missing required key (fluid or sediment)");
+    phase.push_back(body.choice("phase", "", {"fluid", "sediment"}));
+    if (phase.back() == "fluid" && !water) body.fail("phase", "the scene has no `fluid` map");
+    if (phase.back() == "sediment" && !sand) body.fail("phase", "the scene has no `sediment` map");
+  }
+  // Sediment first, so that every fluid body sees every pore.
+  std::vector<Pores<dim>> pores;
+  for (std::size_t n = 0; n < bodies.size(); ++n) {
+    if (phase[n] != "sediment") continue;
+    const mpm::Config& body = bodies[n];
+    const double phi = default_packing ? body.number("packing_fraction", *default_packing, *packing)
+                                       : body.number("packing_fraction", *packing);
+    const mpm::geometry::BodyParticles<dim> b = mpm::geometry::seed_body_shape<dim>(body, out.settings);
+    add_sediment_particles(out, b.x, phi * b.volume, body.vector<dim>("velocity", Vec::Zero()), body.path());
+    const int k = mpm::geometry::lattice_points_per_axis<dim>(mpm::geometry::particles_per_cell<dim>(body));
+    pores.emplace_back(b.x, out.settings.dx / k, phi);
+  }
+  for (std::size_t n = 0; n < bodies.size(); ++n) {
+    if (phase[n] != "fluid") continue;
+    const mpm::Config& body = bodies[n];
+    const mpm::geometry::BodyParticles<dim> b = mpm::geometry::seed_body_shape<dim>(body, out.settings);
+    const Vec v = body.vector<dim>("velocity", Vec::Zero());
+    std::vector<Vec> clear;
+    std::vector<std::vector<Vec>> in_pores(pores.size());
+    for (const Vec& x : b.x) {
+      std::size_t j = 0;
+      while (j < pores.size() && !pores[j].contain(x)) ++j;
+      (j < pores.size() ? in_pores[j] : clear).push_back(x);
+    }
+    add_fluid_particles(out, clear, b.volume, 1.0, v, body.path());
+    for (std::size_t j = 0; j < pores.size(); ++j)
+      add_fluid_particles(out, in_pores[j], b.volume, 1.0 - pores[j].packing(), v, body.path());
+  }
+
+  if (out.flow.inflow)
+    out.fluid_sources.push_back(mpm::geometry::inflow_source(*out.flow.inflow, out.settings, water->density));
+  for (const mpm::Config& emitter : scene.list("emitters")) {
+    const std::string emits = emitter.choice("phase", "", {"fluid", "sediment"});
+    if (emits == "fluid" && !water) emitter.fail("phase", "the scene has no `fluid` map");
+    if (emits == "sediment" && !sand) emitter.fail("phase", "the scene has no `sediment` map");
+    typename mpm::stages::ParticleSource<dim>::Settings source;
+    source.lo = emitter.vector<dim>("lo");
+    source.hi = emitter.vector<dim>("hi");
+    source.velocity = emitter.vector<dim>("velocity");
+    source.dx = out.settings.dx;
+    source.particles_per_cell = mpm::geometry::particles_per_cell<dim>(emitter);
+    const double volume = mpm::geometry::particle_volume<dim>(out.settings.dx, source.particles_per_cell);
+    source.start = emitter.number("start", 0.0, Range::non_negative());
+    source.stop = emitter.number("stop", std::numeric_limits<double>::infinity(), Range{source.start, 1e308, true, true});
+    if (emits == "fluid") {
+      source.particle_volume = volume;
+      source.particle_mass = water->density * volume;
+      out.fluid_sources.push_back(source);
+    } else {
+      // A falling stream is dilute: its grains start discrete when the sediment switches.
+      const double phi = default_packing ? emitter.number("packing_fraction", *default_packing, *packing)
+                                         : emitter.number("packing_fraction", *packing);
+      source.particle_volume = phi * volume;
+      source.particle_mass = sand->density * phi * volume;
+      source.material = sand->materials.empty() || sand->switching ? discrete_grain : std::uint16_t{0};
+      out.sediment_sources.push_back(source);
+    }
+    try {
+      mpm::stages::ParticleSource<dim> check(source);
+    } catch (const mpm::InputError& e) {
+      emitter.fail("lo", e.what());
+    }
+  }
+  return out;
+}
+
+template SedimentPhase<2> parse_sediment_phase<2>(const mpm::Config&);
+template SedimentPhase<3> parse_sediment_phase<3>(const mpm::Config&);
+template CoupledScene<2> load_coupled_scene<2>(const mpm::Config&);
+template CoupledScene<3> load_coupled_scene<3>(const mpm::Config&);
+
+}  // namespace coupling

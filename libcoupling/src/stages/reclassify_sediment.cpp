@@ -1,0 +1,115 @@
+// Continuum <-> discrete switching (coupling/stages/reclassify_sediment.h), after G2P:
+//   n_s,i  = the coupled step's fraction (wet) or m_s,i / (rho_s dx^dim) (dry),
+//   phi_p  = sum_i w_ip n_s,i at the advected x_p (one step behind the fractions, like every
+//            explicit estimate of the step),
+//   continuum -> discrete if phi_p < phi_low, discrete -> continuum if phi_p > phi_high,
+//   F^E = I and plastic = 0 for every particle that is discrete now or was during the step
+//   (DeformationUpdate moved its F; a new continuum particle starts stress-free).
+// The stencil reads the nodes through node_index: after advection a particle may leave the
+// patch of the bucket it was sorted into, and nodes that are not allocated hold no sediment.
+#include <coupling/stages/reclassify_sediment.h>
+#include <mpm/core/error.h>
+#include <mpm/core/particle_buckets.h>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <cmath>
+#include <variant>
+
+namespace coupling {
+
+template <int dim>
+SedimentCounts count_sediment(const CoupledState<dim>& s) {
+  SedimentCounts n;
+  if (!s.has_sediment) return n;
+  for (std::uint16_t m : s.sediment.particles.material) ++(m == discrete_grain ? n.discrete : n.continuum);
+  return n;
+}
+
+namespace stages {
+
+template <int dim>
+ReclassifySediment<dim>::ReclassifySediment(SedimentSwitching thresholds, double sediment_density,
+                                            std::uint16_t continuum, bool wet)
+    : thresholds_(thresholds), rho_s_(sediment_density), continuum_(continuum), wet_(wet) {
+  mpm::verify<mpm::InputError>(
+      thresholds.dilute_below > 0.0 && thresholds.dilute_below < thresholds.dense_above &&
+          thresholds.dense_above < 1.0,
+      "sediment switching: expected 0 < dilute_below < dense_above < 1 (got " +
+          std::to_string(thresholds.dilute_below) + ", " + std::to_string(thresholds.dense_above) + ")");
+  mpm::verify<mpm::InputError>(continuum != discrete_grain, "sediment switching: no continuum material");
+}
+
+template <int dim>
+std::vector<std::string> ReclassifySediment<dim>::reads() const {
+  return {"sediment.particle.x", "sediment.particle.material", wet_ ? "fractions" : "sediment.grid.mass"};
+}
+
+template <int dim>
+void ReclassifySediment<dim>::run(CoupledState<dim>& s) {
+  mpm::Particles<dim>& P = s.sediment.particles;
+  const mpm::SparseGrid<dim>& g = s.sediment.grid;
+  const std::vector<double>* n_s = &s.fractions.sediment;
+  if (!wet_) {
+    const double scale = 1.0 / (rho_s_ * std::pow(g.dx(), dim));
+    dry_fraction_.resize(g.node_storage());
+    for (std::size_t k = 0; k < dry_fraction_.size(); ++k) dry_fraction_[k] = g.mass[k] * scale;
+    n_s = &dry_fraction_;
+  }
+  mpm::verify<mpm::NumericalError>(n_s->size() == g.node_storage(),
+                                   "stage 'reclassify': node fractions do not match the sediment grid");
+
+  phi_p_.resize(P.size());
+  const mpm::CellMap<dim> cells(g);
+  std::visit(
+      [&](const auto& kernel) {
+        constexpr int S = std::decay_t<decltype(kernel)>::support;
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.size(), 4096), [&](const auto& r) {
+          for (std::size_t p = r.begin(); p != r.end(); ++p) {
+            const mpm::Vec<dim> xi = cells(P.x[p]);
+            int base[dim];
+            double w[dim][S], dw[S];
+            for (int a = 0; a < dim; ++a) kernel(xi[a], base[a], w[a], dw);
+            double phi = 0.0;
+            for (int n = 0; n < mpm::ipow(S, dim); ++n) {
+              mpm::IVec<dim> node;
+              double weight = 1.0;
+              for (int a = 0, rest = n; a < dim; ++a, rest /= S) {
+                node[a] = base[a] + rest % S;
+                weight *= w[a][rest % S];
+              }
+              if (const mpm::Index i = g.node_index(node); i >= 0) phi += weight * (*n_s)[static_cast<std::size_t>(i)];
+            }
+            phi_p_[p] = phi;
+          }
+        });
+      },
+      s.sediment.kernel);
+
+  to_discrete_ = to_continuum_ = 0;
+  for (std::size_t p = 0; p < P.size(); ++p) {
+    const bool was_discrete = P.material[p] == discrete_grain;
+    if (was_discrete && phi_p_[p] > thresholds_.dense_above) {
+      P.material[p] = continuum_;
+      ++to_continuum_;
+    } else if (!was_discrete && phi_p_[p] < thresholds_.dilute_below) {
+      P.material[p] = discrete_grain;
+      ++to_discrete_;
+    }
+    if (was_discrete || P.material[p] == discrete_grain) {
+      P.F[p] = mpm::Mat<dim>::Identity();
+      P.plastic[p] = 0.0;
+    }
+  }
+}
+
+template class ReclassifySediment<2>;
+template class ReclassifySediment<3>;
+
+}  // namespace stages
+
+template SedimentCounts count_sediment(const CoupledState<2>&);
+template SedimentCounts count_sediment(const CoupledState<3>&);
+
+}  // namespace coupling

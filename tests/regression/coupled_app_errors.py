@@ -1,0 +1,70 @@
+#!/usr/bin/env python3
+"""Bad input to a coupled app (the scene loader of coupling/scene_loader.h), run end to end:
+each case rewrites one value in a copy of the default submerged_collapse scene and must exit 2
+with exactly one stderr line naming the scene file and the line of that key, the key path,
+the value and the accepted range, and must leave no --out folder.
+
+  coupled_app_errors.py --app EXE --scene data/scenes/submerged_collapse.yaml --work DIR
+"""
+import argparse
+import pathlib
+import re
+import shutil
+import subprocess
+import sys
+
+# (key path in the message, regex of the text to rewrite, its replacement (re.sub syntax),
+#  substrings the message must hold besides file:line and the key path). The line is that of
+#  the match plus the newlines of the replacement.
+CASES = [
+    ("drag.grain_diameter", r"(grain_diameter:)\s*[^\s#]+", r"\1 0", ["0", "> 0"]),
+    ("drag.law", r"(\blaw:)\s*[^\s#]+", r"\1 magic", ["magic", "'stokes'", "'gidaspow'"]),
+    ("sediment.packing_fraction", r"(packing_fraction:)\s*[^\s#]+", r"\1 1.2", ["1.2", "(0, 0.65]"]),
+    ("sediment.min_fluid_fraction", r"(\nsediment:)", r"\1\n  min_fluid_fraction: 0", ["0", "(0, 1]"]),
+    ("sediment.switching.dense_above", r"(dense_above:)\s*[^\s#}]+", r"\1 0.1", ["0.1", "(0.2, 1)"]),
+    ("fluid.density", r"(density:)\s*1000", r"\1 -1", ["-1", "> 0"]),
+    ("bodies[0].phase", r"(phase:)\s*sediment", r"\1 mud", ["mud", "'fluid'", "'sediment'"]),
+]
+
+
+def main():
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--app", required=True)
+    parser.add_argument("--scene", required=True)
+    parser.add_argument("--work", required=True)
+    args = parser.parse_args()
+    work = pathlib.Path(args.work)
+    shutil.rmtree(work, ignore_errors=True)
+    work.mkdir(parents=True)
+    failures = 0
+    text = pathlib.Path(args.scene).read_text()
+    for i, (path, pattern, value, expected) in enumerate(CASES):
+        match = re.search(pattern, text)
+        if not match:
+            raise KeyError(pattern)
+        replaced = match.expand(value)
+        line = text.count("\n", 0, match.start()) + 1 + replaced.count("\n")
+        scene_file = work / f"case_{i}.yaml"
+        scene_file.write_text(text[:match.start()] + replaced + text[match.end():])
+        out = work / f"case_{i}_out"
+        r = subprocess.run([args.app, str(scene_file), "--out", str(out), "--quiet"],
+                           capture_output=True, text=True, timeout=60)
+        lines = r.stderr.strip().splitlines()
+        problems = []
+        if r.returncode != 2:
+            problems.append(f"exit {r.returncode}, expected 2")
+        if len(lines) != 1:
+            problems.append(f"{len(lines)} stderr lines, expected 1")
+        for sub in [f"case_{i}.yaml:{line}:", f"'{path}'"] + expected:
+            if sub not in r.stderr:
+                problems.append(f"message lacks {sub!r}")
+        if out.exists():
+            problems.append("the --out folder was created")
+        status = "ok" if not problems else "FAILED: " + "; ".join(problems)
+        print(f"{path}: {status}\n  {r.stderr.strip()}")
+        failures += bool(problems)
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
