@@ -50,7 +50,7 @@ template <int dim>
 SedimentPhase<dim> parse_sediment_phase(const mpm::Config& sediment);
 
 //! Reads the keys above and seeds the bodies. InputError (file, line, key, value, range) on a
-//! bad value, an unknown phase, law or key type, a body of a phase the scene lacks, or a
+//! bad value, a `periodic` axis (not supported by the coupled stages), an unknown phase, law or key type, a body of a phase the scene lacks, or a
 //! scene with both phases and no `drag`.
 template <int dim>
 CoupledScene<dim> load_coupled_scene(const mpm::Config& scene);

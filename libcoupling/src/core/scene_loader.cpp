@@ -72,6 +72,10 @@ CoupledScene<dim> load_coupled_scene(const mpm::Config& scene) {
   using mpm::Range;
   using Vec = mpm::Vec<dim>;
   mpm::SceneSettings<dim> settings = mpm::parse_scene_settings<dim>(scene);
+  // The volume fractions, the exchange and the mixture projection index nodes without the
+  // periodic wrap of the fluid's own stages.
+  for (int a = 0; a < dim; ++a)
+    if (settings.periodic[a]) scene.fail("periodic", "coupled scenes have no periodic axes (the fluid alone has)");
   auto colliders = mpm::geometry::parse_colliders<dim>(scene, settings.domain_lo, settings.domain_hi,
                                                         mpm::wall_layer(settings.kernel, settings.dx));
   mpm::geometry::FlowBoundaries<dim> flow = mpm::geometry::parse_flow_boundaries<dim>(scene, settings);

@@ -4,6 +4,7 @@
 // Combinations matter: one emptied cell of a closed cavity leaves the constant of the other
 // checkerboard colour in the null space.
 #include <fluid/pressure/null_space.h>
+#include <fluid/pressure/pcg.h>
 
 #include <Eigen/Eigenvalues>
 
@@ -12,13 +13,6 @@
 
 namespace fluid {
 
-namespace {
-double dot(const std::vector<double>& x, const std::vector<double>& y) {
-  double d = 0.0;
-  for (std::size_t i = 0; i < x.size(); ++i) d += x[i] * y[i];
-  return d;
-}
-}  // namespace
 
 template <int dim>
 std::vector<std::vector<double>> null_space_basis(const CellOperator<dim>& op) {

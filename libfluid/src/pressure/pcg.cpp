@@ -9,13 +9,11 @@
 
 namespace fluid {
 
-namespace {
 double dot(const std::vector<double>& a, const std::vector<double>& b) {
   double s = 0.0;
   for (std::size_t i = 0; i < a.size(); ++i) s += a[i] * b[i];
   return s;
 }
-}  // namespace
 
 SolveResult pcg(const LinearMap& A, const LinearMap& precondition, const std::vector<double>& b,
                 std::vector<double>& p, const SolveControl& control) {

@@ -14,6 +14,9 @@ namespace fluid {
 //! y = L x for a linear map on cell vectors (y has the size of x).
 using LinearMap = std::function<void(const std::vector<double>& x, std::vector<double>& y)>;
 
+//! The Euclidean inner product of two cell vectors of equal size.
+double dot(const std::vector<double>& x, const std::vector<double>& y);
+
 //! Solves A p = b from the initial guess in p; `precondition` empty means M = I.
 //! The stopping test uses the recurrence residual; the returned residuals are recomputed
 //! from b - A p. Setup seconds are left 0 (the caller adds its own setup).
