@@ -21,8 +21,13 @@
 //!    operator has positive off-diagonals and lambda_max = 8/3, where 2/3 would diverge).
 //!    Two sweeps each side: 7 (3D) and 8 (2D) iterations, flat from 32^3 and 256^2; one
 //!    sweep needs 10-11 and is no faster.
-//!  * Bottom: the Moore-Penrose pseudo-inverse of the coarsest matrix (dense, <= a few
-//!    hundred fluid cells), which also covers the singular closed-box NodeCell operator.
+//!  * Bottom: the Moore-Penrose pseudo-inverse of the coarsest matrix (dense), which also
+//!    covers the singular closed-box NodeCell operator. The hierarchy is rebuilt every solve,
+//!    so coarsening goes down to <= 32 fluid cells: at 256 the dense eigensolve was 13.3 of the
+//!    13.7 ms set-up per solve at 32x30 cells (settling), pressure 0.73 s vs 0.11 s for CG;
+//!    at 32 the set-up is 0.45 ms (mostly the power iteration for omega), pressure 0.13 s,
+//!    14.3 -> 16.8 iterations; 48x6 channel: 0.60 -> 0.03 s (CG 0.02-0.03 s), 1 -> 8
+//!    iterations. bench_pressure counts stay flat (2D dam break 11 -> 12 at 256^2).
 //!  * Checkerboard modes (2D NodeCell): in 2D, A = D B D^T couples only diagonal neighbours
 //!    (the face-neighbour entry sums s_x s_x' + s_y s_y' = 0 over the shared corners), so the
 //!    red and black cells decouple and S A S = A for S = diag((-1)^(i+j)), for any beta and
@@ -55,8 +60,8 @@ template <int dim>
 class Multigrid {
 public:
   struct Options {
-    int smoothing_sweeps = 2;             //!< smoothing sweeps before and after each coarse correction
-    std::int64_t max_coarse_cells = 256;  //!< coarsen until the coarsest level has at most this many fluid cells
+    int smoothing_sweeps = 2;            //!< smoothing sweeps before and after each coarse correction
+    std::int64_t max_coarse_cells = 32;  //!< coarsen until the coarsest level has at most this many fluid cells
   };
 
   //! Builds the hierarchy; `fine` must outlive the Multigrid.
