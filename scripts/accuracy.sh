@@ -1,11 +1,13 @@
 #!/usr/bin/env bash
 # Regenerates docs/accuracy.md: runs every shipped sweep in data/studies/ with the study
 # program and collects the tables and the error-vs-run-time plots (docs/accuracy/*.png).
-# Usage: bash scripts/accuracy.sh [BUILD_DIR]   (default: build; builds the apps first)
+# Usage: bash scripts/accuracy.sh [BUILD_DIR]   (default: build; builds the study program and
+# the apps the sweeps name first, with JOBS parallel jobs, default nproc)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build=${1:-build}
-cmake --build "$build" -j"$(nproc)"
+mapfile -t apps < <(sed -n 's/^app: *//p' data/studies/*.yaml | sort -u)
+cmake --build "$build" --target study "${apps[@]}" -j"${JOBS:-$(nproc)}"
 mkdir -p docs/accuracy
 {
   echo "# Accuracy: error against run time"

@@ -42,13 +42,6 @@ using namespace mpm;
 namespace {
 
 template <int dim>
-double total_mass(const Particles<dim>& p) {
-  double m = 0.0;
-  for (const double mp : p.mass) m += mp;
-  return m;
-}
-
-template <int dim>
 int run(const CommandLine& cl, const Config& scene) {
   coupling::CoupledScene<dim> flume = coupling::load_coupled_scene<dim>(scene);
   verify<InputError>(flume.fluid && flume.sediment && flume.state.sediment.particles.size() > 0,
@@ -61,7 +54,7 @@ int run(const CommandLine& cl, const Config& scene) {
   const coupling::BedProfile<dim> bed(flume.settings,
                             scene.child("sediment").number("packing_fraction", Range{0.0, 1.0, false, false}));
   const std::vector<double> h0 = bed.heights(s.sediment.particles);
-  const double fluid0 = total_mass(s.fluid.particles), grains0 = total_mass(s.sediment.particles);
+  const double fluid0 = s.fluid.particles.total_mass(), grains0 = s.sediment.particles.total_mass();
 
   auto pipeline = coupling::make_coupled_pipeline(flume);
   coupling::CoupledRunner<dim> runner("sediment_transport", cl, scene, flume.settings);

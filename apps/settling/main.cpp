@@ -11,7 +11,10 @@
 // t >= measure.start and the upper edge still above measure.min_top):
 //   settling_velocity, interface_velocity (least-squares slope of the upper edge),
 //   terminal_velocity_stokes = (rho_s - rho_w) g d^2 / (18 mu), hindered_velocity (the speed
-//   the drag law implies, settling_column.h), reynolds_number = rho_w v d / mu.
+//   the drag law implies, settling_column.h), reynolds_number = rho_w v d / mu, the relative
+//   errors hindered_velocity_error = |v / hindered_velocity - 1| and richardson_zaki_error =
+//   |v / richardson_zaki_velocity - 1|, richardson_zaki_velocity = n_w^4.65 v_St (Richardson &
+//   Zaki 1954, low-Re exponent; data/reference/richardson_zaki1954.md).
 // --check: settling_velocity within 10 % of hindered_velocity. For the Stokes and the
 // Schiller-Naumann laws at low Re this is n_w^2 v_St (n_w = 1 - phi; docs/coupling.md).
 #include <coupling/coupled_runner.h>
@@ -20,6 +23,7 @@
 #include <mpm/core/command_line.h>
 #include <mpm/core/error.h>
 
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -68,10 +72,14 @@ int run(const CommandLine& cl, const Config& scene) {
   const double settling = sum_v / n;
   const double interface = -(n * sth - st * sh) / (n * stt - st * st);
   const double hindered = col.column.hindered_velocity();
+  const double richardson_zaki = std::pow(1.0 - col.column.volume_fraction, 4.65) * col.column.stokes_velocity();
   runner.write_summary({{"settling_velocity", settling},
                         {"interface_velocity", interface},
                         {"terminal_velocity_stokes", col.column.stokes_velocity()},
                         {"hindered_velocity", hindered},
+                        {"hindered_velocity_error", std::abs(settling / hindered - 1.0)},
+                        {"richardson_zaki_velocity", richardson_zaki},
+                        {"richardson_zaki_error", std::abs(settling / richardson_zaki - 1.0)},
                         {"reynolds_number", col.column.reynolds(settling)},
                         {"window_frames", double(n)}});
   if (cl.check) return check_value("settling_velocity", settling, hindered, 0.1 * hindered) ? 0 : 1;

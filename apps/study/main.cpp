@@ -13,6 +13,8 @@
 //   set: [time.end=0.4]           (overrides for every case)
 //   parameter: {key: bar.cells, values: [16, 32, 64], spacing: inverse}   (h ~ 1/value)
 //   methods: [{name: cubic, set: [grid.kernel=cubic], min_order: 0.9}, ...]
+//   notes: |                      (optional Markdown printed under the tables: what the numbers
+//     ...                          mean, what limits them)
 #include <mpm/core/app.h>
 #include <mpm/core/config.h>
 #include <mpm/core/error.h>
@@ -116,6 +118,8 @@ int run(const CommandLine& cl) {
   const fs::path reference = here / sweep.text("reference");
   const std::string error_key = sweep.text("error");
   const std::vector<std::string> common = sweep.texts("set");
+  std::string notes = sweep.text("notes", "");
+  notes.erase(notes.find_last_not_of(" \n") + 1);
   const Config parameter = sweep.child("parameter");
   const std::string key = parameter.text("key");
   const std::vector<double> values = parameter.numbers("values", Range::positive());
@@ -179,6 +183,7 @@ int run(const CommandLine& cl) {
        << (std::isnan(method.min_order) ? "-" : ">= " + number(method.min_order) + (ok ? " (ok)" : " (FAILED)"))
        << " |\n";
   }
+  if (!notes.empty()) md << "\n" << notes << "\n";
   md << "\n![" << title << "](" << "study.png)\n";
   std::ofstream(out / "study.md") << md.str();
   plot(out, title, methods, cases);

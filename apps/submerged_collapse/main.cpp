@@ -73,17 +73,18 @@ double grain_kinetic_energy(const coupling::CoupledState<dim>& s) {
 template <int dim>
 int run(const CommandLine& cl, const Config& scene) {
   coupling::CoupledScene<dim> col = coupling::load_coupled_scene<dim>(scene);
-  verify<InputError>(col.fluid.has_value() && col.sediment.has_value() && col.state.sediment.particles.size() > 0,
-                     scene.file() + ": submerged_collapse needs a `fluid`, a `sediment` and a sediment body");
+  // Without `fluid` the same column collapses dry: the coupled pipeline runs the sediment's
+  // stages only (issue 5, lean scenes).
+  verify<InputError>(col.sediment.has_value() && col.state.sediment.particles.size() > 0,
+                     scene.file() + ": submerged_collapse needs a `sediment` and a sediment body");
   scene.reject_unknown_keys();
   coupling::CoupledState<dim>& s = col.state;
   const double front0 = front(s, true), left_half = 0.5 * front0, height0 = height(s, left_half);
-  double grains0 = 0.0;
-  for (double m : s.sediment.particles.mass) grains0 += m;
+  const double grains0 = s.sediment.particles.total_mass();
 
   auto pipeline = coupling::make_coupled_pipeline(col);
   coupling::CoupledRunner<dim> runner("submerged_collapse", cl, scene, col.settings);
-  coupling::add_pressure_columns(runner, pipeline);
+  if (col.fluid) coupling::add_pressure_columns(runner, pipeline);
   runner.add_column("front", [](const coupling::CoupledState<dim>& st) { return front(st, true); });
   runner.add_column("front_grains", [](const coupling::CoupledState<dim>& st) { return front(st, false); });
   runner.add_column("height", [=](const coupling::CoupledState<dim>& st) { return height(st, left_half); });
@@ -105,8 +106,7 @@ int run(const CommandLine& cl, const Config& scene) {
       duration = time[static_cast<std::size_t>(e - energy.begin())];
       break;
     }
-  double grains = 0.0;
-  for (double m : s.sediment.particles.mass) grains += m;
+  const double grains = s.sediment.particles.total_mass();
   const double runout = front(s, true) - front0, final_height = height(s, left_half);
   runner.write_summary({{"runout", runout},
                         {"final_height", final_height},

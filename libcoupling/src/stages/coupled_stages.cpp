@@ -44,7 +44,7 @@ MixtureProjection<dim>::MixtureProjection(double fluid_density, double sediment_
     : rho_w_(fluid_density),
       rho_s_(sediment_density),
       law_(law),
-      projection_(fluid_density, std::move(colliders), std::move(settings)) {}
+      projection_(fluid_density, std::move(colliders), std::move(settings), "mixture_pressure") {}
 
 template <int dim>
 void MixtureProjection<dim>::run(CoupledState<dim>& s) {

@@ -38,10 +38,11 @@ namespace fluid::stages {
 
 template <int dim>
 PressureProjection<dim>::PressureProjection(double density, mpm::geometry::ColliderSet<dim> colliders,
-                                            PressureSettings settings)
+                                            PressureSettings settings, std::string name)
     : density_(density),
       colliders_(std::move(colliders)),
       settings_(std::move(settings)),
+      name_(std::move(name)),
       solver_(make_pressure_solver<dim>(settings_.solver)) {}
 
 namespace {

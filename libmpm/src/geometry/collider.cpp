@@ -72,11 +72,14 @@ void DomainWalls<dim>::set_wall(int axis, Side side, const std::optional<Contact
 
 template <int dim>
 void DomainWalls<dim>::project(const Vec<dim>& x, Vec<dim>& v) const {
+  // A node on the inner face of the layer belongs to the wall: its coordinate lo + i dx may
+  // round a few ulps beyond lo + thickness (dx = 1/24 is not exact in binary).
+  const double layer = thickness_ * (1.0 + 1e-9);
   for (int axis = 0; axis < dim; ++axis) {
     const std::optional<Contact>& lower = walls_[index(axis, Side::lower)];
     const std::optional<Contact>& upper = walls_[index(axis, Side::upper)];
-    if (lower && x[axis] - lo_[axis] <= thickness_) v = lower->apply<dim>(v, Vec<dim>::Unit(axis));
-    if (upper && hi_[axis] - x[axis] <= thickness_) v = upper->apply<dim>(v, Vec<dim>(-Vec<dim>::Unit(axis)));
+    if (lower && x[axis] - lo_[axis] <= layer) v = lower->apply<dim>(v, Vec<dim>::Unit(axis));
+    if (upper && hi_[axis] - x[axis] <= layer) v = upper->apply<dim>(v, Vec<dim>(-Vec<dim>::Unit(axis)));
   }
 }
 

@@ -40,10 +40,12 @@ struct MixtureNodes {
 template <int dim>
 class PressureProjection final : public mpm::Stage<mpm::MpmState<dim>> {
 public:
-  //! `density` rho_w [kg/m^3] of the fluid; `colliders` the same obstacles as the boundary stage.
-  PressureProjection(double density, mpm::geometry::ColliderSet<dim> colliders, PressureSettings settings);
+  //! `density` rho_w [kg/m^3] of the fluid; `colliders` the same obstacles as the boundary stage;
+  //! `name` the stage name its messages give (the coupling's mixture projection runs one inside).
+  PressureProjection(double density, mpm::geometry::ColliderSet<dim> colliders, PressureSettings settings,
+                     std::string name = "pressure");
 
-  std::string name() const override { return "pressure"; }
+  std::string name() const override { return name_; }
   std::vector<std::string> reads() const override { return {"grid.mass", "grid.velocity", "particle.x"}; }
   std::vector<std::string> writes() const override { return {"grid.velocity", "cell.pressure"}; }
   void run(mpm::MpmState<dim>& s) override;
@@ -86,6 +88,7 @@ private:
   double density_;
   mpm::geometry::ColliderSet<dim> colliders_;
   PressureSettings settings_;
+  std::string name_;
   std::unique_ptr<PressureSolver<dim>> solver_;
   const MixtureNodes<dim>* mixture_ = nullptr;
   CellOperator<dim> op_;

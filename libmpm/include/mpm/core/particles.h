@@ -29,6 +29,12 @@ struct Particles {
   std::vector<double> plastic;        //!< plastic state: log volume correction (Tampubolon 2017) (solid only)
 
   std::size_t size() const { return x.size(); }
+  //! Sum of the particle masses [kg].
+  double total_mass() const {
+    double m = 0.0;
+    for (const double mp : mass) m += mp;
+    return m;
+  }
   bool has_deformation() const { return deformation_; }
 
   //! Appends one particle at rest with identity deformation (when deformation is tracked).
