@@ -102,6 +102,9 @@ CASES = [
          "falls 4a freely and hits the far wall at ~7 m/s", "dam_break", DAM_BREAK,
          ["column.cells_per_width=10", "gravity=[98.1, 0]", "walls.y_max=sticky", "time.end=0.12"],
          "completes"),
+    case("falling_blob", "a disc of water (r = 5 cm) falls 25 cm freely in a closed box and splashes on the "
+         "floor at ~2.2 m/s (`coupled_scene`, fluid only)", "coupled_scene",
+         "data/scenes/stability/falling_blob.yaml", [], "completes"),
     case("pressure_tolerance_1e-30", "`dam_break`, pressure.tolerance = 1e-30 alone: below round-off, the CG "
          "solve stops at its absolute floor (1e-14 of the scale of D u), no warning; diagnostics.csv "
          "records the relative residual reached", "dam_break", DAM_BREAK,
