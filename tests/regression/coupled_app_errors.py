@@ -7,12 +7,10 @@ the value and the accepted range, and must leave no --out folder.
   coupled_app_errors.py --app EXE --scene data/scenes/submerged_collapse.yaml --work DIR
 """
 import argparse
-import pathlib
 import re
-import shutil
 import sys
 
-from bad_input import check_bad_input
+from bad_input import run_cases
 
 # (key path in the message, regex of the text to rewrite, its replacement (re.sub syntax),
 #  substrings the message must hold besides file:line and the key path). The line is that of
@@ -30,30 +28,27 @@ CASES = [
 ]
 
 
+def substitute(pattern, value):
+    """A rewrite for run_cases: the first match of `pattern` becomes `value` (re.sub syntax);
+    the key's line is that of the match plus the newlines of the replacement."""
+    def rewrite(text):
+        match = re.search(pattern, text)
+        if not match:
+            raise KeyError(pattern)
+        replaced = match.expand(value)
+        line = text.count("\n", 0, match.start()) + 1 + replaced.count("\n")
+        return text[:match.start()] + replaced + text[match.end():], line
+    return rewrite
+
+
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--app", required=True)
     parser.add_argument("--scene", required=True)
     parser.add_argument("--work", required=True)
     args = parser.parse_args()
-    work = pathlib.Path(args.work)
-    shutil.rmtree(work, ignore_errors=True)
-    work.mkdir(parents=True)
-    failures = 0
-    text = pathlib.Path(args.scene).read_text()
-    for i, (path, pattern, value, expected) in enumerate(CASES):
-        match = re.search(pattern, text)
-        if not match:
-            raise KeyError(pattern)
-        replaced = match.expand(value)
-        line = text.count("\n", 0, match.start()) + 1 + replaced.count("\n")
-        scene_file = work / f"case_{i}.yaml"
-        scene_file.write_text(text[:match.start()] + replaced + text[match.end():])
-        problems, message = check_bad_input(args.app, scene_file, line, path, expected)
-        status = "ok" if not problems else "FAILED: " + "; ".join(problems)
-        print(f"{path}: {status}\n  {message}")
-        failures += bool(problems)
-    return 1 if failures else 0
+    cases = [(path, path, substitute(pattern, value), expected) for path, pattern, value, expected in CASES]
+    return run_cases(args.app, args.scene, args.work, cases)
 
 
 if __name__ == "__main__":

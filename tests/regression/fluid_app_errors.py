@@ -7,12 +7,10 @@ no --out folder.
   fluid_app_errors.py --dam-break EXE --scene data/scenes/dam_break.yaml --work DIR
 """
 import argparse
-import pathlib
 import re
-import shutil
 import sys
 
-from bad_input import check_bad_input
+from bad_input import run_cases
 
 # (key path, new value, substrings the message must hold besides file:line and the key path)
 CASES = [
@@ -44,20 +42,9 @@ def main():
     parser.add_argument("--scene", required=True)
     parser.add_argument("--work", required=True)
     args = parser.parse_args()
-    work = pathlib.Path(args.work)
-    shutil.rmtree(work, ignore_errors=True)
-    work.mkdir(parents=True)
-    failures = 0
-    text = pathlib.Path(args.scene).read_text()
-    for i, (path, value, expected) in enumerate(CASES):
-        scene, line = with_value(text, path, value)
-        scene_file = work / f"case_{i}.yaml"
-        scene_file.write_text(scene)
-        problems, message = check_bad_input(args.dam_break, scene_file, line, path, expected)
-        status = "ok" if not problems else "FAILED: " + "; ".join(problems)
-        print(f"{path} = {value}: {status}\n  {message}")
-        failures += bool(problems)
-    return 1 if failures else 0
+    cases = [(f"{path} = {value}", path, lambda text, p=path, v=value: with_value(text, p, v), expected)
+             for path, value, expected in CASES]
+    return run_cases(args.dam_break, args.scene, args.work, cases)
 
 
 if __name__ == "__main__":
