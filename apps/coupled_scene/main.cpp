@@ -3,7 +3,7 @@
 //
 //   coupled_scene data/scenes/sediment_transport.yaml --set time.end=0.2
 //
-// diagnostics.csv adds pressure_iterations and pressure_residual when the scene has a fluid,
+// diagnostics.csv adds pressure_iterations, pressure_residual and pressure_round_off when the scene has a fluid,
 // and the inflow and outflow masses of each phase.
 // summary.json: mass_fluid and mass_sediment at the end [kg] (per metre in 2D).
 #include <coupling/coupled_runner.h>

@@ -12,7 +12,7 @@ namespace coupling {
 template <int dim>
 using CoupledRunner = mpm::Runner<dim, CoupledState<dim>>;
 
-//! Adds the columns pressure_iterations and pressure_residual of the pipeline's pressure stage
+//! Adds the columns pressure_iterations, pressure_residual and pressure_round_off of the pipeline's pressure stage
 //! (the mixture projection, or the fluid's own in a clear-fluid scene); InputError when the
 //! pipeline has none (a dry scene).
 template <int dim>

@@ -23,6 +23,8 @@ void add_pressure_columns(CoupledRunner<dim>& runner, mpm::Pipeline<CoupledState
                     [projection](const CoupledState<dim>&) { return double(projection->last_result().iterations); });
   runner.add_column("pressure_residual",
                     [projection](const CoupledState<dim>&) { return projection->last_result().relative_residual; });
+  runner.add_column("pressure_round_off",
+                    [projection](const CoupledState<dim>&) { return projection->stopped_at_round_off() ? 1.0 : 0.0; });
 }
 
 template <int dim>

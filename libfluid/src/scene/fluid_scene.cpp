@@ -127,6 +127,8 @@ void add_pressure_columns(mpm::Runner<dim>& runner, mpm::Pipeline<mpm::MpmState<
                     [projection](const mpm::MpmState<dim>&) { return double(projection->last_result().iterations); });
   runner.add_column("pressure_residual",
                     [projection](const mpm::MpmState<dim>&) { return projection->last_result().relative_residual; });
+  runner.add_column("pressure_round_off",
+                    [projection](const mpm::MpmState<dim>&) { return projection->stopped_at_round_off() ? 1.0 : 0.0; });
 }
 
 template <int dim>

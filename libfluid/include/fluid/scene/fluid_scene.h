@@ -83,8 +83,9 @@ FluidScene<dim> load_fluid_scene(const mpm::Config& scene);
 template <int dim>
 mpm::Pipeline<mpm::MpmState<dim>> make_fluid_pipeline(const FluidScene<dim>& scene);
 
-//! Adds the diagnostics columns pressure_iterations and pressure_residual (of the last solve
-//! of each frame) for the projection stage of `pipeline`.
+//! Adds the diagnostics columns pressure_iterations, pressure_residual and pressure_round_off
+//! (1 when the solve stopped at its round-off floor above the tolerance; of the last solve of
+//! each frame) for the projection stage of `pipeline`.
 template <int dim>
 void add_pressure_columns(mpm::Runner<dim>& runner, mpm::Pipeline<mpm::MpmState<dim>>& pipeline);
 

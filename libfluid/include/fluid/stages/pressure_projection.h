@@ -82,6 +82,9 @@ public:
   //! Pressure [Pa] of the cell holding x after the last solve (0 in empty cells and outside).
   double pressure_at(const mpm::SparseGrid<dim>& grid, const Vec<dim>& x) const;
   const SolveResult& last_result() const { return result_; }
+  //! Whether the last solve stopped at the round-off floor of its system above the requested
+  //! tolerance (a converged solve, but not to the tolerance asked for).
+  bool stopped_at_round_off() const { return stopped_at_round_off_; }
   const PressureSettings& settings() const { return settings_; }
 
 private:
@@ -97,6 +100,8 @@ private:
   std::vector<double> b_;
   std::vector<Vec<dim>> u_;
   SolveResult result_;
+  bool stopped_at_round_off_ = false;
+  bool round_off_reported_ = false;
 };
 
 }  // namespace fluid::stages
