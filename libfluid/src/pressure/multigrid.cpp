@@ -226,24 +226,33 @@ void Multigrid<dim>::gauss_seidel(int l, int colour) {
     });
     return;
   }
+  // x is 0 on every non-fluid cell (only fluid cells are ever written), so a neighbour needs
+  // no type test: an empty neighbour adds 0 (p = 0), and a missing one past a box face reads
+  // the zero line instead. The x faces are peeled off the loop.
+  const std::vector<double> zero_line(static_cast<std::size_t>(nx), 0.0);
   detail::parallel_for_lines<dim>(o.cells, [&](const IVec<dim>& c, std::int64_t base) {
-    std::array<bool, dim> lower{}, upper{};
+    std::array<const double*, 2 * (dim - 1)> across{};
     for (int a = 1; a < dim; ++a) {
-      lower[a] = c[a] > 0;
-      upper[a] = c[a] + 1 < o.cells[a];
+      across[2 * (a - 1)] = c[a] > 0 ? x + base - stride[a] : zero_line.data();
+      across[2 * (a - 1) + 1] = c[a] + 1 < o.cells[a] ? x + base + stride[a] : zero_line.data();
     }
-    for (int i = (colour + c.sum()) % 2; i < nx; i += 2) {
-      const std::int64_t ci = base + i;
-      if (type[ci] != CellType::fluid) continue;
-      double sum = h2 * b[ci];
-      if (i > 0 && type[ci - 1] == CellType::fluid) sum += x[ci - 1];
-      if (i + 1 < nx && type[ci + 1] == CellType::fluid) sum += x[ci + 1];
-      for (int a = 1; a < dim; ++a) {
-        if (lower[a] && type[ci - stride[a]] == CellType::fluid) sum += x[ci - stride[a]];
-        if (upper[a] && type[ci + stride[a]] == CellType::fluid) sum += x[ci + stride[a]];
-      }
-      x[ci] = sum / (2.0 * dim);
+    double* line = x + base;
+    const double* rhs = b + base;
+    const CellType* line_type = type + base;
+    auto update = [&](int i, double sum) {
+      for (const double* neighbour : across) sum += neighbour[i];
+      line[i] = sum * (1.0 / (2.0 * dim));
+    };
+    const int first = (colour + c.sum()) % 2;
+    if (nx == 1) {
+      if (first == 0 && line_type[0] == CellType::fluid) update(0, h2 * rhs[0]);
+      return;
     }
+    if (first == 0 && line_type[0] == CellType::fluid) update(0, h2 * rhs[0] + line[1]);
+    const int last = nx - 1;
+    for (int i = first == 0 ? 2 : 1; i < last; i += 2)
+      if (line_type[i] == CellType::fluid) update(i, h2 * rhs[i] + line[i - 1] + line[i + 1]);
+    if ((last - first) % 2 == 0 && line_type[last] == CellType::fluid) update(last, h2 * rhs[last] + line[last - 1]);
   });
 }
 
