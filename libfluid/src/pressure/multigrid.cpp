@@ -141,14 +141,21 @@ Multigrid<dim>::Multigrid(const CellOperator<dim>& fine, const Options& options)
     next.op = coarsen(op(level_count() - 1));
     levels_.push_back(std::move(next));
   }
+  if (dim == 2 && fine.kind == CellOperator<dim>::Kind::node_cell) {
+    // The column colouring needs an even count on a periodic x axis (else Jacobi).
+    rotated_smoother_ = true;
+    for (int l = 0; l < level_count(); ++l)
+      rotated_smoother_ = rotated_smoother_ && (!op(l).periodic[0] || op(l).cells[0] % 2 == 0);
+  }
   for (int l = 0; l < level_count(); ++l) {
     Level& level = levels_[l];
     const auto n = static_cast<std::size_t>(op(l).cell_count());
-    op(l).diagonal(level.inverse_diagonal);
-    for (double& d : level.inverse_diagonal) d = d > 0.0 ? 1.0 / d : 0.0;
-    // Jacobi (NodeCell) only; 1.05: the power iteration approaches lambda_max from below.
-    if (op(l).kind == CellOperator<dim>::Kind::node_cell)
+    // Jacobi (3D NodeCell) only; 1.05: the power iteration approaches lambda_max from below.
+    if (op(l).kind == CellOperator<dim>::Kind::node_cell && !rotated_smoother_) {
+      op(l).diagonal(level.inverse_diagonal);
+      for (double& d : level.inverse_diagonal) d = d > 0.0 ? 1.0 / d : 0.0;
       level.omega = 4.0 / (3.0 * 1.05 * estimate_lambda_max(op(l), level.inverse_diagonal, level.scratch));
+    }
     level.b.assign(n, 0.0);
     level.x.assign(n, 0.0);
     level.r.assign(n, 0.0);
@@ -257,6 +264,65 @@ void Multigrid<dim>::gauss_seidel(int l, int colour) {
 }
 
 template <int dim>
+void Multigrid<dim>::rotated_gauss_seidel(int l, int parity) {
+  // 2D NodeCell: (A p)_c = sum over the corners n of c of beta_n (p_c - p_c'(n)) / (2 dx^2),
+  // c'(n) the cell diagonally opposite c across n (multigrid.h). Cells couple only to cells
+  // one column over, so the columns of one parity update in place and in parallel. x is 0
+  // off the fluid cells, and a cell past a box face has p = 0 (the zero line, or the peeled
+  // x faces).
+  if constexpr (dim == 2) {
+    Level& level = levels_[l];
+    const CellOperator<dim>& o = op(l);
+    const double two_h2 = 2.0 * o.dx * o.dx;
+    const int nx = o.cells[0], ny = o.cells[1];
+    const CellType* type = o.type.data();
+    const double* beta = o.beta.data();
+    const double* b = level.b.data();
+    double* x = level.x.data();
+    if (o.is_periodic()) {
+      detail::parallel_for_lines<dim>(o.cells, [&](IVec<dim> c, std::int64_t base) {
+        for (c[0] = parity; c[0] < nx; c[0] += 2) {
+          const std::int64_t ci = base + c[0];
+          if (type[ci] != CellType::fluid) continue;
+          double sum = two_h2 * b[ci], weight = 0.0;
+          for (int k = 0; k < 4; ++k) {
+            const IVec<dim> corner = c + IVec<dim>(k & 1, k >> 1);
+            const double w = beta[o.node_index(corner)];
+            weight += w;
+            const std::int64_t cj = detail::shifted_index<dim>(2 * corner - c - IVec<dim>::Ones(),
+                                                               IVec<dim>::Zero(), o.cells, o.periodic);
+            if (cj >= 0) sum += w * x[cj];
+          }
+          if (weight > 0.0) x[ci] = sum / weight;
+        }
+      });
+      return;
+    }
+    const std::vector<double> zero_line(static_cast<std::size_t>(nx), 0.0);
+    const std::int64_t node_row = nx + 1;
+    tbb::parallel_for(tbb::blocked_range<int>(0, ny, 16), [&](const tbb::blocked_range<int>& rows) {
+      for (int j = rows.begin(); j < rows.end(); ++j) {
+        const double* below = j > 0 ? x + std::int64_t(j - 1) * nx : zero_line.data();
+        const double* above = j + 1 < ny ? x + std::int64_t(j + 1) * nx : zero_line.data();
+        const double* beta_lo = beta + std::int64_t(j) * node_row;  // nodes (i, j), (i + 1, j)
+        const double* beta_hi = beta_lo + node_row;                 // nodes (i, j + 1), (i + 1, j + 1)
+        const std::int64_t base = std::int64_t(j) * nx;
+        for (int i = parity; i < nx; i += 2) {
+          if (type[base + i] != CellType::fluid) continue;
+          const double w00 = beta_lo[i], w10 = beta_lo[i + 1], w01 = beta_hi[i], w11 = beta_hi[i + 1];
+          const double weight = w00 + w10 + w01 + w11;
+          if (weight == 0.0) continue;
+          double sum = two_h2 * b[base + i];
+          if (i > 0) sum += w00 * below[i - 1] + w01 * above[i - 1];
+          if (i + 1 < nx) sum += w10 * below[i + 1] + w11 * above[i + 1];
+          x[base + i] = sum / weight;
+        }
+      }
+    });
+  }
+}
+
+template <int dim>
 void Multigrid<dim>::restrict_residual(int l) {
   Level& level = levels_[l];
   detail::apply_operator_to<dim>(op(l), level.x, level.scratch,
@@ -310,19 +376,23 @@ void Multigrid<dim>::vcycle(int l) {
     return;
   }
   const int sweeps = options_.smoothing_sweeps;
-  if (op(l).kind == CellOperator<dim>::Kind::poisson) {
-    // Symmetric red-black Gauss-Seidel: red-black before, black-red after.
+  // Two-colour Gauss-Seidel (Poisson: red-black; 2D NodeCell: column parity), symmetric:
+  // colours 0, 1 before the coarse correction, 1, 0 after.
+  void (Multigrid::*colour_sweep)(int, int) = op(l).kind == CellOperator<dim>::Kind::poisson ? &Multigrid::gauss_seidel
+                                              : rotated_smoother_ ? &Multigrid::rotated_gauss_seidel
+                                                                  : nullptr;
+  if (colour_sweep) {
     std::fill(level.x.begin(), level.x.end(), 0.0);
     for (int s = 0; s < sweeps; ++s) {
-      gauss_seidel(l, 0);
-      gauss_seidel(l, 1);
+      (this->*colour_sweep)(l, 0);
+      (this->*colour_sweep)(l, 1);
     }
     restrict_residual(l);
     vcycle(l + 1);
     prolong_add(l + 1);
     for (int s = 0; s < sweeps; ++s) {
-      gauss_seidel(l, 1);
-      gauss_seidel(l, 0);
+      (this->*colour_sweep)(l, 1);
+      (this->*colour_sweep)(l, 0);
     }
     return;
   }
