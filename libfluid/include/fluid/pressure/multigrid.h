@@ -46,7 +46,11 @@
 //!    and permutations: modes (-1)^(i+j) f(k) with f arbitrary. Representing them needs
 //!    semicoarsened coarse spaces per family; this V-cycle does not have them, and 3D NodeCell
 //!    iteration counts grow with N (docs/performance.md). The same correction with the four
-//!    3D sign patterns was tried and does not help (231 vs 173 iterations at 16^3).
+//!    3D sign patterns was tried and does not help (231 vs 173 iterations at 16^3). Where the
+//!    lines meet, at (pi,pi,pi), the symbol is quartic (~ a^2 b^2 + b^2 c^2 + c^2 a^2 in the
+//!    offsets), so even the modulated smooth modes are not Laplacian-like there. Measured:
+//!    on 3D NodeCell systems plain CG is about 3x faster than this MGPCG (dam break 32^3,
+//!    64^3), so 3D scenes choose cg or hypre_boomeramg.
 //!  * Periodic axes: stencils, transfers (the 1/4 neighbour wraps) and smoothers wrap; such an
 //!    axis halves only from an even count >= 4, so coarsening stops at the first odd count
 //!    (power-of-two periods coarsen fully). The Poisson red-black smoother needs even
