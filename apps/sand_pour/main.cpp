@@ -55,7 +55,7 @@ int run(const CommandLine& cl, const Config& scene) {
   verify<InputError>(tank.fluid && tank.sediment && !tank.sediment_sources.empty(),
                      scene.file() + ": sand_pour needs a `fluid`, a `sediment` and an emitter of sediment");
   const coupling::BedProfile<dim> bed(
-      tank.settings, scene.child("pile").number("packing_fraction", Range{0.0, 1.0, false, false}));
+      tank.settings, scene.child("pile").number("packing_fraction", Range::open(0.0, 1.0)));
   scene.reject_unknown_keys();
 
   auto pipeline = coupling::make_coupled_pipeline(tank);

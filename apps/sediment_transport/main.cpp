@@ -52,7 +52,7 @@ int run(const CommandLine& cl, const Config& scene) {
 
   coupling::CoupledState<dim>& s = flume.state;
   const coupling::BedProfile<dim> bed(flume.settings,
-                            scene.child("sediment").number("packing_fraction", Range{0.0, 1.0, false, false}));
+                            scene.child("sediment").number("packing_fraction", Range::open(0.0, 1.0)));
   const std::vector<double> h0 = bed.heights(s.sediment.particles);
   const double fluid0 = s.fluid.particles.total_mass(), grains0 = s.sediment.particles.total_mass();
 

@@ -19,12 +19,14 @@ CASES = [
     ("drag.grain_diameter", r"(grain_diameter:)\s*[^\s#]+", r"\1 0", ["0", "> 0"]),
     ("drag.law", r"(\blaw:)\s*[^\s#]+", r"\1 magic", ["magic", "'stokes'", "'gidaspow'"]),
     ("sediment.packing_fraction", r"(packing_fraction:)\s*[^\s#]+", r"\1 1.2", ["1.2", "(0, 0.65]"]),
-    ("sediment.min_fluid_fraction", r"(\nsediment:)", r"\1\n  min_fluid_fraction: 0", ["0", "(0, 1]"]),
+    ("sediment.min_fluid_fraction", r"(\nsediment:)", r"\1\n  min_fluid_fraction: 1", ["1", "(0, 1)"]),
     ("sediment.switching.dense_above", r"(dense_above:)\s*[^\s#}]+", r"\1 0.1", ["0.1", "(0.2, 1)"]),
     ("fluid.density", r"(density:)\s*1000", r"\1 -1", ["-1", "> 0"]),
     ("bodies[0].phase", r"(phase:)\s*sediment", r"\1 mud", ["mud", "'fluid'", "'sediment'"]),
     ("periodic", r"(gravity:[^\n]*\nwalls:\n  contact: sticky)", r"\1\n  x_min: open\n  x_max: open\nperiodic: [true, false]",
      ["coupled scenes have no periodic axes"]),
+    ("emitters[0].hi", r"\Z", r"\nemitters:\n  - {phase: fluid, lo: [0.1, 0.12], hi: [0.2, 0.2], velocity: [0, -1]}",
+     ["0.2", "must lie inside the domain"]),
 ]
 
 

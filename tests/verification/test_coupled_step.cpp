@@ -175,6 +175,12 @@ TEST_CASE("dilute Stokes suspension settles at the velocity of the drag law") {
   CHECK(std::abs(v / expected - 1.0) < 0.05);
 }
 
+TEST_CASE("the settling column is closed: a periodic axis is refused with its key") {
+  const std::vector<std::string> open_sides = {"walls.x_min=open", "walls.x_max=open", "periodic=[true, false]"};
+  CHECK_THROWS_WITH_AS(load_settling_column<2>(settling_scene(open_sides)),
+                       doctest::Contains("key 'periodic' = [true, false]: the settling column is closed"), mpm::InputError);
+}
+
 TEST_CASE("stiff drag: 10 um grains at the fluid's time step stay bounded and hindered") {
   // d = 10 um: relaxation time 15 us, a thousandth of the fluid's step. phi = 0.2 with
   // Schiller-Naumann (Stokes limit at Re = 1e-6): v = n_w^2 v_St = 0.64 v_St.

@@ -32,6 +32,10 @@ CoupledScene<dim> make_coupled_scene(mpm::SceneSettings<dim> settings,
                                "coupled scene: a fluid and a sediment phase need a drag law");
   mpm::verify<mpm::InputError>(!sediment || !sediment->switching || !sediment->materials.empty(),
                                "coupled scene: continuum/discrete switching needs a sediment material");
+  // The volume fractions, the exchange and the mixture projection index nodes without the
+  // periodic wrap of the fluid's own stages.
+  for (int a = 0; a < dim; ++a)
+    mpm::verify<mpm::InputError>(!settings.periodic[a], "coupled scene: no periodic axes (the fluid alone has them)");
   CoupledState<dim> state;
   state.has_fluid = fluid.has_value();
   state.has_sediment = sediment.has_value();

@@ -54,7 +54,7 @@ SedimentPhase<dim> parse_sediment_phase(const mpm::Config& sediment) {
     s.density = sediment.number("density", Range::positive());
   }
   s.min_fluid_fraction =
-      sediment.number("min_fluid_fraction", default_min_fluid_fraction, Range{0.0, 1.0, true, false});
+      sediment.number("min_fluid_fraction", default_min_fluid_fraction, Range::open(0.0, 1.0));
   if (const std::optional<mpm::Config> keys = sediment.optional_child("switching")) {
     if (s.materials.empty())
       sediment.fail("switching", "switching needs a continuum sediment (youngs_modulus and the other keys of a "
@@ -72,8 +72,7 @@ CoupledScene<dim> load_coupled_scene(const mpm::Config& scene) {
   using mpm::Range;
   using Vec = mpm::Vec<dim>;
   mpm::SceneSettings<dim> settings = mpm::parse_scene_settings<dim>(scene);
-  // The volume fractions, the exchange and the mixture projection index nodes without the
-  // periodic wrap of the fluid's own stages.
+  // make_coupled_scene refuses them too, without the file position.
   for (int a = 0; a < dim; ++a)
     if (settings.periodic[a]) scene.fail("periodic", "coupled scenes have no periodic axes (the fluid alone has)");
   auto colliders = mpm::geometry::parse_colliders<dim>(scene, settings.domain_lo, settings.domain_hi,
@@ -151,6 +150,7 @@ CoupledScene<dim> load_coupled_scene(const mpm::Config& scene) {
     typename mpm::stages::ParticleSource<dim>::Settings source;
     source.lo = emitter.vector<dim>("lo");
     source.hi = emitter.vector<dim>("hi");
+    mpm::geometry::require_inside_domain(emitter, source.lo, source.hi, out.settings);
     source.velocity = emitter.vector<dim>("velocity");
     source.dx = out.settings.dx;
     source.particles_per_cell = mpm::geometry::particles_per_cell<dim>(emitter);

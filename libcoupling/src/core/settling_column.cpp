@@ -57,6 +57,8 @@ SettlingScene<dim> load_settling_column(const mpm::Config& scene) {
                                  dx};
   domain.hi[1] = col.height + layer;
   mpm::SceneSettings<dim> settings = mpm::parse_scene_settings<dim>(scene, domain);
+  for (int a = 0; a < dim; ++a)
+    if (settings.periodic[a]) scene.fail("periodic", "the settling column is closed; it has no periodic axes");
   col.gravity = settings.gravity.norm();
   auto colliders = mpm::geometry::parse_colliders<dim>(scene, domain.lo, domain.hi, layer);
   mpm::verify<mpm::InputError>(

@@ -5,6 +5,8 @@
 #include <mpm/geometry/body_config.h>
 #include <mpm/geometry/seeding.h>
 
+#include "number_text.h"
+
 #include <cmath>
 
 namespace mpm::geometry {
@@ -71,8 +73,7 @@ FlowBoundaries<dim> parse_flow_boundaries(const Config& scene, const SceneSettin
   inflow.lo = in->vector<dim>("lo");
   inflow.hi = in->vector<dim>("hi");
   if (!(inflow.hi.array() > inflow.lo.array()).all()) in->fail("hi", "must exceed lo in every component");
-  if ((inflow.lo.array() < settings.domain_lo.array()).any()) in->fail("lo", "must lie inside the domain");
-  if ((inflow.hi.array() > settings.domain_hi.array()).any()) in->fail("hi", "must lie inside the domain");
+  require_inside_domain(*in, inflow.lo, inflow.hi, settings);
   // The inlet spans the open layer of its face and at least one cell beyond, where the stream enters.
   const bool lower = inflow.face.side == Side::lower;
   const double open_end = lower ? settings.domain_lo[a] + layer : settings.domain_hi[a] - layer;
@@ -138,7 +139,22 @@ std::vector<stages::SinkRegion<dim>> flow_sink_regions(const FlowBoundaries<dim>
   return regions;
 }
 
+template <int dim>
+void require_inside_domain(const Config& at, const Vec<dim>& lo, const Vec<dim>& hi, const SceneSettings<dim>& settings) {
+  const auto box = [&] {
+    std::string text = "must lie inside the domain, from";
+    for (const Vec<dim>* corner : {&settings.domain_lo, &settings.domain_hi}) {
+      for (int a = 0; a < dim; ++a) text += (a == 0 ? " [" : ", ") + detail::number_text((*corner)[a]);
+      text += corner == &settings.domain_lo ? "] to" : "]";
+    }
+    return text;
+  };
+  if ((lo.array() < settings.domain_lo.array()).any()) at.fail("lo", box());
+  if ((hi.array() > settings.domain_hi.array()).any()) at.fail("hi", box());
+}
+
 #define MPM_FLOW_BOUNDARIES(dim)                                                                              \
+  template void require_inside_domain(const Config&, const Vec<dim>&, const Vec<dim>&, const SceneSettings<dim>&); \
   template FlowBoundaries<dim> parse_flow_boundaries(const Config&, const SceneSettings<dim>&);               \
   template void add_flow_boundaries(const FlowBoundaries<dim>&, ColliderSet<dim>&);                           \
   template stages::ParticleSource<dim>::Settings inflow_source(const Inflow<dim>&, const SceneSettings<dim>&, \

@@ -60,6 +60,11 @@ struct FlowBoundaries {
 template <int dim>
 FlowBoundaries<dim> parse_flow_boundaries(const Config& scene, const SceneSettings<dim>& settings);
 
+//! InputError at `at`'s key lo or hi unless the box [lo, hi] lies inside the domain of
+//! `settings` (an inlet or an emitter: particles outside would stop the run at the next sort).
+template <int dim>
+void require_inside_domain(const Config& at, const Vec<dim>& lo, const Vec<dim>& hi, const SceneSettings<dim>& settings);
+
 //! Opens the walls of the flow faces and adds the inlet (a fixed box, sticky relative to U,
 //! Motion::fixed) to `colliders`, so the boundary stage, the viscous solve and the pressure
 //! projection all treat the inlet nodes as prescribed.

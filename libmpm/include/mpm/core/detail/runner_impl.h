@@ -13,6 +13,9 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <map>
+#include <set>
+#include <stdexcept>
 
 namespace mpm {
 
@@ -54,7 +57,17 @@ std::vector<std::string> Runner<dim, State>::columns(State& state, const Pipelin
   if (all.size() > 1)
     for (const PhaseRef<dim>& phase : all) c.push_back(runner_detail::phase_column("mass", phase.name));
   for (const auto& [name, fn] : extra_) c.push_back(name);
-  for (const auto& stage : pipeline.stage_names()) c.push_back("seconds_" + stage);
+  // A stage that runs twice in a step (e.g. a phase's boundary again after the projection)
+  // gets its own column: seconds_<name>, seconds_<name>_2, ...
+  std::map<std::string, int> runs;
+  for (const auto& stage : pipeline.stage_names()) {
+    const int k = ++runs[stage];
+    c.push_back("seconds_" + stage + (k > 1 ? "_" + std::to_string(k) : ""));
+  }
+  // Columns are read back by name (restart, studies): a name added twice would hide one.
+  std::set<std::string> unique;
+  for (const std::string& name : c)
+    if (!unique.insert(name).second) throw std::logic_error(app_ + ": diagnostics column '" + name + "' added twice");
   return c;
 }
 
