@@ -192,7 +192,7 @@ Multigrid<dim>::Multigrid(const CellOperator<dim>& fine, const Options& options)
 }
 
 template <int dim>
-void Multigrid<dim>::smooth(int l) {
+void Multigrid<dim>::jacobi(int l) {
   // Out of place (the product reads neighbours of x), fused with the product; r is the buffer.
   Level& level = levels_[l];
   detail::apply_operator_to<dim>(op(l), level.x, level.scratch, [&level](std::int64_t c, double Ax) {
@@ -327,12 +327,17 @@ void Multigrid<dim>::restrict_residual(int l) {
   Level& level = levels_[l];
   detail::apply_operator_to<dim>(op(l), level.x, level.scratch,
                                  [&level](std::int64_t c, double Ax) { level.r[c] = level.b[c] - Ax; });
+  restrict_to_coarse(l, level.r);
+}
+
+template <int dim>
+void Multigrid<dim>::restrict_to_coarse(int l, const std::vector<double>& fine) {
   // R = P^T / 2^dim, one axis at a time; coarse empty cells are not unknowns.
   const CellOperator<dim>& c = op(l + 1);
   IVec<dim> extent = op(l).cells;
   std::vector<double>& in = transfer_in_;
   std::vector<double>& out = transfer_out_;
-  in = level.r;
+  in = fine;
   for (int a = 0; a < dim; ++a) {
     IVec<dim> next = extent;
     next[a] = c.cells[a];
@@ -365,6 +370,28 @@ void Multigrid<dim>::prolong_add(int coarse_level) {
 }
 
 template <int dim>
+void Multigrid<dim>::smooth(int l, bool before) {
+  // Two-colour Gauss-Seidel (Poisson: red-black; 2D NodeCell: column parity), symmetric:
+  // colours 0, 1 before the coarse correction, 1, 0 after; else damped Jacobi (3D NodeCell).
+  Level& level = levels_[l];
+  const int sweeps = options_.smoothing_sweeps;
+  void (Multigrid::*colour_sweep)(int, int) = op(l).kind == CellOperator<dim>::Kind::poisson ? &Multigrid::gauss_seidel
+                                              : rotated_smoother_ ? &Multigrid::rotated_gauss_seidel
+                                                                  : nullptr;
+  if (colour_sweep) {
+    if (before) std::fill(level.x.begin(), level.x.end(), 0.0);
+    for (int s = 0; s < sweeps; ++s) {
+      (this->*colour_sweep)(l, before ? 0 : 1);
+      (this->*colour_sweep)(l, before ? 1 : 0);
+    }
+    return;
+  }
+  if (before)
+    for (std::size_t i = 0; i < level.x.size(); ++i) level.x[i] = level.omega * level.inverse_diagonal[i] * level.b[i];
+  for (int s = before ? 1 : 0; s < sweeps; ++s) jacobi(l);
+}
+
+template <int dim>
 void Multigrid<dim>::vcycle(int l) {
   Level& level = levels_[l];
   if (l == level_count() - 1) {
@@ -375,45 +402,45 @@ void Multigrid<dim>::vcycle(int l) {
     for (std::size_t i = 0; i < bottom_cells_.size(); ++i) level.x[bottom_cells_[i]] = solution[static_cast<Eigen::Index>(i)];
     return;
   }
-  const int sweeps = options_.smoothing_sweeps;
-  // Two-colour Gauss-Seidel (Poisson: red-black; 2D NodeCell: column parity), symmetric:
-  // colours 0, 1 before the coarse correction, 1, 0 after.
-  void (Multigrid::*colour_sweep)(int, int) = op(l).kind == CellOperator<dim>::Kind::poisson ? &Multigrid::gauss_seidel
-                                              : rotated_smoother_ ? &Multigrid::rotated_gauss_seidel
-                                                                  : nullptr;
-  if (colour_sweep) {
-    std::fill(level.x.begin(), level.x.end(), 0.0);
-    for (int s = 0; s < sweeps; ++s) {
-      (this->*colour_sweep)(l, 0);
-      (this->*colour_sweep)(l, 1);
-    }
-    restrict_residual(l);
-    vcycle(l + 1);
-    prolong_add(l + 1);
-    for (int s = 0; s < sweeps; ++s) {
-      (this->*colour_sweep)(l, 1);
-      (this->*colour_sweep)(l, 0);
-    }
-    return;
-  }
-  for (std::size_t i = 0; i < level.x.size(); ++i) level.x[i] = level.omega * level.inverse_diagonal[i] * level.b[i];
-  for (int s = 1; s < sweeps; ++s) smooth(l);
+  smooth(l, true);
   restrict_residual(l);
   vcycle(l + 1);
   prolong_add(l + 1);
-  for (int s = 0; s < sweeps; ++s) smooth(l);
+  smooth(l, false);
 }
 
 template <int dim>
 void Multigrid<dim>::apply(const std::vector<double>& r, std::vector<double>& z) {
-  levels_[0].b = r;
-  vcycle(0);
-  z = levels_[0].x;
-  if (checkerboard_.empty()) return;
-  // Second V-cycle on the checkerboard-modulated residual: M = V + S V S (see multigrid.h).
-  for (std::size_t i = 0; i < r.size(); ++i) levels_[0].b[i] = checkerboard_[i] * r[i];
-  vcycle(0);
-  for (std::size_t i = 0; i < z.size(); ++i) z[i] += checkerboard_[i] * levels_[0].x[i];
+  Level& top = levels_[0];
+  top.b = r;
+  if (checkerboard_.empty() || level_count() == 1) {
+    vcycle(0);
+    z = top.x;
+    if (checkerboard_.empty()) return;
+    for (std::size_t i = 0; i < r.size(); ++i) top.b[i] = checkerboard_[i] * r[i];
+    vcycle(0);
+    for (std::size_t i = 0; i < z.size(); ++i) z[i] += checkerboard_[i] * top.x[i];
+    return;
+  }
+  // M = V + S V S (multigrid.h) in one pass over the fine level: S commutes with A and with
+  // the smoother, so the second V-cycle's smoothing is the first's times S. With x the
+  // pre-smoothed iterate, res = r - A x and c1, c2 the coarse solutions for R res and R S res,
+  // z = V r + S V S r = 2 post(x + (P c1 + S P c2) / 2, r) = post(2 x + P c1 + S P c2, 2 r),
+  // post being affine in (x, b). Half the fine-level work of two V-cycles; the same M.
+  smooth(0, true);
+  restrict_residual(0);
+  vcycle(1);
+  for (double& x : top.x) x *= 2.0;
+  prolong_add(1);  // 2 x + P c1
+  for (std::size_t i = 0; i < r.size(); ++i) top.r[i] *= checkerboard_[i];
+  restrict_to_coarse(0, top.r);
+  vcycle(1);
+  for (std::size_t i = 0; i < r.size(); ++i) top.x[i] *= checkerboard_[i];
+  prolong_add(1);
+  for (std::size_t i = 0; i < r.size(); ++i) top.x[i] *= checkerboard_[i];  // 2 x + P c1 + S P c2
+  for (double& b : top.b) b *= 2.0;
+  smooth(0, false);
+  z = top.x;
 }
 
 template class Multigrid<2>;

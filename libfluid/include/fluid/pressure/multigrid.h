@@ -78,8 +78,9 @@ public:
   explicit Multigrid(const CellOperator<dim>& fine, const Options& options);
   explicit Multigrid(const CellOperator<dim>& fine) : Multigrid(fine, Options{}) {}
 
-  //! z = M r: one V-cycle from z = 0, two for 2D NodeCell (z resized to the cell count; empty
-  //! cells 0).
+  //! z = M r: one V-cycle from z = 0; for 2D NodeCell M = V + S V S, fused so that the fine
+  //! level is smoothed once before and once after the two coarse corrections (z resized to
+  //! the cell count; empty cells 0).
   void apply(const std::vector<double>& r, std::vector<double>& z);
 
   int level_count() const { return static_cast<int>(levels_.size()); }
@@ -93,12 +94,15 @@ private:
   };
 
   const CellOperator<dim>& op(int level) const { return level == 0 ? fine_ : levels_[level].op; }
-  void smooth(int level);
+  //! The smoothing before (from x = 0) or after the coarse correction of a V-cycle.
+  void smooth(int level, bool before);
+  void jacobi(int level);
   void gauss_seidel(int level, int colour);
   void rotated_gauss_seidel(int level, int parity);
   void vcycle(int level);
   void prolong_add(int coarse_level);
   void restrict_residual(int fine_level);
+  void restrict_to_coarse(int fine_level, const std::vector<double>& fine);
 
   const CellOperator<dim>& fine_;
   Options options_;
