@@ -9,21 +9,24 @@ summary.json ("info": "stages", "memory_bytes.<field>"):
   fluid   a fluid-only scene (dam break) holds no particle.F / particle.plastic and runs no
           stress_forces, deformation or plasticity stage;
   elastic an elastic scene (jello_collide) runs no plasticity stage;
-  openvdb none of these runs calls into OpenVDB, while a scene with a level-set collider
-          (goo_slits) does.
+  openvdb none of these processes loads libopenvdb, while a scene with a level-set collider
+          (goo_slits) does, through the plugin libmpm_openvdb.
 
-How OpenVDB is observed: every level-set loader (libmpm/src/geometry/level_set_vdb.cpp) calls
-openvdb::initialize() before anything else. libmpm_core reaches it through a lazily bound PLT
-slot, and the dynamic linker reports a lazy binding when the slot is first used
-(LD_DEBUG=bindings), so the binding appears exactly when a loader ran. The goo_slits run
-proves that the probe sees a call; eager binding (LD_BIND_NOW, -z now) would report the
-binding in every run and fail the test rather than hide a call. libopenvdb.so itself is mapped
-into every process of a build with SEDIMENT_WITH_OPENVDB=ON (it is a link dependency of
-libmpm_core); only a build with the option OFF leaves it out entirely.
+How OpenVDB is observed: a shared libmpm_core does not link OpenVDB; its first level set
+dlopen()s the plugin libmpm_openvdb.so beside it, which needs libopenvdb (see
+libmpm/src/geometry/level_set_loader.cpp). Under LD_DEBUG=files the dynamic linker reports every
+object it loads and the object that needed it (`file=libopenvdb.so.10.0 [0];  needed by
+.../libmpm_openvdb.so [0]`), so a process that never loads libopenvdb has no such line. The
+goo_slits run proves that the probe sees a load; OpenVDB linked into libmpm_core or an app again
+would show the line in every run and fail the test. A goo_slits run with libmpm_core copied to a
+folder without the plugin must stop with an input error that names the plugin path. A static
+build (--openvdb linked) links OpenVDB into every app, so there the OpenVDB checks are skipped; a
+build with SEDIMENT_WITH_OPENVDB=OFF has no OpenVDB at all.
 
   lean_scenes.py --solid-scene build/apps/solid_scene --coupled-app build/apps/submerged_collapse \\
       --dam-break build/apps/dam_break --jello-collide build/apps/jello_collide \\
-      --goo-slits build/apps/goo_slits --scenes data/scenes --work /tmp/lean
+      --goo-slits build/apps/goo_slits --openvdb plugin --core build/libmpm/libmpm_core.so \\
+      --scenes data/scenes --work /tmp/lean
 
 Exit status: 0 all assertions hold, 1 one fails (each failure is printed), 2 a run failed.
 """
@@ -38,16 +41,15 @@ import subprocess
 import sys
 
 QUICK = ["output.png=false", "output.particles=false"]
-# The lazy binding of openvdb::initialize() (in its versioned namespace, e.g. openvdb::v10_0)
-# for a caller outside OpenVDB: libmpm_core, or the app when it is linked statically.
-# OpenVDB's own openvdb::points::internal::initialize is bound when the library loads.
-OPENVDB_INITIALIZE = re.compile(
-    r"binding file (?!\S*libopenvdb)\S+ \[\d+\] to \S*libopenvdb\S* \[\d+\]: "
-    r"normal symbol `_ZN7openvdb\d+v\d+_\d+10initializeEv'")
+# A load of libopenvdb (file=libopenvdb.so.10.0 or a full path) and the object that needed or
+# dlopen()ed it; not the "(relocation dependency)" lines that follow a load.
+OPENVDB_LOADED = re.compile(
+    r"\bfile=(?:\S*/)?libopenvdb\.so\S* \[\d+\];\s+(?:needed|dynamically loaded) by (\S+) \[\d+\]$")
 
 
 def run(name, app, scene, overrides, work):
-    """Runs `app` on `scene` under the binding probe; returns (summary, initialize bound)."""
+    """Runs `app` on `scene` under the load probe; returns (summary, the objects that made the
+    dynamic linker load libopenvdb: empty when it never did)."""
     out = work / name
     shutil.rmtree(out, ignore_errors=True)
     probe = work / f"{name}.ld"
@@ -56,19 +58,31 @@ def run(name, app, scene, overrides, work):
     command = [app, str(scene), "--out", str(out), "--quiet"]
     for assignment in QUICK + overrides:
         command += ["--set", assignment]
-    env = dict(os.environ, LD_DEBUG="bindings", LD_DEBUG_OUTPUT=str(probe))
-    env.pop("LD_BIND_NOW", None)
+    env = dict(os.environ, LD_DEBUG="files", LD_DEBUG_OUTPUT=str(probe))
     result = subprocess.run(command, capture_output=True, text=True, env=env)
     if result.returncode != 0:
         sys.stderr.write(result.stderr)
         print(f"lean_scenes.py: {' '.join(command)} exited with {result.returncode}", file=sys.stderr)
         sys.exit(2)
-    bound = False
+    loaded_by = set()
     for log in work.glob(f"{name}.ld.*"):
         with open(log, errors="replace") as f:
-            bound = bound or any(OPENVDB_INITIALIZE.search(line) for line in f)
+            loaded_by.update(m.group(1) for m in map(OPENVDB_LOADED.search, f) if m)
         log.unlink()
-    return json.loads((out / "summary.json").read_text()), bound
+    return json.loads((out / "summary.json").read_text()), loaded_by
+
+
+def run_without_plugin(app, scene, core, work):
+    """Runs `app` on `scene` with a copy of libmpm_core (LD_LIBRARY_PATH) in a folder that holds no
+    plugin; returns (exit status, stderr, the plugin path that libmpm_core should name)."""
+    lonely = work / "core_without_plugin"
+    shutil.rmtree(lonely, ignore_errors=True)
+    lonely.mkdir()
+    shutil.copy2(core, lonely)
+    command = [app, str(scene), "--out", str(work / "no_plugin"), "--quiet"]
+    env = dict(os.environ, LD_LIBRARY_PATH=str(lonely))
+    result = subprocess.run(command, capture_output=True, text=True, env=env)
+    return result.returncode, result.stderr, str(lonely / "libmpm_openvdb.so")
 
 
 def diagnostics(out):
@@ -103,18 +117,21 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     for app in ("solid-scene", "coupled-app", "dam-break", "jello-collide", "goo-slits"):
         parser.add_argument(f"--{app}", required=True, help=f"the {app.replace('-', '_')} executable")
+    parser.add_argument("--openvdb", required=True, choices=("plugin", "linked"),
+                        help="how this build reaches OpenVDB: the plugin of a shared build, or linked in")
+    parser.add_argument("--core", required=True, type=pathlib.Path, help="the libmpm_core library")
     parser.add_argument("--scenes", required=True, type=pathlib.Path, help="data/scenes")
     parser.add_argument("--work", required=True, type=pathlib.Path, help="folder for the runs")
     args = parser.parse_args()
     args.work.mkdir(parents=True, exist_ok=True)
     c = Checks()
-    vdb_calls = {}
+    vdb_loads = {}
 
     # Dry sand: the coupled app without `fluid` against the solid app on the same column.
     coarse = ["grid.dx=0.005", "time.end=0.2"]
-    solid, vdb_calls["solid_scene"] = run("dry_solid", args.solid_scene, args.scenes / "dry_collapse.yaml",
+    solid, vdb_loads["solid_scene"] = run("dry_solid", args.solid_scene, args.scenes / "dry_collapse.yaml",
                                           coarse, args.work)
-    dry, vdb_calls["coupled dry"] = run("dry_coupled", args.coupled_app, args.scenes / "dry_collapse_coupled.yaml",
+    dry, vdb_loads["coupled dry"] = run("dry_coupled", args.coupled_app, args.scenes / "dry_collapse_coupled.yaml",
                                         coarse, args.work)
     dry_stages, dry_memory = stages(dry), memory(dry)
     wet = [s for s in dry_stages if re.search(r"pressure|^fluid\.|exchange|volume_fraction", s)]
@@ -136,7 +153,7 @@ def main():
              f"coupled {sediment_memory} / solid {memory(solid)}")
 
     # A fluid-only scene carries no solid stress fields and runs no solid stage.
-    fluid, vdb_calls["dam_break"] = run("fluid_only", args.dam_break, args.scenes / "dam_break.yaml",
+    fluid, vdb_loads["dam_break"] = run("fluid_only", args.dam_break, args.scenes / "dam_break.yaml",
                                         ["time.end=0.05"], args.work)
     fluid_memory = memory(fluid)
     solid_fields = {k: v for k, v in fluid_memory.items()
@@ -148,18 +165,27 @@ def main():
     c.expect("fluid: a pressure stage runs", "pressure" in stages(fluid), fluid["info"]["stages"])
 
     # An elastic scene runs no plasticity stage.
-    elastic, vdb_calls["jello_collide"] = run("elastic", args.jello_collide, args.scenes / "jello_collide.yaml",
+    elastic, vdb_loads["jello_collide"] = run("elastic", args.jello_collide, args.scenes / "jello_collide.yaml",
                                               ["time.end=0.02"], args.work)
     c.expect("elastic: no plasticity stage", "plasticity" not in stages(elastic), elastic["info"]["stages"])
     c.expect("elastic: stress_forces runs", "stress_forces" in stages(elastic), elastic["info"]["stages"])
     c.expect("dry: the plastic sand runs plasticity", "plasticity" in stages(solid), solid["info"]["stages"])
 
-    # OpenVDB: called by the level-set collider of goo_slits only.
+    # OpenVDB: loaded for the level-set collider of goo_slits only.
     _, level_set = run("level_set", args.goo_slits, args.scenes / "goo_slits.yaml",
                        ["grid.dx=0.02", "time.end=0.02"], args.work)
-    c.expect("openvdb: the level-set scene calls openvdb::initialize (the probe sees calls)", level_set)
-    for name, called in vdb_calls.items():
-        c.expect(f"openvdb: {name} never calls into OpenVDB", not called)
+    if args.openvdb == "linked":
+        print("check openvdb: skipped (a static build links OpenVDB into every app)")
+        return 1 if c.failed else 0
+    c.expect("openvdb: the level-set scene loads libopenvdb through the plugin (the probe sees loads)",
+             bool(level_set) and all("libmpm_openvdb" in by for by in level_set), f"needed by {sorted(level_set)}")
+    for name, loaded_by in vdb_loads.items():
+        c.expect(f"openvdb: {name} never loads libopenvdb", not loaded_by, f"needed by {sorted(loaded_by)}")
+    # The plugin is looked for beside libmpm_core only, and its absence is an input error that names it.
+    status, error, plugin = run_without_plugin(args.goo_slits, args.scenes / "goo_slits.yaml", args.core, args.work)
+    names_both = plugin in error and "-DSEDIMENT_WITH_OPENVDB=ON" in error
+    c.expect("openvdb: without the plugin beside libmpm_core, the level-set scene stops with an input error "
+             "naming the plugin and the option", status == 2 and names_both, f"exit {status}: {error.strip()}")
     return 1 if c.failed else 0
 
 

@@ -1,14 +1,15 @@
-//! LevelSet loaders on OpenVDB: the only translation unit of libmpm that includes OpenVDB.
+//! Level-set loaders on OpenVDB: the only translation unit of libmpm that includes OpenVDB. It is
+//! the plugin libmpm_openvdb.so of a shared build, a part of libmpm_core in a static one
+//! (openvdb_plugin.h); either way libmpm_core reaches it through mpm_openvdb_plugin() alone.
 //!   .vdb file  -> io::File, the first FloatGrid of class GRID_LEVEL_SET (or a named grid);
 //!   mesh file  -> tools::meshToLevelSet on a linear transform of the caller's voxel size;
 //!   phi(x)     -> tools::BoxSampler (trilinear) at the index-space position of x.
-#include <mpm/geometry/level_set.h>
-
 #include <mpm/core/error.h>
 #include <mpm/geometry/triangle_mesh.h>
 
 #include "level_set_grid.h"
 #include "number_text.h"
+#include "openvdb_plugin.h"
 
 #include <openvdb/io/File.h>
 #include <openvdb/openvdb.h>
@@ -73,9 +74,7 @@ void require_readable(const std::string& file) {
   if (!std::ifstream(file)) throw InputError(file + ": cannot open the file");
 }
 
-}  // namespace
-
-LevelSet LevelSet::from_vdb(const std::string& file, const std::string& grid_name) {
+std::shared_ptr<const detail::LevelSetGrid> grid_from_vdb(const std::string& file, const std::string& grid_name) {
   require_readable(file);
   openvdb::initialize();
   try {
@@ -102,13 +101,14 @@ LevelSet LevelSet::from_vdb(const std::string& file, const std::string& grid_nam
       throw InputError(file + ": grid '" + grid_name + "' is no float level set; grids in the file: " + names);
     const openvdb::GridBase::Ptr grid = archive.readGrid(chosen->getName());
     archive.close();
-    return LevelSet(make_grid(openvdb::gridConstPtrCast<openvdb::FloatGrid>(grid), file));
+    return make_grid(openvdb::gridConstPtrCast<openvdb::FloatGrid>(grid), file);
   } catch (const openvdb::Exception& e) {
     throw InputError(file + ": cannot read the OpenVDB file: " + e.what());
   }
 }
 
-LevelSet LevelSet::from_mesh(const std::string& file, double voxel_size, double half_width) {
+std::shared_ptr<const detail::LevelSetGrid> grid_from_mesh(const std::string& file, double voxel_size,
+                                                           double half_width) {
   verify<InputError>(std::isfinite(voxel_size) && voxel_size > 0.0,
                      file + ": the voxel size must be > 0, got " + detail::number_text(voxel_size));
   verify<InputError>(std::isfinite(half_width) && half_width >= 3.0,
@@ -137,7 +137,16 @@ LevelSet LevelSet::from_mesh(const std::string& file, double voxel_size, double 
   openvdb::FloatGrid::Ptr grid =
       openvdb::tools::meshToLevelSet<openvdb::FloatGrid>(*transform, points, triangles, float(half_width));
   grid->setName(std::filesystem::path(file).stem().string());
-  return LevelSet(make_grid(grid, file));
+  return make_grid(grid, file);
 }
 
+}  // namespace
+
 }  // namespace mpm::geometry
+
+extern "C" const mpm::geometry::detail::OpenVdbPlugin* mpm_openvdb_plugin() {
+  static const mpm::geometry::detail::OpenVdbPlugin plugin{mpm::geometry::detail::kOpenVdbPluginVersion,
+                                                           &mpm::geometry::grid_from_vdb,
+                                                           &mpm::geometry::grid_from_mesh};
+  return &plugin;
+}
