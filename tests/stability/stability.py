@@ -121,6 +121,11 @@ CASES = [
     case("pressure_no_converge_warn", "as above with on_failure = warn: every step warns, the run completes",
          "dam_break", DAM_BREAK, ["column.cells_per_width=10", "time.end=0.05", "pressure.on_failure=warn"]
          + NO_CONVERGE, "warns", ["warning: stage 'pressure'"] + PRESSURE_MESSAGE),
+    case("pressure_fallback", "`dam_break`, CG capped at 15 iterations with `pressure.fallback = mgpcg`: every "
+         "failed CG solve is retried by MGPCG from the same guess and reported", "dam_break", DAM_BREAK,
+         ["column.cells_per_width=10", "time.end=0.05", "pressure.solver=cg", "pressure.max_iterations=15",
+          "pressure.fallback=mgpcg"], "warns",
+         ["warning: stage 'pressure'", "pressure solver 'cg'", "did not converge", "retrying with 'mgpcg'"]),
     case("mixture_pressure_no_converge_stop",
          "`settling`, tolerance 1e-30 and 3 CG iterations, on_failure = stop",
          "settling", SETTLING, SETTLING_SHORT + NO_CONVERGE, "stops",

@@ -36,6 +36,9 @@ stages::PressureSettings parse_pressure_settings(const Config& scene) {
   const std::optional<Config> p = scene.optional_child("pressure");
   if (!p) return s;
   s.solver = p->choice("solver", s.solver, pressure_solver_names());
+  std::vector<std::string> fallbacks = pressure_solver_names();
+  fallbacks.push_back("none");
+  if (const std::string fallback = p->choice("fallback", "none", fallbacks); fallback != "none") s.fallback = fallback;
   s.control.relative_tolerance = p->number("tolerance", s.control.relative_tolerance, Range::open(0.0, 1.0));
   s.control.max_iterations = p->integer("max_iterations", s.control.max_iterations, 1, 1000000);
   s.on_failure = p->choice("on_failure", "stop", {"stop", "warn"}) == "stop" ? stages::OnFailure::stop

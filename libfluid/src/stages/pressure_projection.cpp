@@ -44,7 +44,8 @@ PressureProjection<dim>::PressureProjection(double density, mpm::geometry::Colli
       colliders_(std::move(colliders)),
       settings_(std::move(settings)),
       name_(std::move(name)),
-      solver_(make_pressure_solver<dim>(settings_.solver)) {}
+      solver_(make_pressure_solver<dim>(settings_.solver)),
+      fallback_(settings_.fallback.empty() ? nullptr : make_pressure_solver<dim>(settings_.fallback)) {}
 
 namespace {
 //! Grid cell holding x; on a periodic axis the canonical cell (in [periodic_lo, + period)).
@@ -151,7 +152,15 @@ void PressureProjection<dim>::run(mpm::MpmState<dim>& s) {
   const double floor = 1e-14 * std::sqrt(static_cast<double>(op_.cell_count())) * 2.0 * dim * speed / g.dx();
   SolveControl control = settings_.control;
   control.absolute_tolerance = std::max(control.absolute_tolerance, floor);
+  const PressureSolver<dim>* solved_by = solver_.get();
+  const std::vector<double> guess = fallback_ ? p_ : std::vector<double>{};
   result_ = solver_->solve(op_, b_, p_, control);
+  if (!result_.converged && fallback_) {
+    std::cerr << "warning: " << failure(s, *solver_) << "; retrying with '" << fallback_->name() << "'\n";
+    p_ = guess;
+    result_ = fallback_->solve(op_, b_, p_, control);
+    solved_by = fallback_.get();
+  }
   remove_components(null_space, p_);
   // A tolerance below the floor (1e-30, or 1e-8 of a right-hand side a few digits above
   // round-off) is not met; the solve is as good as double precision allows, so it does not
@@ -168,12 +177,8 @@ void PressureProjection<dim>::run(mpm::MpmState<dim>& s) {
               << s.step << "; said once per run, diagnostics.csv flags every such solve (pressure_round_off = 1)\n";
   }
   if (!result_.converged) {
-    std::ostringstream why;
-    why << "stage '" << name() << "': pressure solver '" << solver_->name() << "' did not converge in "
-        << result_.iterations << " iterations (relative residual " << result_.relative_residual << ", tolerance "
-        << settings_.control.relative_tolerance << ") at t = " << s.time << " s, step " << s.step;
-    if (settings_.on_failure == OnFailure::stop) throw mpm::NumericalError(why.str());
-    std::cerr << "warning: " << why.str() << "\n";
+    if (settings_.on_failure == OnFailure::stop) throw mpm::NumericalError(failure(s, *solved_by));
+    std::cerr << "warning: " << failure(s, *solved_by) << "\n";
   }
 
   // 4. v_w += (dt / rho_w) D^T p: the impulse beta D^T p rescaled from the mixture beta.
@@ -181,6 +186,15 @@ void PressureProjection<dim>::run(mpm::MpmState<dim>& s) {
   op_.subtract_gradient(p_, impulse);
   for (std::int64_t i = 0; i < nodes; ++i)
     if (op_.beta[i] > 0.0) g.velocity[storage[i]] += (fluid_beta / op_.beta[i]) * impulse[i];
+}
+
+template <int dim>
+std::string PressureProjection<dim>::failure(const mpm::MpmState<dim>& s, const PressureSolver<dim>& solver) const {
+  std::ostringstream why;
+  why << "stage '" << name() << "': pressure solver '" << solver.name() << "' did not converge in "
+      << result_.iterations << " iterations (relative residual " << result_.relative_residual << ", tolerance "
+      << settings_.control.relative_tolerance << ") at t = " << s.time << " s, step " << s.step;
+  return why.str();
 }
 
 template <int dim>

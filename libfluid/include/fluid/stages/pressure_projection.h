@@ -23,7 +23,10 @@ enum class OnFailure { warn, stop };
 
 struct PressureSettings {
   std::string solver = "mgpcg";  //!< one of pressure_solver_names()
-  SolveControl control;          //!< tolerance and iteration cap of every solve
+  //! Empty, or a second back-end that retries a failed solve from the same initial guess (with
+  //! the same control); the retry is reported, and on_failure applies when it fails too.
+  std::string fallback;
+  SolveControl control;  //!< tolerance and iteration cap of every solve
   OnFailure on_failure = OnFailure::stop;
 };
 
@@ -88,11 +91,14 @@ public:
   const PressureSettings& settings() const { return settings_; }
 
 private:
+  //! The message of the last, failed solve by `solver`.
+  std::string failure(const mpm::MpmState<dim>& s, const PressureSolver<dim>& solver) const;
+
   double density_;
   mpm::geometry::ColliderSet<dim> colliders_;
   PressureSettings settings_;
   std::string name_;
-  std::unique_ptr<PressureSolver<dim>> solver_;
+  std::unique_ptr<PressureSolver<dim>> solver_, fallback_;
   const MixtureNodes<dim>* mixture_ = nullptr;
   CellOperator<dim> op_;
   IVec<dim> box_lo_ = IVec<dim>::Zero();
