@@ -21,8 +21,9 @@
 //      solve stops at the round-off level of D u (1e-14 sqrt(cells) 2 dim max|u| / dx);
 //   4. v_i <- v_i^* + (dt / rho_w) (D^T p)_i = v_i^* - (dt / rho_w) (G p)_i, so that
 //      D (n_w v_w + n_s v_s) = 0 in every fluid cell once the coupling applies the solid's part.
-// A solve that misses its tolerance warns or stops (pressure.on_failure) with iterations and
-// residual; it is never silent.
+// A solve that misses its tolerance is retried by the fallback solver when the scene names one
+// (pressure.fallback), then warns or stops (pressure.on_failure) with iterations and residual;
+// it is never silent.
 #include <fluid/pressure/null_space.h>
 #include <fluid/pressure/pcg.h>
 #include <fluid/stages/prescribed_nodes.h>
