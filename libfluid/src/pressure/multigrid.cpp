@@ -7,8 +7,6 @@
 
 #include <algorithm>
 #include <array>
-#include <cmath>
-#include <random>
 
 namespace fluid {
 
@@ -87,39 +85,22 @@ CellOperator<dim> coarsen(const CellOperator<dim>& fine) {
   return coarse;
 }
 
-double dot(const std::vector<double>& a, const std::vector<double>& b) {
-  double s = 0.0;
-  for (std::size_t i = 0; i < a.size(); ++i) s += a[i] * b[i];
-  return s;
-}
-
-//! lambda_max(D^-1 A) by 20 power iterations on the fluid cells (an estimate from below,
-//! hence the safety factor of the caller).
-template <int dim>
-double estimate_lambda_max(const CellOperator<dim>& op, const std::vector<double>& inverse_diagonal,
-                           std::vector<double>& scratch) {
-  std::mt19937 rng(7);
-  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
-  std::vector<double> v(inverse_diagonal.size()), w;
-  for (std::size_t i = 0; i < v.size(); ++i) v[i] = inverse_diagonal[i] > 0.0 ? uniform(rng) : 0.0;
-  double lambda = 0.0;
-  for (int it = 0; it < 20; ++it) {
-    const double norm = std::sqrt(dot(v, v));
-    if (norm == 0.0) return 1.0;
-    for (double& e : v) e /= norm;
-    detail::apply_operator(op, v, w, scratch);
-    for (std::size_t i = 0; i < w.size(); ++i) w[i] *= inverse_diagonal[i];
-    lambda = std::sqrt(dot(w, w));
-    v.swap(w);
-  }
-  return lambda;
-}
-
 }  // namespace
+
+template <int dim>
+bool Multigrid<dim>::supports(const CellOperator<dim>& op) {
+  if (op.kind == CellOperator<dim>::Kind::poisson) return true;
+  // 2D NodeCell: the column colouring needs an even count on a periodic x axis. A coarse
+  // level with an odd periodic count cannot coarsen further, so it is the bottom (solved,
+  // not smoothed): only the fine count decides.
+  return dim == 2 && (!op.periodic[0] || op.cells[0] % 2 == 0);
+}
 
 template <int dim>
 Multigrid<dim>::Multigrid(const CellOperator<dim>& fine, const Options& options) : fine_(fine), options_(options) {
   mpm::verify<mpm::InputError>(options.smoothing_sweeps >= 1, "Multigrid: smoothing_sweeps must be >= 1");
+  mpm::verify<mpm::InputError>(supports(fine), "Multigrid: no Gauss-Seidel smoother for this operator (3D NodeCell, "
+                                               "or 2D NodeCell with an odd periodic x count): use ModulatedMultigrid");
   for (int a = 0; a < dim; ++a)
     mpm::verify<mpm::InputError>(!fine.periodic[a] || fine.kind == CellOperator<dim>::Kind::node_cell ||
                                      fine.cells[a] % 2 == 0,
@@ -141,21 +122,9 @@ Multigrid<dim>::Multigrid(const CellOperator<dim>& fine, const Options& options)
     next.op = coarsen(op(level_count() - 1));
     levels_.push_back(std::move(next));
   }
-  if (dim == 2 && fine.kind == CellOperator<dim>::Kind::node_cell) {
-    // The column colouring needs an even count on a periodic x axis (else Jacobi).
-    rotated_smoother_ = true;
-    for (int l = 0; l < level_count(); ++l)
-      rotated_smoother_ = rotated_smoother_ && (!op(l).periodic[0] || op(l).cells[0] % 2 == 0);
-  }
   for (int l = 0; l < level_count(); ++l) {
     Level& level = levels_[l];
     const auto n = static_cast<std::size_t>(op(l).cell_count());
-    // Jacobi (3D NodeCell) only; 1.05: the power iteration approaches lambda_max from below.
-    if (op(l).kind == CellOperator<dim>::Kind::node_cell && !rotated_smoother_) {
-      op(l).diagonal(level.inverse_diagonal);
-      for (double& d : level.inverse_diagonal) d = d > 0.0 ? 1.0 / d : 0.0;
-      level.omega = 4.0 / (3.0 * 1.05 * estimate_lambda_max(op(l), level.inverse_diagonal, level.scratch));
-    }
     level.b.assign(n, 0.0);
     level.x.assign(n, 0.0);
     level.r.assign(n, 0.0);
@@ -189,16 +158,6 @@ Multigrid<dim>::Multigrid(const CellOperator<dim>& fine, const Options& options)
   Eigen::VectorXd inverse(m);
   for (Eigen::Index i = 0; i < m; ++i) inverse[i] = lambda[i] > cutoff ? 1.0 / lambda[i] : 0.0;
   bottom_pinv_ = eigen.eigenvectors() * inverse.asDiagonal() * eigen.eigenvectors().transpose();
-}
-
-template <int dim>
-void Multigrid<dim>::jacobi(int l) {
-  // Out of place (the product reads neighbours of x), fused with the product; r is the buffer.
-  Level& level = levels_[l];
-  detail::apply_operator_to<dim>(op(l), level.x, level.scratch, [&level](std::int64_t c, double Ax) {
-    level.r[c] = level.x[c] + level.omega * level.inverse_diagonal[c] * (level.b[c] - Ax);
-  });
-  level.x.swap(level.r);
 }
 
 template <int dim>
@@ -372,23 +331,15 @@ void Multigrid<dim>::prolong_add(int coarse_level) {
 template <int dim>
 void Multigrid<dim>::smooth(int l, bool before) {
   // Two-colour Gauss-Seidel (Poisson: red-black; 2D NodeCell: column parity), symmetric:
-  // colours 0, 1 before the coarse correction, 1, 0 after; else damped Jacobi (3D NodeCell).
+  // colours 0, 1 before the coarse correction, 1, 0 after.
   Level& level = levels_[l];
-  const int sweeps = options_.smoothing_sweeps;
-  void (Multigrid::*colour_sweep)(int, int) = op(l).kind == CellOperator<dim>::Kind::poisson ? &Multigrid::gauss_seidel
-                                              : rotated_smoother_ ? &Multigrid::rotated_gauss_seidel
-                                                                  : nullptr;
-  if (colour_sweep) {
-    if (before) std::fill(level.x.begin(), level.x.end(), 0.0);
-    for (int s = 0; s < sweeps; ++s) {
-      (this->*colour_sweep)(l, before ? 0 : 1);
-      (this->*colour_sweep)(l, before ? 1 : 0);
-    }
-    return;
+  void (Multigrid::*colour_sweep)(int, int) =
+      op(l).kind == CellOperator<dim>::Kind::poisson ? &Multigrid::gauss_seidel : &Multigrid::rotated_gauss_seidel;
+  if (before) std::fill(level.x.begin(), level.x.end(), 0.0);
+  for (int s = 0; s < options_.smoothing_sweeps; ++s) {
+    (this->*colour_sweep)(l, before ? 0 : 1);
+    (this->*colour_sweep)(l, before ? 1 : 0);
   }
-  if (before)
-    for (std::size_t i = 0; i < level.x.size(); ++i) level.x[i] = level.omega * level.inverse_diagonal[i] * level.b[i];
-  for (int s = before ? 1 : 0; s < sweeps; ++s) jacobi(l);
 }
 
 template <int dim>

@@ -4,6 +4,7 @@ list(APPEND FLUID_SOURCES
   src/pressure/cg.cpp
   src/pressure/jacobi_pcg.cpp
   src/pressure/multigrid.cpp
+  src/pressure/modulated_multigrid.cpp
   src/pressure/mgpcg.cpp
   src/pressure/cholmod.cpp
   src/pressure/hypre_runtime.cpp

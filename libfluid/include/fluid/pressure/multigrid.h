@@ -21,12 +21,9 @@
 //!    across n (the face-neighbour entries vanish, see below); it replaced damped Jacobi, which
 //!    needed two products with A per sweep: dam break 2D 256^2, 12 -> 11 iterations,
 //!    0.087 -> 0.043 s (bench_pressure, loaded machine). A periodic x axis with an odd count
-//!    falls back to Jacobi. 3D NodeCell: damped Jacobi (its
-//!    3^dim stencil couples same-colour cells in 3D), omega = 4 / (3 lambda_max(D^-1 A)) with
-//!    lambda_max estimated by power iteration per level (2/3 for a Laplacian; the 3D NodeCell
-//!    operator has positive off-diagonals and lambda_max = 8/3, where 2/3 would diverge).
-//!    Two sweeps each side: 7 (3D) and 8 (2D) iterations, flat from 32^3 and 256^2; one
-//!    sweep needs 10-11 and is no faster.
+//!    is not supported (supports() is false; MGPCG then uses ModulatedMultigrid). 3D NodeCell
+//!    is not supported either: its 3^dim stencil couples same-colour cells, and its near-null
+//!    space is not smooth (modulated_multigrid.h handles it).
 //!  * Bottom: the Moore-Penrose pseudo-inverse of the coarsest matrix (dense), which also
 //!    covers the singular closed-box NodeCell operator. The hierarchy is rebuilt every solve,
 //!    so coarsening goes down to <= 32 fluid cells: at 256 the dense eigensolve was 13.3 of the
@@ -44,16 +41,8 @@
 //!    commutes with the column smoother (it reads only same-parity cells), so apply() shares
 //!    the fine-level smoothing of the two V-cycles (one pre- and one post-smoothing around
 //!    both coarse corrections) and builds exactly the same M.
-//!    In 3D S A S != A for every sign pattern (A also couples face and corner neighbours)
-//!    and the near-null set is three lines through (pi,pi,pi) in Fourier space, (pi,pi,t)
-//!    and permutations: modes (-1)^(i+j) f(k) with f arbitrary. Representing them needs
-//!    semicoarsened coarse spaces per family; this V-cycle does not have them, and 3D NodeCell
-//!    iteration counts grow with N (docs/performance.md). The same correction with the four
-//!    3D sign patterns was tried and does not help (231 vs 173 iterations at 16^3). Where the
-//!    lines meet, at (pi,pi,pi), the symbol is quartic (~ a^2 b^2 + b^2 c^2 + c^2 a^2 in the
-//!    offsets), so even the modulated smooth modes are not Laplacian-like there. Measured:
-//!    on 3D NodeCell systems plain CG is about 3x faster than this MGPCG (dam break 32^3,
-//!    64^3), so 3D scenes choose cg or hypre_boomeramg.
+//!    In 3D S A S != A for every sign pattern, and the near-null set is three lines of Fourier
+//!    space: modulated_multigrid.h gives each its own Galerkin coarse space.
 //!  * Periodic axes: stencils, transfers (the 1/4 neighbour wraps) and smoothers wrap; such an
 //!    axis halves only from an even count >= 4, so coarsening stops at the first odd count
 //!    (power-of-two periods coarsen fully). The Poisson red-black smoother needs even
@@ -77,7 +66,9 @@ public:
     std::int64_t max_coarse_cells = 32;  //!< coarsen until the coarsest level has at most this many fluid cells
   };
 
-  //! Builds the hierarchy; `fine` must outlive the Multigrid.
+  //! Poisson in 2D and 3D; 2D NodeCell unless the x axis is periodic with an odd count.
+  static bool supports(const CellOperator<dim>& op);
+  //! Builds the hierarchy; `fine` must outlive the Multigrid and be supported.
   explicit Multigrid(const CellOperator<dim>& fine, const Options& options);
   explicit Multigrid(const CellOperator<dim>& fine) : Multigrid(fine, Options{}) {}
 
@@ -91,15 +82,12 @@ public:
 private:
   struct Level {
     CellOperator<dim> op;                  //!< empty for level 0, which uses *fine_
-    std::vector<double> inverse_diagonal;  //!< Jacobi levels only; 0 for empty cells and zero rows
-    double omega = 0.0;
     std::vector<double> b, x, r, scratch;  //!< rhs, iterate, residual, node scratch
   };
 
   const CellOperator<dim>& op(int level) const { return level == 0 ? fine_ : levels_[level].op; }
   //! The smoothing before (from x = 0) or after the coarse correction of a V-cycle.
   void smooth(int level, bool before);
-  void jacobi(int level);
   void gauss_seidel(int level, int colour);
   void rotated_gauss_seidel(int level, int parity);
   void vcycle(int level);
@@ -112,7 +100,6 @@ private:
   std::vector<Level> levels_;
   std::vector<double> transfer_in_, transfer_out_;  //!< scratch of the axis-by-axis transfers
   std::vector<double> checkerboard_;  //!< S = diag((-1)^(i+j)); empty unless 2D NodeCell
-  bool rotated_smoother_ = false;     //!< 2D NodeCell with an even or open x axis on every level
   std::vector<std::int64_t> bottom_cells_;  //!< fluid cells of the coarsest level
   Eigen::MatrixXd bottom_pinv_;
 };
