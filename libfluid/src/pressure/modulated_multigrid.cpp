@@ -34,37 +34,80 @@ bool can_coarsen(const IVec<dim>& extent, const std::array<bool, dim>& periodic)
   return ok;
 }
 
-//! X Y for row-major X, Y (Gustavson: row by row with a dense accumulator over the columns of
-//! Y; rows come out sorted). Eigen's product converts storage orders on the way and took 3x
-//! longer on the Galerkin products here.
-template <class Matrix>
-Matrix multiply(const Matrix& X, const Matrix& Y) {
-  std::vector<double> accumulator(static_cast<std::size_t>(Y.cols()), 0.0);
-  std::vector<char> seen(static_cast<std::size_t>(Y.cols()), 0);
-  std::vector<int> touched, start{0}, column;
-  std::vector<double> value;
-  for (Eigen::Index i = 0; i < X.rows(); ++i) {
-    for (typename Matrix::InnerIterator x(X, i); x; ++x)
-      for (typename Matrix::InnerIterator y(Y, x.col()); y; ++y) {
-        const auto j = static_cast<std::size_t>(y.col());
+//! Rows with K values per entry (one per sign pattern) over one sparsity structure.
+struct PatternRows {
+  int patterns = 0;
+  std::vector<int> start{0}, column;
+  std::vector<double> value;  //!< entry e, pattern k at e * patterns + k
+};
+
+//! Gustavson's product, row by row with a dense accumulator, for K patterns at once: output
+//! row i is the sum over the entries (m, w) of left row i of w * sign_k(m) * (right row m)_k.
+//! `right(m, emit)` calls emit(column, values of the K patterns) for each entry of row m.
+//! One pass serves every pattern (the set-up time is that of separate products per pattern,
+//! but only P0 is stored, not one P_k and R_k per child).
+template <class Right>
+PatternRows multiply_patterns(const Eigen::SparseMatrix<double, Eigen::RowMajor>& left,
+                              const std::vector<Eigen::VectorXd>& signs, Eigen::Index columns, Right&& right) {
+  const int K = static_cast<int>(signs.size());
+  PatternRows out;
+  out.patterns = K;
+  std::vector<double> accumulator(static_cast<std::size_t>(columns * K), 0.0);
+  std::vector<char> seen(static_cast<std::size_t>(columns), 0);
+  std::vector<int> touched;
+  std::vector<double> weight(static_cast<std::size_t>(K));
+  for (Eigen::Index i = 0; i < left.rows(); ++i) {
+    for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator l(left, i); l; ++l) {
+      for (int k = 0; k < K; ++k) weight[k] = l.value() * signs[k][l.col()];
+      right(l.col(), [&](int j, const double* values) {
         if (!seen[j]) {
           seen[j] = 1;
-          touched.push_back(static_cast<int>(j));
+          touched.push_back(j);
         }
-        accumulator[j] += x.value() * y.value();
-      }
+        double* sum = &accumulator[static_cast<std::size_t>(j) * K];
+        for (int k = 0; k < K; ++k) sum[k] += weight[k] * values[k];
+      });
+    }
     std::sort(touched.begin(), touched.end());
     for (int j : touched) {
-      column.push_back(j);
-      value.push_back(accumulator[j]);
-      accumulator[j] = 0.0;
+      out.column.push_back(j);
+      double* sum = &accumulator[static_cast<std::size_t>(j) * K];
+      out.value.insert(out.value.end(), sum, sum + K);
+      std::fill(sum, sum + K, 0.0);
       seen[j] = 0;
     }
     touched.clear();
-    start.push_back(static_cast<int>(column.size()));
+    out.start.push_back(static_cast<int>(out.column.size()));
   }
-  return Eigen::Map<const Matrix>(X.rows(), Y.cols(), static_cast<Eigen::Index>(column.size()), start.data(),
-                                  column.data(), value.data());
+  return out;
+}
+
+//! The Galerkin operators A_k = P0^T S_k A S_k P0 (R0 = P0^T) of every sign vector s_k.
+std::vector<Eigen::SparseMatrix<double, Eigen::RowMajor>> modulated_galerkin(
+    const Eigen::SparseMatrix<double, Eigen::RowMajor>& A, const Eigen::SparseMatrix<double, Eigen::RowMajor>& P0,
+    const Eigen::SparseMatrix<double, Eigen::RowMajor>& R0, const std::vector<Eigen::VectorXd>& signs) {
+  using Matrix = Eigen::SparseMatrix<double, Eigen::RowMajor>;
+  const int K = static_cast<int>(signs.size());
+  std::vector<double> same(static_cast<std::size_t>(K));
+  // T_k = A S_k P0: row m of P0 carries the same weight for every pattern.
+  const PatternRows T = multiply_patterns(A, signs, P0.cols(), [&](Eigen::Index m, auto&& emit) {
+    for (Matrix::InnerIterator p(P0, m); p; ++p) {
+      std::fill(same.begin(), same.end(), p.value());
+      emit(static_cast<int>(p.col()), same.data());
+    }
+  });
+  // A_k = R0 S_k T_k.
+  const PatternRows C = multiply_patterns(R0, signs, P0.cols(), [&](Eigen::Index m, auto&& emit) {
+    for (int e = T.start[m]; e < T.start[m + 1]; ++e) emit(T.column[e], &T.value[static_cast<std::size_t>(e) * K]);
+  });
+  std::vector<Matrix> result;
+  std::vector<double> values(C.column.size());
+  for (int k = 0; k < K; ++k) {
+    for (std::size_t e = 0; e < values.size(); ++e) values[e] = C.value[e * K + k];
+    result.emplace_back(Eigen::Map<const Matrix>(R0.rows(), P0.cols(), static_cast<Eigen::Index>(values.size()),
+                                                 C.start.data(), C.column.data(), values.data()));
+  }
+  return result;
 }
 
 }  // namespace
@@ -159,7 +202,7 @@ void ModulatedMultigrid<dim>::build(int index) {
   const Eigen::VectorXd diagonal = s.A.diagonal();
   const Eigen::VectorXd interpolated_one = P0 * Eigen::VectorXd::Ones(P0.cols());
   std::vector<Child> children;
-  std::vector<Matrix> child_matrices;
+  std::vector<Eigen::VectorXd> signs;
   for (int pattern = 0; pattern < (1 << dim); ++pattern) {
     Eigen::VectorXd sign(P0.rows());
     for (std::size_t i = 0; i < s.cell.size(); ++i) {
@@ -172,11 +215,15 @@ void ModulatedMultigrid<dim>::build(int index) {
     if (pattern != 0 && !(energy < options_.near_null_ratio * scale)) continue;
     Child child;
     child.pattern = pattern;
-    child.P = sign.asDiagonal() * P0;
-    child.R = child.P.transpose();
-    child_matrices.push_back(multiply(child.R, multiply(s.A, child.P)));
-    children.push_back(std::move(child));
+    children.push_back(child);
+    signs.push_back(std::move(sign));
   }
+  Matrix R0 = P0.transpose();
+  std::vector<Matrix> child_matrices = modulated_galerkin(s.A, P0, R0, signs);
+  for (std::size_t k = 0; k < children.size(); ++k) children[k].sign = std::move(signs[k]);
+  Space& parent = spaces_[index];
+  parent.P0 = std::move(P0);
+  parent.R0 = std::move(R0);
   for (std::size_t k = 0; k < children.size(); ++k) {
     Space coarse;
     coarse.A = std::move(child_matrices[k]);
@@ -222,9 +269,9 @@ void ModulatedMultigrid<dim>::cycle(int index) {
     s.residual.noalias() -= s.A * s.x;
     for (const Child& child : s.children) {
       Space& c = spaces_[child.space];
-      c.b.noalias() = child.R * s.residual;
+      c.b.noalias() = s.R0 * child.sign.cwiseProduct(s.residual);  // (S_k P0)^T residual
       cycle(child.space);
-      s.x.noalias() += child.P * c.x;
+      s.x += child.sign.cwiseProduct(s.P0 * c.x);
     }
   }
   for (int sweep = 0; sweep < options_.smoothing_sweeps; ++sweep) gauss_seidel(s, false);

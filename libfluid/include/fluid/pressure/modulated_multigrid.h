@@ -19,19 +19,24 @@
 //!    v^T A v < near_null_ratio * v^T diag(A) v (k = 0 always). On the fine NodeCell box
 //!    this picks k = 000, 110, 011, 101, 111: the smooth and the checkerboard families above.
 //!    The child's matrix is the Galerkin product A_k = P_k^T A P_k, and the child is built
-//!    the same way, so each family gets its own coarse hierarchy and its own near-null
-//!    patterns at the next scale (A_111 picks 000, 100, 010, 001 there: the lines at
-//!    t = pi / 2, pi / 4, ...).
+//!    the same way, so each family gets its own coarse hierarchy with the near-null patterns
+//!    of its own operator at the next scale (the smooth child A_000 is again NodeCell-like;
+//!    A_111 is the quartic operator, whose near-null lines lie on the axes). The 3D dam
+//!    break tree has 20, 51 and 121 spaces at 16^3, 32^3 and 64^3.
 //!  * Cross terms P_j^T A P_k (j != k) are dropped: the children correct additively from the
-//!    same residual. For constant beta the patterns are exactly A-orthogonal harmonics, so this
-//!    loses little (prototype, dam break with a random velocity: 13 iterations flat instead of
-//!    8 with the coupled coarse system, which is 3x denser).
+//!    same residual. For constant beta on a periodic box the patterns are A-orthogonal
+//!    harmonics, so this loses little: in a two-level prototype (exact coarse solves, 3D dam
+//!    break 16^3 and 24^3) the coupled coarse system took 7 and 8 iterations, the separate
+//!    ones 13 and 13, at a fifth of the coupled system's nonzeros.
 //!  * Smoother: one forward Gauss-Seidel sweep before the coarse corrections and one backward
 //!    sweep after (the adjoint), so the cycle is a symmetric linear map and CG stays valid.
 //!  * Bottom: the Moore-Penrose pseudo-inverse of a space with at most max_bottom_unknowns
 //!    unknowns (covers singular closed boxes); a space that can neither coarsen (odd periodic
 //!    count) nor be inverted is smoothed only.
-//! Measured iteration counts and costs: docs/performance.md.
+//! Measured (bench_pressure, 3D dam break, rtol 1e-8): 13, 14, 17, 22 iterations at 16^3,
+//! 32^3, 64^3, 128^3 (plain CG 388, 1354, 5000+); nonzeros of all levels over the fine ones
+//! ("operator complexity") 2.6, 3.7, 4.4: the Galerkin stencils have 5^3 points. The set-up
+//! costs about one solve (1.0 s at 64^3). docs/performance.md has the comparison.
 #include <fluid/pressure/cell_operator.h>
 
 #include <Eigen/Dense>
@@ -72,8 +77,7 @@ private:
   struct Child {
     int pattern = 0;
     int space = 0;
-    Matrix P;  //!< parent unknowns x child unknowns
-    Matrix R;  //!< P^T, stored: restriction and the Galerkin product read it by rows
+    Eigen::VectorXd sign;  //!< S_k over the parent's unknowns: P_k = S_k P0
   };
   struct Space {
     Matrix A;
@@ -81,6 +85,7 @@ private:
     std::vector<IVec<dim>> cell;  //!< box coordinates of each unknown
     Eigen::VectorXd inverse_diagonal;
     std::vector<Child> children;
+    Matrix P0, R0;           //!< interpolation from the children's box and its transpose
     Eigen::MatrixXd bottom;  //!< pseudo-inverse; empty unless a bottom space
     Eigen::VectorXd b, x, residual;
   };
