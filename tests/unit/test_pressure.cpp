@@ -345,14 +345,14 @@ TEST_CASE("MGPCG iteration count flat under refinement (NodeCell dam break, Pois
   CAPTURE(coarse_3d);
   CAPTURE(fine_3d);
   CHECK(fine_3d <= 1.2 * coarse_3d);
-  // 3D NodeCell (modulated_multigrid.h): 13 -> 14; the geometric V-cycle took 173 -> 686
-  // and plain CG takes 388 -> 1354.
+  // 3D NodeCell (modulated_multigrid.h): 12 -> 10; the geometric V-cycle took 173 -> 686,
+  // plain CG takes 388 -> 1354, and the same hierarchy with additive children 13 -> 14.
   const int coarse_node_cell = mgpcg_iterations(dam_break_problem<3>(16, OperatorKind<3>::node_cell));
   const int fine_node_cell = mgpcg_iterations(dam_break_problem<3>(32, OperatorKind<3>::node_cell));
   CAPTURE(coarse_node_cell);
   CAPTURE(fine_node_cell);
   CHECK(fine_node_cell <= 1.2 * coarse_node_cell);
-  CHECK(fine_node_cell <= 16);
+  CHECK(fine_node_cell <= 12);
 }
 
 TEST_CASE("modulated multigrid: a coarse space for each near-null family of the NodeCell operator") {

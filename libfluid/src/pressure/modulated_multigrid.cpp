@@ -8,6 +8,8 @@
 
 #include <Eigen/Eigenvalues>
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <utility>
 
@@ -36,50 +38,61 @@ bool can_coarsen(const IVec<dim>& extent, const std::array<bool, dim>& periodic)
 
 //! Rows with K values per entry (one per sign pattern) over one sparsity structure.
 struct PatternRows {
-  int patterns = 0;
   std::vector<int> start{0}, column;
-  std::vector<double> value;  //!< entry e, pattern k at e * patterns + k
+  std::vector<double> value;  //!< entry e, pattern k at e * K + k
 };
 
 //! Gustavson's product, row by row with a dense accumulator, for K patterns at once: output
 //! row i is the sum over the entries (m, w) of left row i of w * sign_k(m) * (right row m)_k.
-//! `right(m, emit)` calls emit(column, values of the K patterns) for each entry of row m.
-//! One pass serves every pattern (the set-up time is that of separate products per pattern,
-//! but only P0 is stored, not one P_k and R_k per child).
+//! `right(m, emit)` calls emit(column, values, stride) for each entry of row m, the value of
+//! pattern k at values[k * stride] (stride 0: one value for all). One pass serves every
+//! pattern. Rows are independent: blocks of rows run in parallel, each with its own
+//! accumulator, and are joined in order (the result does not depend on the thread count).
 template <class Right>
 PatternRows multiply_patterns(const Eigen::SparseMatrix<double, Eigen::RowMajor>& left,
-                              const std::vector<Eigen::VectorXd>& signs, Eigen::Index columns, Right&& right) {
+                              const std::vector<Eigen::VectorXd>& signs, Eigen::Index columns, const Right& right) {
   const int K = static_cast<int>(signs.size());
-  PatternRows out;
-  out.patterns = K;
-  std::vector<double> accumulator(static_cast<std::size_t>(columns * K), 0.0);
-  std::vector<char> seen(static_cast<std::size_t>(columns), 0);
-  std::vector<int> touched;
-  std::vector<double> weight(static_cast<std::size_t>(K));
-  for (Eigen::Index i = 0; i < left.rows(); ++i) {
-    for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator l(left, i); l; ++l) {
-      for (int k = 0; k < K; ++k) weight[k] = l.value() * signs[k][l.col()];
-      right(l.col(), [&](int j, const double* values) {
-        if (!seen[j]) {
-          seen[j] = 1;
-          touched.push_back(j);
-        }
+  const Eigen::Index rows = left.rows();
+  const Eigen::Index blocks = std::clamp<Eigen::Index>(rows / 4096, 1, 64);
+  std::vector<PatternRows> parts(static_cast<std::size_t>(blocks));
+  tbb::parallel_for(Eigen::Index{0}, blocks, [&](Eigen::Index block) {
+    PatternRows& out = parts[static_cast<std::size_t>(block)];
+    std::vector<double> accumulator(static_cast<std::size_t>(columns * K), 0.0);
+    std::vector<char> seen(static_cast<std::size_t>(columns), 0);
+    std::vector<int> touched;
+    std::vector<double> weight(static_cast<std::size_t>(K));
+    for (Eigen::Index i = rows * block / blocks; i < rows * (block + 1) / blocks; ++i) {
+      for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator l(left, i); l; ++l) {
+        for (int k = 0; k < K; ++k) weight[k] = l.value() * signs[k][l.col()];
+        right(l.col(), [&](int j, const double* values, int stride) {
+          if (!seen[j]) {
+            seen[j] = 1;
+            touched.push_back(j);
+          }
+          double* sum = &accumulator[static_cast<std::size_t>(j) * K];
+          for (int k = 0; k < K; ++k) sum[k] += weight[k] * values[k * stride];
+        });
+      }
+      std::sort(touched.begin(), touched.end());
+      for (int j : touched) {
+        out.column.push_back(j);
         double* sum = &accumulator[static_cast<std::size_t>(j) * K];
-        for (int k = 0; k < K; ++k) sum[k] += weight[k] * values[k];
-      });
+        out.value.insert(out.value.end(), sum, sum + K);
+        std::fill(sum, sum + K, 0.0);
+        seen[j] = 0;
+      }
+      touched.clear();
+      out.start.push_back(static_cast<int>(out.column.size()));
     }
-    std::sort(touched.begin(), touched.end());
-    for (int j : touched) {
-      out.column.push_back(j);
-      double* sum = &accumulator[static_cast<std::size_t>(j) * K];
-      out.value.insert(out.value.end(), sum, sum + K);
-      std::fill(sum, sum + K, 0.0);
-      seen[j] = 0;
-    }
-    touched.clear();
-    out.start.push_back(static_cast<int>(out.column.size()));
+  });
+  PatternRows joined = std::move(parts[0]);
+  for (std::size_t b = 1; b < parts.size(); ++b) {
+    const int offset = static_cast<int>(joined.column.size());
+    for (std::size_t r = 1; r < parts[b].start.size(); ++r) joined.start.push_back(offset + parts[b].start[r]);
+    joined.column.insert(joined.column.end(), parts[b].column.begin(), parts[b].column.end());
+    joined.value.insert(joined.value.end(), parts[b].value.begin(), parts[b].value.end());
   }
-  return out;
+  return joined;
 }
 
 //! The Galerkin operators A_k = P0^T S_k A S_k P0 (R0 = P0^T) of every sign vector s_k.
@@ -88,17 +101,13 @@ std::vector<Eigen::SparseMatrix<double, Eigen::RowMajor>> modulated_galerkin(
     const Eigen::SparseMatrix<double, Eigen::RowMajor>& R0, const std::vector<Eigen::VectorXd>& signs) {
   using Matrix = Eigen::SparseMatrix<double, Eigen::RowMajor>;
   const int K = static_cast<int>(signs.size());
-  std::vector<double> same(static_cast<std::size_t>(K));
   // T_k = A S_k P0: row m of P0 carries the same weight for every pattern.
   const PatternRows T = multiply_patterns(A, signs, P0.cols(), [&](Eigen::Index m, auto&& emit) {
-    for (Matrix::InnerIterator p(P0, m); p; ++p) {
-      std::fill(same.begin(), same.end(), p.value());
-      emit(static_cast<int>(p.col()), same.data());
-    }
+    for (Matrix::InnerIterator p(P0, m); p; ++p) emit(static_cast<int>(p.col()), &p.valueRef(), 0);
   });
   // A_k = R0 S_k T_k.
   const PatternRows C = multiply_patterns(R0, signs, P0.cols(), [&](Eigen::Index m, auto&& emit) {
-    for (int e = T.start[m]; e < T.start[m + 1]; ++e) emit(T.column[e], &T.value[static_cast<std::size_t>(e) * K]);
+    for (int e = T.start[m]; e < T.start[m + 1]; ++e) emit(T.column[e], &T.value[static_cast<std::size_t>(e) * K], 1);
   });
   std::vector<Matrix> result;
   std::vector<double> values(C.column.size());
@@ -264,14 +273,31 @@ void ModulatedMultigrid<dim>::cycle(int index) {
   }
   s.x.setZero();
   for (int sweep = 0; sweep < options_.smoothing_sweeps; ++sweep) gauss_seidel(s, true);
-  if (!s.children.empty()) {
+  // Child k solves for the correction S_k P0 e from the right-hand side (S_k P0)^T residual.
+  auto restrict_residual = [&](const Child& child) {
+    spaces_[child.space].b.noalias() = s.R0 * child.sign.cwiseProduct(s.residual);
+  };
+  auto add_correction = [&](const Child& child) { s.x += child.sign.cwiseProduct(s.P0 * spaces_[child.space].x); };
+  auto update_residual = [&s] {
     s.residual = s.b;
     s.residual.noalias() -= s.A * s.x;
-    for (const Child& child : s.children) {
-      Space& c = spaces_[child.space];
-      c.b.noalias() = s.R0 * child.sign.cwiseProduct(s.residual);  // (S_k P0)^T residual
+  };
+  const int K = static_cast<int>(s.children.size());
+  if (index == 0) {
+    // Additive: all children from one residual (one product with the largest matrix). Their
+    // subtrees share nothing, so they run in parallel; the sum is taken in a fixed order.
+    if (K > 0) update_residual();
+    for (const Child& child : s.children) restrict_residual(child);
+    tbb::parallel_for(0, K, [&](int k) { cycle(s.children[k].space); });
+    for (const Child& child : s.children) add_correction(child);
+  } else {
+    // Multiplicative, children 0 .. K-1 .. 0, each from the updated residual (header).
+    for (int step = 0; step < 2 * K - 1; ++step) {
+      const Child& child = s.children[step < K ? step : 2 * K - 2 - step];
+      update_residual();
+      restrict_residual(child);
       cycle(child.space);
-      s.x += child.sign.cwiseProduct(s.P0 * c.x);
+      add_correction(child);
     }
   }
   for (int sweep = 0; sweep < options_.smoothing_sweeps; ++sweep) gauss_seidel(s, false);
