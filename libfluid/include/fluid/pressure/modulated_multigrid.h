@@ -42,10 +42,13 @@
 //!  * Bottom: the Moore-Penrose pseudo-inverse of a space with at most max_bottom_unknowns
 //!    unknowns (covers singular closed boxes); a space that can neither coarsen (odd periodic
 //!    count) nor be inverted is smoothed only.
-//! Measured (bench_pressure, 3D dam break, rtol 1e-8): 13, 14, 17, 22 iterations at 16^3,
-//! 32^3, 64^3, 128^3 (plain CG 388, 1354, 5000+); nonzeros of all levels over the fine ones
-//! ("operator complexity") 2.6, 3.7, 4.4: the Galerkin stencils have 5^3 points. The set-up
-//! costs about one solve (1.0 s at 64^3). docs/performance.md has the comparison.
+//! Measured (bench_pressure --threads 1, 3D dam break, rtol 1e-8): 12, 10, 10, 10 iterations
+//! at 16^3, 32^3, 64^3, 128^3 (plain CG 388, 1354, 5000+); nonzeros of all levels over the
+//! fine ones ("operator complexity") 2.6, 3.7, 4.4: the Galerkin stencils have 5^3 points.
+//! The set-up costs about one solve (0.79 s set-up, 0.54 s solve at 64^3; 7.1 and 5.8 s at
+//! 128^3). The fine level's children and the rows of the Galerkin products run in parallel
+//! (2 threads: set-up 1.3x, solve 1.5x faster at 64^3). docs/performance.md has the
+//! comparison with the other back-ends.
 #include <fluid/pressure/cell_operator.h>
 
 #include <Eigen/Dense>
