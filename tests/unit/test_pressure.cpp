@@ -355,6 +355,22 @@ TEST_CASE("MGPCG iteration count flat under refinement (NodeCell dam break, Pois
   CHECK(fine_node_cell <= 12);
 }
 
+TEST_CASE("modulated multigrid: droplets in the air do not spoil the hierarchy") {
+  // 2 % of the air cells of the 3D dam break become isolated fluid cells (spray). Their
+  // diagonal rows must neither vote patterns out (median energy ratio) nor join coarse
+  // spaces; with the global ratio and no filter MGPCG took 29 iterations here instead of 10.
+  CellOperator<3> op = dam_break_problem<3>(32, OperatorKind<3>::node_cell);
+  const int clean = mgpcg_iterations(op);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  for (CellType& type : op.type)
+    if (type == CellType::empty && uniform(rng) < 0.02) type = CellType::fluid;
+  const int spray = mgpcg_iterations(op);
+  CAPTURE(clean);
+  CAPTURE(spray);
+  CHECK(spray <= 16);  // measured 15 (clean: 10)
+}
+
 TEST_CASE("modulated multigrid: a coarse space for each near-null family of the NodeCell operator") {
   // Patterns are bit sets of flipped axes. 3D: smooth (0) and the checkerboards of the lines
   // (pi, pi, t), (pi, t, pi), (t, pi, pi) and their meeting point: xy = 3, xz = 5, yz = 6, xyz = 7.

@@ -119,6 +119,24 @@ std::vector<Eigen::SparseMatrix<double, Eigen::RowMajor>> modulated_galerkin(
   return result;
 }
 
+//! The median over the unknowns of the local energy ratio (A v)_i / (A_ii v_i) (v_i != 0).
+//! A median, not the global v^T A v / v^T diag(A) v: a pattern that is near-null on most of
+//! the space stays near-null when a minority of cells (droplets, whose rows are diagonal)
+//! add ratio 1. With the global ratio, 2 % droplet cells in the air of the 32^3 dam break cut
+//! the tree from 51 to 36 spaces and MGPCG went from 10 to 29 iterations.
+double median_energy_ratio(const Eigen::SparseMatrix<double, Eigen::RowMajor>& A, const Eigen::VectorXd& diagonal,
+                           const Eigen::VectorXd& v) {
+  const Eigen::VectorXd Av = A * v;
+  std::vector<double> ratio;
+  ratio.reserve(static_cast<std::size_t>(v.size()));
+  for (Eigen::Index i = 0; i < v.size(); ++i)
+    if (v[i] != 0.0 && diagonal[i] > 0.0) ratio.push_back(Av[i] / (diagonal[i] * v[i]));
+  if (ratio.empty()) return 1.0;
+  auto middle = ratio.begin() + static_cast<std::ptrdiff_t>(ratio.size() / 2);
+  std::nth_element(ratio.begin(), middle, ratio.end());
+  return *middle;
+}
+
 }  // namespace
 
 template <int dim>
@@ -175,7 +193,15 @@ void ModulatedMultigrid<dim>::build(int index) {
   const IVec<dim> coarse_extent = (s.extent.array() + 1) / 2;
   std::vector<std::int64_t> coarse_index(static_cast<std::size_t>(coarse_extent.template cast<std::int64_t>().prod()), -1);
   std::vector<IVec<dim>> coarse_cell;
-  for (const IVec<dim>& q : s.cell) {
+  // A cell without off-diagonal entries (a droplet: no neighbour shares a movable node) is
+  // solved exactly by the smoother; in a coarse space it would only add its energy to the
+  // coarse functions of the liquid beside it. It gets no interpolation.
+  std::vector<char> coupled(s.cell.size(), 0);
+  for (Eigen::Index i = 0; i < s.A.outerSize(); ++i)
+    for (Matrix::InnerIterator a(s.A, i); a; ++a) coupled[static_cast<std::size_t>(i)] |= a.col() != i && a.value() != 0.0;
+  for (std::size_t i = 0; i < s.cell.size(); ++i) {
+    if (!coupled[i]) continue;
+    const IVec<dim>& q = s.cell[i];
     std::int64_t& slot = coarse_index[box_index<dim>(q / 2, coarse_extent)];
     if (slot >= 0) continue;
     slot = static_cast<std::int64_t>(coarse_cell.size());
@@ -183,6 +209,7 @@ void ModulatedMultigrid<dim>::build(int index) {
   }
   std::vector<Triplet> weights;
   for (std::size_t i = 0; i < s.cell.size(); ++i) {
+    if (!coupled[i]) continue;
     const IVec<dim>& q = s.cell[i];
     for (int corner = 0; corner < (1 << dim); ++corner) {
       IVec<dim> coarse;
@@ -219,9 +246,9 @@ void ModulatedMultigrid<dim>::build(int index) {
       for (int a = 0; a < dim; ++a) parity += (pattern >> a & 1) * s.cell[i][a];
       sign[static_cast<Eigen::Index>(i)] = parity % 2 == 0 ? 1.0 : -1.0;
     }
-    const Eigen::VectorXd v = sign.cwiseProduct(interpolated_one);
-    const double energy = v.dot(s.A * v), scale = v.dot(diagonal.cwiseProduct(v));
-    if (pattern != 0 && !(energy < options_.near_null_ratio * scale)) continue;
+    if (pattern != 0 && !(median_energy_ratio(s.A, diagonal, sign.cwiseProduct(interpolated_one)) <
+                          options_.near_null_ratio))
+      continue;
     Child child;
     child.pattern = pattern;
     children.push_back(child);

@@ -13,16 +13,20 @@
 //! Construction (recursive, per "space": a matrix over a set of cells of a box):
 //!  * P0: cell-centred multilinear interpolation from the 2x-coarser box (weights 3/4, 1/4 per
 //!    axis; the 1/4 neighbour is mirrored at a face, wrapped on a periodic axis), with a
-//!    column for each coarse cell that has a cell of the space among its children.
+//!    column for each coarse cell that has a cell of the space among its children. Cells
+//!    whose row has no off-diagonal entry (droplets) get no interpolation: the smoother
+//!    solves them exactly.
 //!  * For each of the 2^dim sign patterns k (S_k = diag((-1)^(k . c))), the modulated space
-//!    P_k = S_k P0 becomes a child when its constant vector v = P_k 1 is near-null:
-//!    v^T A v < near_null_ratio * v^T diag(A) v (k = 0 always). On the fine NodeCell box
-//!    this picks k = 000, 110, 011, 101, 111: the smooth and the checkerboard families above.
+//!    P_k = S_k P0 becomes a child when its constant vector v = P_k 1 is near-null: the
+//!    median over the cells of (A v)_i / (A_ii v_i) is below near_null_ratio (k = 0 always).
+//!    A median, so that a minority of cells (spray) cannot vote a pattern out. On the fine
+//!    NodeCell box this picks k = 000, 110, 011, 101, 111: the smooth and the checkerboard
+//!    families above.
 //!    The child's matrix is the Galerkin product A_k = P_k^T A P_k, and the child is built
 //!    the same way, so each family gets its own coarse hierarchy with the near-null patterns
 //!    of its own operator at the next scale (the smooth child A_000 is again NodeCell-like;
 //!    A_111 is the quartic operator, whose near-null lines lie on the axes). The 3D dam
-//!    break tree has 20, 51 and 121 spaces at 16^3, 32^3 and 64^3.
+//!    break tree has 20, 51 and 133 spaces at 16^3, 32^3 and 64^3.
 //!  * Cross terms P_j^T A P_k (j != k) are dropped: each child corrects on its own. For
 //!    constant beta on a periodic box the patterns are A-orthogonal harmonics, so this loses
 //!    little: in a two-level prototype (exact coarse solves, 3D dam break 16^3 and 24^3) the
@@ -65,7 +69,7 @@ template <int dim>
 class ModulatedMultigrid {
 public:
   struct Options {
-    double near_null_ratio = 0.3;            //!< a pattern is a child when its energy ratio is below this
+    double near_null_ratio = 0.3;            //!< a pattern is a child when its median energy ratio is below this
     std::int64_t max_bottom_unknowns = 64;  //!< invert spaces of at most this many unknowns
     int smoothing_sweeps = 1;                //!< Gauss-Seidel sweeps before and after the coarse corrections
   };
