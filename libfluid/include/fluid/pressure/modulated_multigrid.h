@@ -38,7 +38,7 @@
 //!    symmetric, and it makes each child's cycle a convergent iteration (an A-norm
 //!    contraction), which the additive sum is not where children overlap: additive on every
 //!    space took 13, 14, 17, 22 iterations from 16^3 to 128^3 (two cycles per child even
-//!    broke CG down: the sum overcorrects); this way 12, 10, 10, 10. Multiplicative on the
+//!    broke CG down: the sum overcorrects); this way 12, 10, 10, 9-10. Multiplicative on the
 //!    fine level too took 10, 8, 8 (16^3-64^3) but 1.5x the time at 64^3.
 //!  * Smoother: one forward Gauss-Seidel sweep before the coarse corrections and one backward
 //!    sweep after (the adjoint), so the cycle is a symmetric positive definite map on the
@@ -46,13 +46,12 @@
 //!  * Bottom: the Moore-Penrose pseudo-inverse of a space with at most max_bottom_unknowns
 //!    unknowns (covers singular closed boxes); a space that can neither coarsen (odd periodic
 //!    count) nor be inverted is smoothed only.
-//! Measured (bench_pressure --threads 1, 3D dam break, rtol 1e-8): 12, 10, 10, 10 iterations
+//! Measured (bench_pressure --threads 1, 3D dam break, rtol 1e-8): 12, 10, 10, 9 iterations
 //! at 16^3, 32^3, 64^3, 128^3 (plain CG 388, 1354, 5000+); nonzeros of all levels over the
 //! fine ones ("operator complexity") 2.6, 3.7, 4.4: the Galerkin stencils have 5^3 points.
-//! The set-up costs about one solve (0.79 s set-up, 0.54 s solve at 64^3; 7.1 and 5.8 s at
-//! 128^3). The fine level's children and the rows of the Galerkin products run in parallel
-//! (2 threads: set-up 1.3x, solve 1.5x faster at 64^3). docs/performance.md has the
-//! comparison with the other back-ends.
+//! The set-up costs about one to one and a half solves (0.82 s set-up, 0.55 s solve at 64^3;
+//! 8.4 and 5.4 s at 128^3). The fine level's children and the rows of the Galerkin products
+//! run in parallel. docs/performance.md compares the other back-ends.
 #include <fluid/pressure/cell_operator.h>
 
 #include <Eigen/Dense>
