@@ -234,7 +234,7 @@ void ModulatedMultigrid<dim>::build(int index) {
   Matrix P0(static_cast<Eigen::Index>(s.cell.size()), static_cast<Eigen::Index>(coarse_cell.size()));
   P0.setFromTriplets(weights.begin(), weights.end());
 
-  // Pattern k's constant vector is v = S_k P0 1; its energy ratio decides (header).
+  // Pattern k's constant vector is v = S_k P0 1; its median energy ratio decides (header).
   const Eigen::VectorXd diagonal = s.A.diagonal();
   const Eigen::VectorXd interpolated_one = P0 * Eigen::VectorXd::Ones(P0.cols());
   std::vector<Child> children;
