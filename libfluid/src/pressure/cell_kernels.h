@@ -27,6 +27,16 @@ inline int wrap(int i, int n, bool periodic) {
   return i >= 0 && i < n ? i : -1;
 }
 
+//! Whether a box of cells can halve for a multigrid coarse level: some axis has more than one
+//! cell, and every periodic axis an even count >= 4 (the wrap must pair fine cells 2j, 2j + 1
+//! into coarse cell j, and two coarse cells keep a two-colour smoother valid).
+template <int dim>
+bool can_halve(const IVec<dim>& cells, const std::array<bool, dim>& periodic) {
+  bool ok = (cells.array() > 1).any();
+  for (int a = 0; a < dim; ++a) ok = ok && (!periodic[a] || (cells[a] % 2 == 0 && cells[a] >= 4));
+  return ok;
+}
+
 //! Calls fn(line coordinates, first index) for every x-line of the box `extent` (the
 //! coordinates have x = 0), in parallel over lines; fn loops over x itself so that the inner
 //! loop is a plain stride-1 loop.

@@ -27,15 +27,6 @@ std::int64_t box_index(const IVec<dim>& q, const IVec<dim>& extent) {
   return index;
 }
 
-//! A box can halve when some axis has more than one cell and every periodic axis has an even
-//! count >= 4 (the wrap must pair fine cells 2j, 2j + 1 into coarse cell j).
-template <int dim>
-bool can_coarsen(const IVec<dim>& extent, const std::array<bool, dim>& periodic) {
-  bool ok = (extent.array() > 1).any();
-  for (int a = 0; a < dim; ++a) ok = ok && (!periodic[a] || (extent[a] % 2 == 0 && extent[a] >= 4));
-  return ok;
-}
-
 //! Rows with K values per entry (one per sign pattern) over one sparsity structure.
 struct PatternRows {
   std::vector<int> start{0}, column;
@@ -186,7 +177,7 @@ void ModulatedMultigrid<dim>::build(int index) {
       s.bottom = eigen.eigenvectors() * inverse.asDiagonal() * eigen.eigenvectors().transpose();
       return;
     }
-    if (!can_coarsen<dim>(s.extent, periodic_)) return;  // smoothed only
+    if (!detail::can_halve<dim>(s.extent, periodic_)) return;  // smoothed only
   }
   // P0: the coarse cells that own a cell of this space, and the interpolation weights.
   const Space& s = spaces_[index];

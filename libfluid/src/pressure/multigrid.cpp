@@ -110,14 +110,8 @@ Multigrid<dim>::Multigrid(const CellOperator<dim>& fine, const Options& options)
   auto fluid_cells = [](const CellOperator<dim>& o) {
     return std::count(o.type.begin(), o.type.end(), CellType::fluid);
   };
-  // A periodic axis halves only from an even count >= 4 (the wrap must pair fine cells
-  // 2j, 2j + 1 into coarse cell j, and two coarse cells keep the red-black colouring valid).
-  auto can_coarsen = [](const CellOperator<dim>& o) {
-    bool ok = (o.cells.array() > 1).any();
-    for (int a = 0; a < dim; ++a) ok = ok && (!o.periodic[a] || (o.cells[a] % 2 == 0 && o.cells[a] >= 4));
-    return ok;
-  };
-  while (fluid_cells(op(level_count() - 1)) > options.max_coarse_cells && can_coarsen(op(level_count() - 1))) {
+  while (fluid_cells(op(level_count() - 1)) > options.max_coarse_cells &&
+         detail::can_halve<dim>(op(level_count() - 1).cells, fine.periodic)) {
     Level next;
     next.op = coarsen(op(level_count() - 1));
     levels_.push_back(std::move(next));
