@@ -14,6 +14,19 @@
 
 namespace fluid::detail {
 
+//! The operator of `op` as a linear map y = A x for mpm::solve::conjugate_gradient; owns the
+//! nodal scratch of the NodeCell product so that iterations do not reallocate it.
+template <int dim>
+class OperatorProduct {
+public:
+  explicit OperatorProduct(const CellOperator<dim>& op) : op_(op) {}
+  void apply(const std::vector<double>& x, std::vector<double>& y) { apply_operator(op_, x, y, scratch_); }
+
+private:
+  const CellOperator<dim>& op_;
+  std::vector<double> scratch_;
+};
+
 //! b restricted to fluid cells (empty cells 0), so that residuals measure fluid cells only.
 template <int dim>
 std::vector<double> fluid_rhs(const CellOperator<dim>& op, const std::vector<double>& b) {

@@ -1,8 +1,8 @@
 #include <fluid/pressure/mgpcg.h>
 #include <fluid/pressure/modulated_multigrid.h>
-#include <fluid/pressure/pcg.h>
 
-#include "cell_kernels.h"
+#include <mpm/core/solve/conjugate_gradient.h>
+
 #include "fluid_cells.h"
 
 #include <chrono>
@@ -10,16 +10,13 @@
 namespace fluid {
 
 namespace {
-//! PCG with the given preconditioner; the time since `start` is the set-up.
-template <int dim>
+//! PCG preconditioned by `multigrid`; the time since `start` is the set-up.
+template <int dim, class Preconditioner>
 SolveResult solve_with(const CellOperator<dim>& op, const std::vector<double>& rhs, std::vector<double>& p,
                        const SolveControl& control, std::chrono::steady_clock::time_point start,
-                       const LinearMap& precondition) {
+                       Preconditioner& multigrid) {
   const double setup = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::vector<double> scratch;
-  SolveResult result = pcg(
-      [&](const std::vector<double>& x, std::vector<double>& y) { detail::apply_operator(op, x, y, scratch); },
-      precondition, rhs, p, control);
+  SolveResult result = mpm::solve::conjugate_gradient(detail::OperatorProduct<dim>(op), multigrid, rhs, p, control);
   result.setup_seconds = setup;
   return result;
 }
@@ -35,12 +32,10 @@ SolveResult MgpcgSolver<dim>::solve(const CellOperator<dim>& op, const std::vect
   // 3D NodeCell: near-null modes that no smooth coarse space holds (modulated_multigrid.h).
   if (!Multigrid<dim>::supports(op)) {
     ModulatedMultigrid<dim> multigrid(op);
-    return solve_with(op, rhs, p, control, start,
-                      [&](const std::vector<double>& r, std::vector<double>& z) { multigrid.apply(r, z); });
+    return solve_with(op, rhs, p, control, start, multigrid);
   }
   Multigrid<dim> multigrid(op, options_);
-  return solve_with(op, rhs, p, control, start,
-                    [&](const std::vector<double>& r, std::vector<double>& z) { multigrid.apply(r, z); });
+  return solve_with(op, rhs, p, control, start, multigrid);
 }
 
 template class MgpcgSolver<2>;

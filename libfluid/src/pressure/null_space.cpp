@@ -4,7 +4,7 @@
 // Combinations matter: one emptied cell of a closed cavity leaves the constant of the other
 // checkerboard colour in the null space.
 #include <fluid/pressure/null_space.h>
-#include <fluid/pressure/pcg.h>
+#include <mpm/core/solve/vector_space.h>
 
 #include <Eigen/Eigenvalues>
 
@@ -13,6 +13,7 @@
 
 namespace fluid {
 
+using mpm::solve::dot;
 
 template <int dim>
 std::vector<std::vector<double>> null_space_basis(const CellOperator<dim>& op) {

@@ -1,6 +1,5 @@
 list(APPEND FLUID_SOURCES
   src/pressure/cell_operator.cpp
-  src/pressure/pcg.cpp
   src/pressure/cg.cpp
   src/pressure/jacobi_pcg.cpp
   src/pressure/multigrid.cpp

@@ -7,15 +7,17 @@
 //     right-hand side).
 // The matrix I - dt nu L is symmetric positive definite (diagonally dominant, symmetric
 // neighbour relation); one CG solve acts on all dim components at once (the operator is the
-// same for each). Precondition: grid velocities after the explicit update.
+// same for each), by the project's CG (mpm/core/solve). Precondition: grid velocities after
+// the explicit update.
 #include <fluid/stages/implicit_viscosity.h>
 #include <fluid/stages/prescribed_nodes.h>
 
 #include <mpm/core/error.h>
+#include <mpm/core/solve/conjugate_gradient.h>
+#include <mpm/core/solve/preconditioners.h>
 
 #include <algorithm>
 #include <array>
-#include <chrono>
 #include <cmath>
 #include <sstream>
 
@@ -71,7 +73,7 @@ void ImplicitViscosity<dim>::run(mpm::MpmState<dim>& s) {
       }
     }
   }
-  auto apply = [&](const std::vector<Vec<dim>>& v, std::vector<Vec<dim>>& y) {
+  const auto apply = [&](const std::vector<Vec<dim>>& v, std::vector<Vec<dim>>& y) {
     for (std::size_t u = 0; u < n; ++u) {
       Vec<dim> r = diagonal[u] * v[u];
       for (const mpm::Index m : neighbour[u])
@@ -79,43 +81,15 @@ void ImplicitViscosity<dim>::run(mpm::MpmState<dim>& s) {
       y[u] = r;
     }
   };
-  auto dot = [&](const std::vector<Vec<dim>>& a, const std::vector<Vec<dim>>& bb) {
-    double d = 0.0;
-    for (std::size_t u = 0; u < n; ++u) d += a[u].dot(bb[u]);
-    return d;
-  };
 
   // Jacobi-preconditioned CG from v^*.
-  const auto start = std::chrono::steady_clock::now();
-  std::vector<Vec<dim>> r(n), z(n), p(n), q(n);
-  apply(x, q);
-  for (std::size_t u = 0; u < n; ++u) r[u] = b[u] - q[u];
-  const double b_norm = std::sqrt(dot(b, b));
-  const double target = std::max(control_.relative_tolerance * b_norm, control_.absolute_tolerance);
-  double r_norm = std::sqrt(dot(r, r));
-  for (std::size_t u = 0; u < n; ++u) p[u] = z[u] = r[u] / diagonal[u];
-  double rz = dot(r, z);
-  int it = 0;
-  while (r_norm > target && it < control_.max_iterations) {
-    apply(p, q);
-    const double alpha = rz / dot(p, q);
-    for (std::size_t u = 0; u < n; ++u) {
-      x[u] += alpha * p[u];
-      r[u] -= alpha * q[u];
-      z[u] = r[u] / diagonal[u];
-    }
-    const double rz_new = dot(r, z);
-    for (std::size_t u = 0; u < n; ++u) p[u] = z[u] + (rz_new / rz) * p[u];
-    rz = rz_new;
-    r_norm = std::sqrt(dot(r, r));
-    ++it;
-  }
-  result_ = {r_norm <= target, it, b_norm > 0.0 ? r_norm / b_norm : 0.0, r_norm, 0.0,
-             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()};
+  result_ = mpm::solve::conjugate_gradient(apply, mpm::solve::JacobiPreconditioner(diagonal), b, x,
+                                           control_);
   if (!result_.converged) {
     std::ostringstream why;
-    why << "stage '" << name() << "': viscous CG did not converge in " << it << " iterations (relative residual "
-        << result_.relative_residual << ") at t = " << s.time << " s, step " << s.step;
+    why << "stage '" << name() << "': viscous CG did not converge in " << result_.iterations
+        << " iterations (relative residual " << result_.relative_residual << ") at t = " << s.time << " s, step "
+        << s.step;
     throw mpm::NumericalError(why.str());
   }
   for (std::size_t u = 0; u < n; ++u) g.velocity[node[u]] = x[u];

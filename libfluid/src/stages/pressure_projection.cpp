@@ -25,11 +25,11 @@
 // (pressure.fallback), then warns or stops (pressure.on_failure) with iterations and residual;
 // it is never silent.
 #include <fluid/pressure/null_space.h>
-#include <fluid/pressure/pcg.h>
 #include <fluid/stages/prescribed_nodes.h>
 #include <fluid/stages/pressure_projection.h>
 
 #include <mpm/core/error.h>
+#include <mpm/core/solve/vector_space.h>
 
 #include <algorithm>
 #include <cmath>
@@ -167,7 +167,7 @@ void PressureProjection<dim>::run(mpm::MpmState<dim>& s) {
   // round-off) is not met; the solve is as good as double precision allows, so it does not
   // count as failed, but the run says so once and diagnostics.csv flags every such solve. A
   // right-hand side at round-off itself (u already divergence-free) needs no solve at all.
-  const double rtol = settings_.control.relative_tolerance, b_norm = std::sqrt(dot(b_, b_));
+  const double rtol = settings_.control.relative_tolerance, b_norm = std::sqrt(mpm::solve::dot(b_, b_));
   stopped_at_round_off_ = result_.converged && result_.relative_residual > rtol && b_norm > floor &&
                           floor > std::max(rtol * b_norm, settings_.control.absolute_tolerance);
   if (stopped_at_round_off_ && !round_off_reported_) {

@@ -4,26 +4,17 @@
 //! caller (a scene setting) decides whether a non-converged solve warns or stops.
 #include <fluid/pressure/cell_operator.h>
 
+#include <mpm/core/solve/solve_control.h>
+
 #include <memory>
 #include <string>
 #include <vector>
 
 namespace fluid {
 
-struct SolveControl {
-  double relative_tolerance = 1e-8;  //!< stop when |b - A p| <= rtol |b|
-  double absolute_tolerance = 0.0;   //!< ... or when |b - A p| <= atol
-  int max_iterations = 1000;
-};
-
-struct SolveResult {
-  bool converged = false;
-  int iterations = 0;
-  double relative_residual = 0.0;  //!< |b - A p| / |b| (0 when b = 0)
-  double absolute_residual = 0.0;
-  double setup_seconds = 0.0;
-  double solve_seconds = 0.0;
-};
+// The solve layer of the core (mpm/core/solve/): every back-end reports the same result.
+using mpm::solve::SolveControl;
+using mpm::solve::SolveResult;
 
 template <int dim>
 class PressureSolver {
