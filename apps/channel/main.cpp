@@ -5,8 +5,8 @@
 //   channel data/scenes/channel.yaml
 //   channel data/scenes/channel.yaml --set inflow.velocity=[0.3,0] --set time.end=8
 //
-// diagnostics.csv adds inflow_mass (emitted since t = 0), outflow_mass (removed since t = 0,
-// carried through checkpoints) and fluid_mass [kg]. summary.json: inflow_discharge rho |U_n| A and
+// diagnostics.csv holds inflow_mass (emitted since t = 0) and outflow_mass (removed since t = 0,
+// carried through checkpoints) [kg], reported by the source and sink stages, beside mass. summary.json: inflow_discharge rho |U_n| A and
 // outflow_discharge, the mean outflow rate over the last channel.steady_window seconds [kg/s]
 // (per metre of width in 2D), their ratio, and mass_balance_error, the largest
 // |M(0) + M_in - M_out - M| / (M(0) + M_in) over the frames (0 up to round-off: every particle
@@ -39,8 +39,6 @@ int run(const CommandLine& cl, const Config& scene) {
   // 2. Run.
   auto pipeline = fluid::make_fluid_pipeline(water);
   Runner<dim> runner("channel", cl, scene, water.settings);
-  fluid::add_pressure_columns(runner, pipeline);
-  fluid::add_flow_columns(runner, pipeline);
   runner.run(water.state, pipeline);
 
   // 3. Discharges: rho |U_n| A in, the mean removal rate over the steady window out.
@@ -50,7 +48,7 @@ int run(const CommandLine& cl, const Config& scene) {
     if (a != in.face.axis) area *= in.hi[a] - in.lo[a];
   const double q_in = water.fluid.density * std::abs(in.velocity[in.face.axis]) * area;
   const std::vector<double> t = runner.history("time"), out = runner.history("outflow_mass"),
-                            emitted = runner.history("inflow_mass"), stored = runner.history("fluid_mass");
+                            emitted = runner.history("inflow_mass"), stored = runner.history("mass");
   const std::size_t last = t.size() - 1;
   std::size_t first = last;
   while (first > 0 && t[first - 1] >= t[last] - window - 1e-12) --first;

@@ -76,7 +76,7 @@ int run(const CommandLine& cl, const Config& scene) {
   scene.reject_unknown_keys();
 
   // 3. Run.
-  auto pipeline = solid::make_explicit_pipeline(solid);
+  auto pipeline = solid::make_solid_pipeline(solid);
   Runner<dim> runner("column_collapse", cl, scene, settings);
   runner.set_elastic_energy([&](const MpmState<dim>& s) { return solid::elastic_energy(s, solid.materials); });
   runner.run(solid.state, pipeline);

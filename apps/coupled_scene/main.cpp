@@ -21,8 +21,6 @@ int run(const CommandLine& cl, const Config& scene) {
   scene.reject_unknown_keys();
   auto pipeline = coupling::make_coupled_pipeline(cs);
   coupling::CoupledRunner<dim> runner("coupled_scene", cl, scene, cs.settings);
-  if (cs.fluid) coupling::add_pressure_columns(runner, pipeline);
-  coupling::add_flow_columns(runner, pipeline);
   runner.run(cs.state, pipeline);
   runner.write_summary({{"mass_fluid", cs.state.fluid.particles.total_mass()},
                          {"mass_sediment", cs.state.sediment.particles.total_mass()}});

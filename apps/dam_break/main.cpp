@@ -101,7 +101,6 @@ int run(const CommandLine& cl, const Config& scene) {
   // 3. Run.
   auto pipeline = fluid::make_fluid_pipeline(water);
   Runner<dim> runner("dam_break", cl, scene, settings);
-  fluid::add_pressure_columns(runner, pipeline);
   runner.add_column("front_position", front_position<dim>);
   runner.add_column("column_height", [&](const MpmState<dim>& s) { return column_height(s, a / 4, depth); });
   runner.run(water.state, pipeline);

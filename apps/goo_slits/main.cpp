@@ -31,7 +31,7 @@ int run(const CommandLine& cl, const Config& scene) {
   const auto& shape = std::get<geometry::LevelSetShape<dim>>(plate->shape());
   const double plate_bottom = shape.level_set().bounding_box().lo[1];
 
-  auto pipeline = solid::make_explicit_pipeline(solid);
+  auto pipeline = solid::make_solid_pipeline(solid);
   Runner<dim> runner("goo_slits", cl, scene, solid.settings);
   runner.set_elastic_energy([&](const MpmState<dim>& s) { return solid::elastic_energy(s, solid.materials); });
   runner.add_column("max_penetration", [&](const MpmState<dim>& s) {

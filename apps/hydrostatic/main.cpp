@@ -53,7 +53,6 @@ int run(const CommandLine& cl, const Config& scene) {
   // 3. Run.
   auto pipeline = fluid::make_fluid_pipeline(liquid);
   Runner<dim> runner("hydrostatic", cl, scene, settings);
-  fluid::add_pressure_columns(runner, pipeline);
   runner.run(liquid.state, pipeline);
 
   // 4. Spurious speed and pressure error at the end.

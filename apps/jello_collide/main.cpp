@@ -44,7 +44,7 @@ int run(const CommandLine& cl, const Config& scene) {
   scene.reject_unknown_keys();
 
   const Totals<dim> before(solid.state.particles);
-  auto pipeline = solid::make_explicit_pipeline(solid);
+  auto pipeline = solid::make_solid_pipeline(solid);
   Runner<dim> runner("jello_collide", cl, scene, solid.settings);
   runner.set_elastic_energy([&](const MpmState<dim>& s) { return solid::elastic_energy(s, solid.materials); });
   runner.run(solid.state, pipeline);

@@ -122,7 +122,6 @@ int run2(const CommandLine& cl, const Config& scene) {
   // 2. Run.
   auto pipeline = fluid::make_fluid_pipeline(fluid);
   Runner<2> runner("lid_driven_cavity", cl, scene, settings);
-  fluid::add_pressure_columns(runner, pipeline);
   runner.run(fluid.state, pipeline);
 
   // 3. Centre lines, extremes, steadiness, Ghia et al.

@@ -60,8 +60,6 @@ int run(const CommandLine& cl, const Config& scene) {
 
   auto pipeline = coupling::make_coupled_pipeline(tank);
   coupling::CoupledRunner<dim> runner("sand_pour", cl, scene, tank.settings);
-  coupling::add_pressure_columns(runner, pipeline);
-  coupling::add_flow_columns(runner, pipeline);
   using State = coupling::CoupledState<dim>;
   runner.add_column("pile_height", [&](const State& s) { return pile_shape(bed, s.sediment.particles).first; });
   runner.add_column("pile_width", [&](const State& s) { return pile_shape(bed, s.sediment.particles).second; });
@@ -76,7 +74,7 @@ int run(const CommandLine& cl, const Config& scene) {
   runner.run(tank.state, pipeline);
 
   const std::vector<double> poured = runner.history("inflow_mass_sediment"), held = runner.history("mass_sediment"),
-                            removed = runner.history("outflow_mass_sediment");
+                            removed = runner.history_or_zero("outflow_mass_sediment");
   double balance = 0.0;
   for (std::size_t f = 0; f < held.size(); ++f)
     if (poured[f] > 0.0) balance = std::max(balance, std::abs(poured[f] - removed[f] - held[f]) / poured[f]);

@@ -58,8 +58,6 @@ int run(const CommandLine& cl, const Config& scene) {
 
   auto pipeline = coupling::make_coupled_pipeline(flume);
   coupling::CoupledRunner<dim> runner("sediment_transport", cl, scene, flume.settings);
-  coupling::add_pressure_columns(runner, pipeline);
-  coupling::add_flow_columns(runner, pipeline);
   const auto change = [&](const coupling::CoupledState<dim>& st) {
     return bed.change(h0, bed.heights(st.sediment.particles), window_lo, window_hi);
   };
@@ -85,7 +83,8 @@ int run(const CommandLine& cl, const Config& scene) {
   io::write_file_atomically(runner.out_dir() / "bed_profile.csv", profile.str());
 
   const auto balance = [&](const char* in, const char* out, const char* mass, double m0) {
-    const std::vector<double> m_in = runner.history(in), m_out = runner.history(out), m = runner.history(mass);
+    const std::vector<double> m_in = runner.history_or_zero(in), m_out = runner.history_or_zero(out),
+                              m = runner.history(mass);
     double error = 0.0;
     for (std::size_t f = 0; f < m.size(); ++f)
       error = std::max(error, std::abs(m0 + m_in[f] - m_out[f] - m[f]) / (m0 + m_in[f]));
@@ -99,7 +98,7 @@ int run(const CommandLine& cl, const Config& scene) {
   runner.write_summary({{"max_scour_depth", max_scour},
                         {"final_scour_depth", final_scour},
                         {"final_deposition_height", final_deposit},
-                        {"sediment_outflow_mass", runner.history("outflow_mass_sediment").back()},
+                        {"sediment_outflow_mass", runner.history_or_zero("outflow_mass_sediment").back()},
                         {"fluid_mass_balance_error", fluid_error},
                         {"sediment_mass_balance_error", grain_error}});
   if (!cl.check) return 0;

@@ -44,7 +44,6 @@ int run(const CommandLine& cl, const Config& scene) {
 
   auto pipeline = coupling::make_coupled_pipeline(col.scene);
   coupling::CoupledRunner<dim> runner("settling", cl, scene, settings);
-  coupling::add_pressure_columns(runner, pipeline);
   runner.add_column("settling_velocity", [&](const coupling::CoupledState<dim>& s) {
     return -coupling::mean_sediment_velocity(s, 2.0 * dx);
   });

@@ -22,7 +22,7 @@ template <int dim>
 int run(const CommandLine& cl, const Config& scene) {
   solid::SolidScene<dim> solid = solid::load_solid_scene<dim>(scene);
   scene.reject_unknown_keys();
-  auto pipeline = solid::make_explicit_pipeline(solid);
+  auto pipeline = solid::make_solid_pipeline(solid);
   Runner<dim> runner("solid_scene", cl, scene, solid.settings);
   runner.set_elastic_energy([&](const MpmState<dim>& s) { return solid::elastic_energy(s, solid.materials); });
   runner.run(solid.state, pipeline);

@@ -84,7 +84,6 @@ int run(const CommandLine& cl, const Config& scene) {
 
   auto pipeline = coupling::make_coupled_pipeline(col);
   coupling::CoupledRunner<dim> runner("submerged_collapse", cl, scene, col.settings);
-  if (col.fluid) coupling::add_pressure_columns(runner, pipeline);
   runner.add_column("front", [](const coupling::CoupledState<dim>& st) { return front(st, true); });
   runner.add_column("front_grains", [](const coupling::CoupledState<dim>& st) { return front(st, false); });
   runner.add_column("height", [=](const coupling::CoupledState<dim>& st) { return height(st, left_half); });

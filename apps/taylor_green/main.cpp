@@ -92,7 +92,6 @@ int run_2d(const CommandLine& cl, const Config& scene) {
   // 3. Run.
   auto pipeline = fluid::make_fluid_pipeline(water);
   Runner<2> runner("taylor_green", cl, scene, settings);
-  fluid::add_pressure_columns(runner, pipeline);
   runner.add_column("l2_velocity_error", [&](const MpmState<2>& s) { return l2_velocity_error(s, vortex); });
   const double energy0 = kinetic_energy(water.state);
   runner.run(water.state, pipeline);

@@ -69,7 +69,7 @@ int run(const CommandLine& cl, const Config& scene) {
   // 3. Run with the centre-of-mass velocity and its exact value in the diagnostics.
   const double omega = beta * std::sqrt(materials[0].lame.p_wave_modulus() / materials[0].density);
   auto exact = [&](double t) { return 2.0 * v0 / std::numbers::pi * std::cos(omega * t); };
-  auto pipeline = solid::make_explicit_pipeline(solid);
+  auto pipeline = solid::make_solid_pipeline(solid);
   Runner<dim> runner("vibrating_bar", cl, scene, settings);
   runner.set_elastic_energy([&](const MpmState<dim>& s) { return solid::elastic_energy(s, solid.materials); });
   runner.add_column("com_velocity", [](const MpmState<dim>& s) { return com_velocity(s.particles); });

@@ -7,6 +7,7 @@
 #include <coupling/scene_loader.h>
 #include <coupling/stages/on_phase.h>
 #include <coupling/stages/reclassify_sediment.h>
+#include <mpm/core/advance.h>
 #include <doctest/doctest.h>
 #include <mpm/core/stages/particles_to_grid.h>
 #include <mpm/core/stages/sort_particles.h>
@@ -148,7 +149,7 @@ TEST_CASE("reclassify in the dry pipeline: a dense bed stays continuum, an isola
   REQUIRE(n == 36 * 8 * 4 + 1);
   CHECK(count_sediment(s).continuum == n);
   auto pipeline = make_coupled_pipeline(scene);
-  advance(s, pipeline, 0.05);
+  mpm::advance(s, pipeline, 0.05);
   const SedimentCounts counts = count_sediment(s);
   CHECK(counts.discrete == 1);
   CHECK(counts.continuum == n - 1);
@@ -178,7 +179,7 @@ TEST_CASE("reclassify: a bed deposited as discrete grains does not expand when i
     Run r{top(s), top(s), grain_volume(s), 0.0, 0.0, {}};
     auto pipeline = make_coupled_pipeline(scene);
     while (s.step < (wet ? 150 : 300)) {
-      advance(s, pipeline, s.time + 1e-3);
+      mpm::advance(s, pipeline, s.time + 1e-3);
       r.highest = std::max(r.highest, top(s));
     }
     r.grains = grain_volume(s);

@@ -1,5 +1,5 @@
 // Vibrating bar (the standard MPM test, e.g. Bardenhagen 2002, J. Comput. Phys. 180): observed
-// convergence of the explicit MPM solid pipeline (solid::make_explicit_pipeline) on the first
+// convergence of the explicit MPM solid pipeline (solid::make_solid_pipeline) on the first
 // mode of a fixed-free elastic bar. docs/verification.md has the measured tables.
 //
 // Exact solution. A bar 0 < X < L of density rho and Young's modulus E, fixed at X = 0 and
@@ -111,7 +111,7 @@ BarRun run_bar(int cells, const Kernel& kernel, FixedEnd fixed_end) {
     P.C[p](0, 0) = kV0 * beta * std::cos(beta * P.x[p][0]);  // APIC C = grad v at t = 0
   }
 
-  Pipeline<MpmState<2>> pipeline = solid::make_explicit_pipeline(scene);
+  Pipeline<MpmState<2>> pipeline = solid::make_solid_pipeline(scene);
   MpmState<2>& state = scene.state;
   BarRun run;
   double e_half = 0.0, e_node = 0.0;

@@ -4,11 +4,12 @@
 //! pressure solver, a clear-fluid scene no sediment stages.
 //!
 //! The coupled step, one Stage<CoupledState> each (OnPhase runs a phase's own stage):
-//!   time_step -> sort (both) -> p2g (both) -> volume_fraction -> stress_forces (continuum
-//!   sediment) -> grid_update (both; gravity, the sediment its stress) -> viscosity (fluid,
-//!   mu > 0) -> exchange -> boundary (both) -> mixture_pressure -> boundary (sediment)
-//!   -> deformation + plasticity (continuum sediment) -> g2p (both) -> reclassify (a
-//!   continuum sediment with `switching`: stages/reclassify_sediment.h)
+//!   time_step -> sort (both) -> p2g (both) -> volume_fraction -> grid_update (fluid, gravity)
+//!   -> the sediment solver's grid update (explicit: stress_forces -> grid_update; grains:
+//!   grid_update) -> viscosity (fluid, mu > 0) -> exchange -> boundary (both)
+//!   -> mixture_pressure -> boundary (sediment) -> the sediment solver's particle update
+//!   (explicit: deformation + plasticity) -> g2p (both) -> reclassify (a continuum sediment
+//!   with `switching`: stages/reclassify_sediment.h)
 #include <coupling/coupled_state.h>
 #include <coupling/drag/drag_law.h>
 #include <coupling/stages/reclassify_sediment.h>
@@ -19,6 +20,9 @@
 #include <mpm/core/stages/particle_source.h>
 #include <mpm/geometry/flow_boundary_config.h>
 #include <mpm/solid/material.h>
+#include <mpm/solid/solid_solver.h>
+
+#include <memory>
 
 #include <optional>
 #include <string>
@@ -29,8 +33,11 @@ namespace coupling {
 template <int dim>
 struct SedimentPhase {
   double density = 2650.0;  //!< grain material density rho_s [kg/m^3]
-  //! Drucker-Prager (or any libmpm) continuum of the sediment; empty: discrete grains that
-  //! feel only gravity, buoyancy and drag (a dilute suspension).
+  //! The solid solver of the sediment (mpm/solid/solid_solver.h): "explicit" for a continuum of
+  //! `materials`, "grains" for discrete grains that feel only gravity, buoyancy and drag (a
+  //! dilute suspension; no materials).
+  std::string solver = "grains";
+  //! Drucker-Prager (or any libmpm) continuum of the sediment; empty with "grains".
   std::vector<mpm::Material<dim>> materials;
   double min_fluid_fraction = default_min_fluid_fraction;  //!< n_min of volume_fraction.h
   //! Continuum <-> discrete switching (needs materials); nullopt: every particle keeps its
@@ -46,6 +53,8 @@ struct CoupledScene {
   fluid::stages::PressureSettings pressure;
   std::optional<SedimentPhase<dim>> sediment;  //!< nullopt: clear fluid
   std::optional<drag::DragLaw> drag;           //!< set iff both phases are
+  //! The sediment's solid solver, built from SedimentPhase::solver (null without a sediment).
+  std::shared_ptr<const mpm::solid::SolidSolver<dim>> solid_solver;
   CoupledState<dim> state;
   //! Inflow and outflow (flow_boundary_config.h), already applied to `colliders`: the inflow
   //! emits fluid (fraction 1), the outflow removes particles of both phases.
@@ -55,8 +64,9 @@ struct CoupledScene {
 };
 
 //! A scene without particles; a grid is allocated for each phase present. InputError when
-//! both phases are present without a drag law, or neither is, or a sediment switches without
-//! a continuum material.
+//! both phases are present without a drag law, or neither is, or the sediment's solver does
+//! not match its materials (explicit needs them, grains has none), or it switches without a
+//! continuum material.
 template <int dim>
 CoupledScene<dim> make_coupled_scene(mpm::SceneSettings<dim> settings,
                                      mpm::geometry::ColliderSet<dim> colliders,
@@ -82,11 +92,5 @@ void add_sediment_particles(CoupledScene<dim>& scene, const std::vector<mpm::Vec
 //! The coupled pipeline of the header comment for the phases `scene` holds.
 template <int dim>
 mpm::Pipeline<CoupledState<dim>> make_coupled_pipeline(const CoupledScene<dim>& scene);
-
-//! Steps `pipeline` until state.time reaches t_end (the last step ends exactly on it);
-//! NumericalError after `max_steps` steps.
-template <int dim>
-void advance(CoupledState<dim>& state, mpm::Pipeline<CoupledState<dim>>& pipeline, double t_end,
-             int max_steps = 1000000);
 
 }  // namespace coupling

@@ -1,5 +1,8 @@
 #include <coupling/coupled_scene.h>
-#include <coupling/stages/coupled_stages.h>
+#include <coupling/stages/coupled_time_step.h>
+#include <coupling/stages/exchange_stage.h>
+#include <coupling/stages/mixture_projection.h>
+#include <coupling/stages/volume_fraction_stage.h>
 #include <coupling/stages/on_phase.h>
 #include <fluid/stages/implicit_viscosity.h>
 #include <mpm/core/error.h>
@@ -10,9 +13,7 @@
 #include <mpm/core/stages/particle_source.h>
 #include <mpm/core/stages/particles_to_grid.h>
 #include <mpm/core/stages/sort_particles.h>
-#include <mpm/solid/stages/deformation_update.h>
-#include <mpm/solid/stages/return_map.h>
-#include <mpm/solid/stages/stress_forces.h>
+#include <mpm/core/stages/time_step_control.h>
 
 #include <algorithm>
 #include <cmath>
@@ -32,6 +33,8 @@ CoupledScene<dim> make_coupled_scene(mpm::SceneSettings<dim> settings,
                                "coupled scene: a fluid and a sediment phase need a drag law");
   mpm::verify<mpm::InputError>(!sediment || !sediment->switching || !sediment->materials.empty(),
                                "coupled scene: continuum/discrete switching needs a sediment material");
+  mpm::verify<mpm::InputError>(!sediment || sediment->solver != "grains" || sediment->materials.empty(),
+                               "coupled scene: sediment solver 'grains' takes no material");
   // The volume fractions, the exchange and the mixture projection index nodes without the
   // periodic wrap of the fluid's own stages.
   for (int a = 0; a < dim; ++a)
@@ -40,13 +43,15 @@ CoupledScene<dim> make_coupled_scene(mpm::SceneSettings<dim> settings,
   state.has_fluid = fluid.has_value();
   state.has_sediment = sediment.has_value();
   if (fluid) state.fluid = mpm::initial_state(settings);
+  std::shared_ptr<const mpm::solid::SolidSolver<dim>> solid;
   if (sediment) {
     state.sediment = mpm::initial_state(settings);
-    if (!sediment->materials.empty()) state.sediment.particles.enable_deformation();
+    solid = mpm::solid::make_solid_solver<dim>(sediment->solver, sediment->materials, sediment->switching.has_value());
+    solid->add_channels(state.sediment.particles);
   }
   if (!(fluid && sediment)) drag.reset();
   return {std::move(settings), std::move(colliders), fluid, std::move(pressure), std::move(sediment), drag,
-          std::move(state), {}, {}, {}};
+          std::move(solid), std::move(state), {}, {}, {}};
 }
 
 template <int dim>
@@ -84,19 +89,11 @@ mpm::Pipeline<CoupledState<dim>> make_coupled_pipeline(const CoupledScene<dim>& 
   const bool continuum = sandy && !scene.sediment->materials.empty();
   const bool switching = continuum && scene.sediment->switching.has_value();
 
-  // Free fall as a wave speed (fluid_scene.h) for both phases; a continuum sediment adds its
-  // elastic wave speed.
-  typename stages::CoupledTimeStep<dim>::Settings dt;
-  dt.cfl = scene.settings.cfl;
-  dt.wave_cfl = scene.settings.wave_cfl;
-  dt.max_dt = scene.settings.max_dt;
-  dt.wave_speed = std::sqrt(scene.settings.gravity.norm() * scene.settings.dx);
-  for (const auto& c : scene.colliders.colliders())
-    dt.wave_speed = std::max(dt.wave_speed, c.velocity().norm());
-  typename stages::CoupledTimeStep<dim>::Settings dt_sediment = dt;
-  if (continuum)
-    for (const auto& m : scene.sediment->materials)
-      dt_sediment.wave_speed = std::max(dt_sediment.wave_speed, m.wave_speed());
+  // Free fall as a wave speed (fluid_scene.h) for both phases; the sediment adds its solver's.
+  const double free_surface = fluid::free_surface_wave_speed(scene.settings, scene.colliders);
+  const auto dt = ms::time_step_settings(scene.settings, free_surface);
+  const auto dt_sediment =
+      ms::time_step_settings(scene.settings, std::max(free_surface, sandy ? scene.solid_solver->wave_speed() : 0.0));
 
   std::vector<std::string> initial;
   for (const auto& [present, phase] :
@@ -125,14 +122,13 @@ mpm::Pipeline<CoupledState<dim>> make_coupled_pipeline(const CoupledScene<dim>& 
   if (wet && sandy)
     p.add(std::make_unique<stages::VolumeFractionStage<dim>>(scene.fluid->density, scene.sediment->density,
                                                              scene.sediment->min_fluid_fraction));
-  if (continuum)
-    on(Phase::sediment, std::make_unique<ms::StressForces<dim>>(scene.sediment->materials, switching));
   if (wet) on(Phase::fluid, std::make_unique<ms::GridVelocityUpdate<dim>>(false));
-  if (sandy) on(Phase::sediment, std::make_unique<ms::GridVelocityUpdate<dim>>(continuum));
+  if (sandy)
+    for (auto& stage : scene.solid_solver->grid_update()) on(Phase::sediment, std::move(stage));
   if (wet && scene.fluid->viscosity > 0.0)
     on(Phase::fluid, std::make_unique<fluid::stages::ImplicitViscosity<dim>>(
                          scene.fluid->viscosity / scene.fluid->density, scene.colliders,
-                         fluid::SolveControl{1e-10, 0.0, 1000}));
+                         mpm::solve::SolveControl{1e-10, 0.0, 1000}));
   if (wet && sandy) p.add(std::make_unique<stages::ExchangeStage<dim>>(*scene.drag));
   both([&] { return std::make_unique<ms::GridBoundary<dim>>(scene.colliders); });
   if (wet && sandy) {
@@ -145,33 +141,13 @@ mpm::Pipeline<CoupledState<dim>> make_coupled_pipeline(const CoupledScene<dim>& 
     on(Phase::fluid, std::make_unique<fluid::stages::PressureProjection<dim>>(
                          scene.fluid->density, scene.colliders, scene.pressure));
   }
-  if (continuum) {
-    on(Phase::sediment, std::make_unique<ms::DeformationUpdate<dim>>());
-    if (ms::any_plastic(scene.sediment->materials))
-      on(Phase::sediment, std::make_unique<ms::ReturnMap<dim>>(scene.sediment->materials));
-  }
+  if (sandy)
+    for (auto& stage : scene.solid_solver->particle_update()) on(Phase::sediment, std::move(stage));
   both([] { return std::make_unique<ms::GridToParticles<dim>>(); });
   if (switching)
     p.add(std::make_unique<stages::ReclassifySediment<dim>>(*scene.sediment->switching, scene.sediment->density,
                                                             0, wet));
   return p;
-}
-
-template <int dim>
-void advance(CoupledState<dim>& state, mpm::Pipeline<CoupledState<dim>>& pipeline, double t_end,
-             int max_steps) {
-  for (int n = 0; state.time < t_end; ++n) {
-    if (n >= max_steps) {
-      std::ostringstream why;
-      why << "coupled step: " << max_steps << " steps did not reach t = " << t_end << " s (t = " << state.time
-          << " s, dt = " << state.dt << " s)";
-      throw mpm::NumericalError(why.str());
-    }
-    state.dt_limit = t_end - state.time;
-    pipeline.step(state);
-    state.time = state.dt >= state.dt_limit ? t_end : state.time + state.dt;
-    ++state.step;
-  }
 }
 
 #define COUPLED_SCENE(dim)                                                                                 \
@@ -182,8 +158,7 @@ void advance(CoupledState<dim>& state, mpm::Pipeline<CoupledState<dim>>& pipelin
                                     const mpm::Vec<dim>&, const std::string&);                             \
   template void add_sediment_particles(CoupledScene<dim>&, const std::vector<mpm::Vec<dim>>&, double,      \
                                        const mpm::Vec<dim>&, const std::string&);                          \
-  template mpm::Pipeline<CoupledState<dim>> make_coupled_pipeline(const CoupledScene<dim>&);               \
-  template void advance(CoupledState<dim>&, mpm::Pipeline<CoupledState<dim>>&, double, int);
+  template mpm::Pipeline<CoupledState<dim>> make_coupled_pipeline(const CoupledScene<dim>&);
 COUPLED_SCENE(2)
 COUPLED_SCENE(3)
 

@@ -47,7 +47,10 @@ template <int dim>
 SedimentPhase<dim> parse_sediment_phase(const mpm::Config& sediment) {
   using mpm::Range;
   SedimentPhase<dim> s;
-  if (sediment.has("youngs_modulus")) {
+  // A continuum by default when the map holds material keys, discrete grains otherwise.
+  s.solver = sediment.choice("solver", sediment.has("youngs_modulus") ? "explicit" : "grains",
+                             mpm::solid::solid_solver_names());
+  if (s.solver != "grains") {
     s.materials.push_back(mpm::parse_material<dim>(sediment));
     s.density = s.materials.front().density;
   } else {

@@ -86,20 +86,21 @@ FluidScene<dim> load_fluid_scene(const Config& scene) {
 }
 
 template <int dim>
-mpm::Pipeline<mpm::MpmState<dim>> make_fluid_pipeline(const FluidScene<dim>& scene) {
-  namespace ms = mpm::stages;
-  typename ms::TimeStepControl<dim>::Settings dt;
-  dt.cfl = scene.settings.cfl;
-  dt.wave_cfl = scene.settings.wave_cfl;
-  dt.max_dt = scene.settings.max_dt;
+double free_surface_wave_speed(const mpm::SceneSettings<dim>& settings, const mpm::geometry::ColliderSet<dim>& colliders) {
   // The free-fall limit as a "wave speed": wave_cfl dx / sqrt(|g| dx) = wave_cfl sqrt(dx / |g|);
   // and moving obstacles (a cavity lid) drag the liquid next to them at their speed.
-  dt.wave_speed = std::sqrt(scene.settings.gravity.norm() * scene.settings.dx);
-  for (const auto& c : scene.colliders.colliders()) dt.wave_speed = std::max(dt.wave_speed, c.velocity().norm());
+  double speed = std::sqrt(settings.gravity.norm() * settings.dx);
+  for (const auto& c : colliders.colliders()) speed = std::max(speed, c.velocity().norm());
+  return speed;
+}
 
+template <int dim>
+mpm::Pipeline<mpm::MpmState<dim>> make_fluid_pipeline(const FluidScene<dim>& scene) {
+  namespace ms = mpm::stages;
   mpm::Pipeline<mpm::MpmState<dim>> p({"particle.x", "particle.v", "particle.C", "particle.mass",
                                        "particle.volume0", "particle.material"});
-  p.add(std::make_unique<ms::TimeStepControl<dim>>(dt));
+  p.add(std::make_unique<ms::TimeStepControl<dim>>(
+      ms::time_step_settings(scene.settings, free_surface_wave_speed(scene.settings, scene.colliders))));
   // Outflow, then inflow, before the sort that rebuilds the buckets.
   if (auto regions = mpm::geometry::flow_sink_regions(scene.flow, scene.settings); !regions.empty())
     p.add(std::make_unique<ms::ParticleSink<dim>>(std::move(regions)));
@@ -113,38 +114,13 @@ mpm::Pipeline<mpm::MpmState<dim>> make_fluid_pipeline(const FluidScene<dim>& sce
   p.add(std::make_unique<ms::GridVelocityUpdate<dim>>(false));
   if (scene.fluid.viscosity > 0.0)
     p.add(std::make_unique<stages::ImplicitViscosity<dim>>(scene.fluid.viscosity / scene.fluid.density,
-                                                           scene.colliders, SolveControl{1e-10, 0.0, 1000}));
+                                                           scene.colliders, mpm::solve::SolveControl{1e-10, 0.0, 1000}));
   p.add(std::make_unique<ms::GridBoundary<dim>>(scene.colliders));
   p.add(std::make_unique<stages::PressureProjection<dim>>(scene.fluid.density, scene.colliders, scene.pressure));
   if (periodic) p.add(std::make_unique<ms::PeriodicFill<dim>>());
   p.add(std::make_unique<ms::GridToParticles<dim>>());
   if (periodic) p.add(std::make_unique<ms::PeriodicWrap<dim>>());
   return p;
-}
-
-template <int dim>
-void add_pressure_columns(mpm::Runner<dim>& runner, mpm::Pipeline<mpm::MpmState<dim>>& pipeline) {
-  const auto* projection = pipeline.template find<stages::PressureProjection<dim>>();
-  if (!projection) throw mpm::InputError("add_pressure_columns: the pipeline has no pressure stage");
-  runner.add_column("pressure_iterations",
-                    [projection](const mpm::MpmState<dim>&) { return double(projection->last_result().iterations); });
-  runner.add_column("pressure_residual",
-                    [projection](const mpm::MpmState<dim>&) { return projection->last_result().relative_residual; });
-  runner.add_column("pressure_round_off",
-                    [projection](const mpm::MpmState<dim>&) { return projection->stopped_at_round_off() ? 1.0 : 0.0; });
-}
-
-template <int dim>
-void add_flow_columns(mpm::Runner<dim>& runner, mpm::Pipeline<mpm::MpmState<dim>>& pipeline) {
-  const auto* source = pipeline.template find<mpm::stages::ParticleSource<dim>>();
-  const auto* sink = pipeline.template find<mpm::stages::ParticleSink<dim>>();
-  runner.add_column("inflow_mass", [source](const mpm::MpmState<dim>&) { return source ? source->emitted_mass() : 0.0; });
-  runner.add_column("outflow_mass", [sink](const mpm::MpmState<dim>&) { return sink ? sink->removed_mass() : 0.0; });
-  runner.add_column("fluid_mass", [](const mpm::MpmState<dim>& s) {
-    double m = 0.0;
-    for (const double mp : s.particles.mass) m += mp;
-    return m;
-  });
 }
 
 #define FLUID_SCENE(dim)                                                                                   \
@@ -154,9 +130,8 @@ void add_flow_columns(mpm::Runner<dim>& runner, mpm::Pipeline<mpm::MpmState<dim>
                                     const std::string&);                                                   \
   template void seed_fluid_bodies(FluidScene<dim>&, const Config&);                                        \
   template FluidScene<dim> load_fluid_scene<dim>(const Config&);                                           \
-  template mpm::Pipeline<mpm::MpmState<dim>> make_fluid_pipeline(const FluidScene<dim>&);                  \
-  template void add_pressure_columns(mpm::Runner<dim>&, mpm::Pipeline<mpm::MpmState<dim>>&);                \
-  template void add_flow_columns(mpm::Runner<dim>&, mpm::Pipeline<mpm::MpmState<dim>>&);
+  template double free_surface_wave_speed(const mpm::SceneSettings<dim>&, const mpm::geometry::ColliderSet<dim>&); \
+  template mpm::Pipeline<mpm::MpmState<dim>> make_fluid_pipeline(const FluidScene<dim>&);
 FLUID_SCENE(2)
 FLUID_SCENE(3)
 

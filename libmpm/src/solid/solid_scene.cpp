@@ -1,7 +1,6 @@
 #include <mpm/core/error.h>
 #include <mpm/core/stages/grid_boundary.h>
 #include <mpm/core/stages/grid_to_particles.h>
-#include <mpm/core/stages/grid_velocity_update.h>
 #include <mpm/core/stages/particles_to_grid.h>
 #include <mpm/core/stages/sort_particles.h>
 #include <mpm/core/stages/time_step_control.h>
@@ -9,9 +8,6 @@
 #include <mpm/geometry/collider_config.h>
 #include <mpm/geometry/seeding.h>
 #include <mpm/solid/solid_scene.h>
-#include <mpm/solid/stages/deformation_update.h>
-#include <mpm/solid/stages/return_map.h>
-#include <mpm/solid/stages/stress_forces.h>
 
 #include <Eigen/Geometry>
 
@@ -52,7 +48,6 @@ void add_particles(SolidScene<dim>& scene, const std::vector<Vec<dim>>& position
   if (const OutsideDomain outside = first_outside_domain(scene.settings, positions); !outside.why.empty())
     throw InputError(where + ": " + outside.why);
   Particles<dim>& P = scene.state.particles;
-  P.enable_deformation();
   const double mass = scene.materials.at(m).density * volume;
   for (const Vec<dim>& x : positions) P.push_back(x, velocity, mass, volume, m);
 }
@@ -87,9 +82,11 @@ void seed_body(SolidScene<dim>& scene, const Config& body) {
 
 template <int dim>
 SolidScene<dim> make_solid_scene(SceneSettings<dim> settings, std::vector<Material<dim>> materials,
-                                 geometry::ColliderSet<dim> colliders) {
+                                 geometry::ColliderSet<dim> colliders, const std::string& solver) {
   MpmState<dim> state = initial_state(settings);
-  return {std::move(settings), std::move(materials), std::move(colliders), std::move(state)};
+  std::shared_ptr<const SolidSolver<dim>> s = make_solid_solver<dim>(solver, materials);
+  s->add_channels(state.particles);
+  return {std::move(settings), std::move(materials), std::move(colliders), std::move(s), std::move(state)};
 }
 
 template <int dim>
@@ -102,29 +99,23 @@ SolidScene<dim> load_solid_scene(const Config& scene) {
   SceneSettings<dim> settings = parse_scene_settings<dim>(scene);
   auto colliders = geometry::parse_colliders<dim>(scene, settings.domain_lo, settings.domain_hi,
                                                    wall_layer(settings.kernel, settings.dx));
-  SolidScene<dim> s = make_solid_scene(std::move(settings), parse_materials<dim>(scene), std::move(colliders));
+  const std::string solver = scene.choice("solver", "explicit", solid_solver_names());
+  SolidScene<dim> s = make_solid_scene(std::move(settings), parse_materials<dim>(scene), std::move(colliders), solver);
   seed_bodies(s, scene);
   return s;
 }
 
 template <int dim>
-Pipeline<MpmState<dim>> make_explicit_pipeline(const SolidScene<dim>& scene) {
-  typename stages::TimeStepControl<dim>::Settings dt;
-  dt.cfl = scene.settings.cfl;
-  dt.wave_cfl = scene.settings.wave_cfl;
-  dt.max_dt = scene.settings.max_dt;
-  for (const auto& m : scene.materials) dt.wave_speed = std::max(dt.wave_speed, m.wave_speed());
-
+Pipeline<MpmState<dim>> make_solid_pipeline(const SolidScene<dim>& scene) {
   Pipeline<MpmState<dim>> p({"particle.x", "particle.v", "particle.C", "particle.mass", "particle.volume0",
                              "particle.material", "particle.F", "particle.plastic"});
-  p.add(std::make_unique<stages::TimeStepControl<dim>>(dt));
+  p.add(std::make_unique<stages::TimeStepControl<dim>>(
+      stages::time_step_settings(scene.settings, scene.solver->wave_speed())));
   p.add(std::make_unique<stages::SortParticles<dim>>());
   p.add(std::make_unique<stages::ParticlesToGrid<dim>>());
-  p.add(std::make_unique<stages::StressForces<dim>>(scene.materials));
-  p.add(std::make_unique<stages::GridVelocityUpdate<dim>>(true));
+  for (auto& stage : scene.solver->grid_update()) p.add(std::move(stage));
   p.add(std::make_unique<stages::GridBoundary<dim>>(scene.colliders));
-  p.add(std::make_unique<stages::DeformationUpdate<dim>>());
-  if (stages::any_plastic(scene.materials)) p.add(std::make_unique<stages::ReturnMap<dim>>(scene.materials));
+  for (auto& stage : scene.solver->particle_update()) p.add(std::move(stage));
   p.add(std::make_unique<stages::GridToParticles<dim>>());
   return p;
 }
@@ -144,10 +135,10 @@ double elastic_energy(const MpmState<dim>& state, const std::vector<Material<dim
   template void add_particles(SolidScene<dim>&, const std::vector<Vec<dim>>&, double, std::uint16_t, \
                               const Vec<dim>&, const std::string&);                               \
   template SolidScene<dim> make_solid_scene(SceneSettings<dim>, std::vector<Material<dim>>,          \
-                                           geometry::ColliderSet<dim>);                           \
+                                           geometry::ColliderSet<dim>, const std::string&);       \
   template void seed_bodies(SolidScene<dim>&, const Config&);                                     \
   template SolidScene<dim> load_solid_scene<dim>(const Config&);                                  \
-  template Pipeline<MpmState<dim>> make_explicit_pipeline(const SolidScene<dim>&);                \
+  template Pipeline<MpmState<dim>> make_solid_pipeline(const SolidScene<dim>&);                   \
   template double elastic_energy(const MpmState<dim>&, const std::vector<Material<dim>>&);
 MPM_SOLID_SCENE(2)
 MPM_SOLID_SCENE(3)

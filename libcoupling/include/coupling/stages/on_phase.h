@@ -33,6 +33,16 @@ class OnPhase final : public mpm::Stage<CoupledState<dim>> {
   void run(CoupledState<dim>& s) override { stage_->run(phase_state(s, phase_)); }
   mpm::CarriedData carried() const override { return stage_->carried(); }
   void restore(const mpm::CarriedData& data) override { stage_->restore(data); }
+  //! The stage's columns; a per-phase quantity gets the phase appended ("inflow_mass_fluid").
+  std::vector<mpm::Diagnostic> diagnostics() const override {
+    std::vector<mpm::Diagnostic> all = stage_->diagnostics();
+    for (mpm::Diagnostic& d : all)
+      if (d.per_phase) {
+        d.name += "_" + phase_name(phase_);
+        d.per_phase = false;
+      }
+    return all;
+  }
 
   Phase phase() const { return phase_; }
   mpm::Stage<mpm::MpmState<dim>>& stage() { return *stage_; }

@@ -77,21 +77,15 @@ void seed_fluid_bodies(FluidScene<dim>& fluid, const mpm::Config& scene);
 template <int dim>
 FluidScene<dim> load_fluid_scene(const mpm::Config& scene);
 
+//! The speed that limits the time step of a free surface: sqrt(|g| dx), so that dt <= wave_cfl
+//! sqrt(dx / |g|), or a faster moving collider. The coupled scenes use it for both phases.
+template <int dim>
+double free_surface_wave_speed(const mpm::SceneSettings<dim>& settings, const mpm::geometry::ColliderSet<dim>& colliders);
+
 //! The fluid pipeline for `scene`. Besides the particle CFL, dt <= wave_cfl sqrt(dx / |g|)
 //! (a particle starting from rest falls less than wave_cfl^2 dx / 2 in one step) and
 //! dt <= wave_cfl dx / |v_c| for every moving collider c.
 template <int dim>
 mpm::Pipeline<mpm::MpmState<dim>> make_fluid_pipeline(const FluidScene<dim>& scene);
-
-//! Adds the diagnostics columns pressure_iterations, pressure_residual and pressure_round_off
-//! (1 when the solve stopped at its round-off floor above the tolerance; of the last solve of
-//! each frame) for the projection stage of `pipeline`.
-template <int dim>
-void add_pressure_columns(mpm::Runner<dim>& runner, mpm::Pipeline<mpm::MpmState<dim>>& pipeline);
-
-//! Adds the diagnostics columns inflow_mass (emitted since the start) and outflow_mass (removed
-//! since the start; checkpoints carry it) [kg], 0 without an inflow or outflow, and fluid_mass (particles) [kg].
-template <int dim>
-void add_flow_columns(mpm::Runner<dim>& runner, mpm::Pipeline<mpm::MpmState<dim>>& pipeline);
 
 }  // namespace fluid

@@ -25,6 +25,10 @@ public:
 
   //! Iterations and relative residual of the last CG solve.
   const SolveResult& last_result() const { return result_; }
+  //! viscosity_iterations of the last solve.
+  std::vector<mpm::Diagnostic> diagnostics() const override {
+    return {{"viscosity_iterations", double(result_.iterations)}};
+  }
 
 private:
   double nu_;

@@ -89,6 +89,13 @@ public:
   //! tolerance (a converged solve, but not to the tolerance asked for).
   bool stopped_at_round_off() const { return stopped_at_round_off_; }
   const PressureSettings& settings() const { return settings_; }
+  //! pressure_iterations, pressure_residual (relative) and pressure_round_off (1 when the solve
+  //! stopped at its round-off floor above the tolerance) of the last solve.
+  std::vector<mpm::Diagnostic> diagnostics() const override {
+    return {{"pressure_iterations", double(result_.iterations)},
+            {"pressure_residual", result_.relative_residual},
+            {"pressure_round_off", stopped_at_round_off_ ? 1.0 : 0.0}};
+  }
 
 private:
   //! The message of the last, failed solve by `solver`.

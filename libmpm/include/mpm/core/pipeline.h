@@ -1,9 +1,14 @@
 #pragma once
-//! An ordered list of stages that advances a State by one step and times every stage.
+//! An ordered list of stages that advances a State by one step and times every stage. Stages
+//! are appended by the scene's assembler and may be inserted or replaced by name afterwards (a
+//! user's extra stage, another solver for one step); every change re-checks that each field is
+//! written before it is read.
 #include <mpm/core/error.h>
 #include <mpm/core/stage.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cstddef>
 #include <memory>
 #include <set>
 #include <string>
@@ -26,17 +31,28 @@ public:
   //! `initial_fields` are the fields a scene provides before the first stage runs.
   explicit Pipeline(std::vector<std::string> initial_fields) : initial_(std::move(initial_fields)) {}
 
-  Pipeline& add(std::unique_ptr<Stage<State>> stage) {
-    std::set<std::string> available(initial_.begin(), initial_.end());
-    for (const auto& s : stages_)
-      for (const auto& f : s->writes()) available.insert(f);
-    for (const auto& f : stage->reads())
-      if (!available.count(f))
-        throw InputError("pipeline: stage '" + stage->name() + "' reads field '" + f +
-                         "' that no earlier stage writes and the scene does not provide");
-    times_.names.push_back(stage->name());
-    times_.seconds.push_back(0.0);
-    stages_.push_back(std::move(stage));
+  //! Appends a stage; InputError when it reads a field that is neither initial nor written by
+  //! an earlier stage.
+  Pipeline& add(std::unique_ptr<Stage<State>> stage) { return insert(stages_.size(), std::move(stage)); }
+  //! Inserts a stage before / after the first stage called `name`, or replaces that stage; the
+  //! whole order is checked again. InputError when no stage has that name.
+  Pipeline& insert_before(const std::string& name, std::unique_ptr<Stage<State>> stage) {
+    return insert(position(name), std::move(stage));
+  }
+  Pipeline& insert_after(const std::string& name, std::unique_ptr<Stage<State>> stage) {
+    return insert(position(name) + 1, std::move(stage));
+  }
+  Pipeline& replace(const std::string& name, std::unique_ptr<Stage<State>> stage) {
+    const std::size_t at = position(name);
+    std::swap(stages_[at], stage);
+    try {
+      check();
+    } catch (...) {
+      std::swap(stages_[at], stage);  // the pipeline stays as it was
+      throw;
+    }
+    times_.names[at] = stages_[at]->name();
+    times_.seconds[at] = 0.0;
     return *this;
   }
 
@@ -81,8 +97,54 @@ public:
     return found;
   }
 
+  //! The diagnostics of every stage in pipeline order; columns of the same name add up (two
+  //! emitters of one phase report one inflow).
+  std::vector<Diagnostic> diagnostics() const {
+    std::vector<Diagnostic> all;
+    for (const auto& s : stages_)
+      for (const Diagnostic& d : s->diagnostics()) {
+        auto same = std::find_if(all.begin(), all.end(), [&](const Diagnostic& e) { return e.name == d.name; });
+        if (same == all.end()) all.push_back(d);
+        else same->value += d.value;
+      }
+    return all;
+  }
+
 private:
   std::string prefix(std::size_t s) const { return std::to_string(s) + "." + stages_[s]->name() + "/"; }
+
+  std::size_t position(const std::string& name) const {
+    for (std::size_t s = 0; s < stages_.size(); ++s)
+      if (stages_[s]->name() == name) return s;
+    std::string names;
+    for (const auto& s : stages_) names += (names.empty() ? "" : ", ") + s->name();
+    throw InputError("pipeline: no stage '" + name + "' (stages: " + names + ")");
+  }
+
+  Pipeline& insert(std::size_t at, std::unique_ptr<Stage<State>> stage) {
+    stages_.insert(stages_.begin() + static_cast<std::ptrdiff_t>(at), std::move(stage));
+    try {
+      check();
+    } catch (...) {
+      stages_.erase(stages_.begin() + static_cast<std::ptrdiff_t>(at));
+      throw;
+    }
+    times_.names.insert(times_.names.begin() + static_cast<std::ptrdiff_t>(at), stages_[at]->name());
+    times_.seconds.insert(times_.seconds.begin() + static_cast<std::ptrdiff_t>(at), 0.0);
+    return *this;
+  }
+
+  //! Every field a stage reads is initial or written by an earlier stage.
+  void check() const {
+    std::set<std::string> available(initial_.begin(), initial_.end());
+    for (const auto& s : stages_) {
+      for (const auto& f : s->reads())
+        if (!available.count(f))
+          throw InputError("pipeline: stage '" + s->name() + "' reads field '" + f +
+                           "' that no earlier stage writes and the scene does not provide");
+      for (const auto& f : s->writes()) available.insert(f);
+    }
+  }
 
   std::vector<std::string> initial_;
   std::vector<std::unique_ptr<Stage<State>>> stages_;

@@ -3,7 +3,9 @@
 //! particles_NNNN.h5 + .xdmf (and particles.xdmf, the time series), preview_NNNN.png,
 //! diagnostics.csv (one row per frame, a seconds column per stage), checkpoint_NNNN.h5,
 //! summary.json; a progress line with ETA on stderr and, at the end, the per-stage time
-//! table and the memory held per field.
+//! table and the memory held per field. Besides the columns every run has and those an app adds,
+//! diagnostics.csv holds what each stage reports (Stage::diagnostics(): solver iterations and
+//! residuals, masses emitted and removed).
 //!
 //! A state of several particle phases (libcoupling's CoupledState, through its `phases`
 //! function, state.h) writes one particle series per phase named after it (fluid_NNNN.h5 +
@@ -41,6 +43,9 @@ public:
   void add_column(std::string name, Column value) { extra_.emplace_back(std::move(name), std::move(value)); }
   //! Every value of a diagnostics column so far, frame 0 first (rows before a restart included).
   std::vector<double> history(const std::string& column) const { return csv_.column(column); }
+  //! history(column), or zeros when no stage reports that column (inflow_mass_sediment of a
+  //! scene without sediment emitters).
+  std::vector<double> history_or_zero(const std::string& column) const;
 
   //! Creates the output folder (or continues from --restart) and runs all frames.
   void run(State& state, Pipeline<State>& pipeline);
@@ -55,7 +60,6 @@ private:
   std::string scene_digest() const;
   int open_output(State& state, Pipeline<State>& pipeline);  // returns the first frame to run
   void append_diagnostics(State& state, int frame, const Pipeline<State>& pipeline);
-  void advance(State& state, Pipeline<State>& pipeline, double t_end, int frame);
   void write_frame(State& state, int frame);
   void progress(const State& state, int frame, bool last) const;
 

@@ -13,6 +13,16 @@ namespace mpm {
 //! start), so that a checkpoint can hold them and a restarted run continue bit for bit.
 using CarriedData = std::vector<std::pair<std::string, std::vector<double>>>;
 
+//! One diagnostics column a stage reports: its value after the last step of a frame.
+struct Diagnostic {
+  std::string name;
+  double value = 0.0;
+  //! A quantity of the particle phase the stage acts on (the mass an emitter added): in a state
+  //! of several phases the column is "<name>_<phase>". Otherwise it belongs to the step (a
+  //! solver's iterations) and keeps its name.
+  bool per_phase = false;
+};
+
 template <class State>
 class Stage {
 public:
@@ -24,6 +34,9 @@ public:
   //! What run() left for the next step (default: nothing) and its restoration.
   virtual CarriedData carried() const { return {}; }
   virtual void restore(const CarriedData& /*data*/) {}
+  //! The stage's diagnostics columns, the same names after every step (default: none); the
+  //! Runner writes them to diagnostics.csv, so no app wires a stage's figures by hand.
+  virtual std::vector<Diagnostic> diagnostics() const { return {}; }
 };
 
 }  // namespace mpm

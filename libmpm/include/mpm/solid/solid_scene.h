@@ -1,14 +1,19 @@
 #pragma once
-//! Assembles an explicit elastoplastic MPM scene from a scene file: materials, bodies
-//! (seeded particles), colliders and the staged pipeline (DESIGN.md):
-//!   time_step -> sort -> p2g -> stress_forces -> grid_update -> boundary -> deformation
-//!   -> plasticity (only when a material is plastic) -> g2p (and advection)
+//! Assembles an elastoplastic MPM scene from a scene file: materials, bodies (seeded
+//! particles), colliders, the solid solver (`solver:`, solid_solver.h) and the staged pipeline:
+//!   time_step -> sort -> p2g -> [solver grid update] -> boundary -> [solver particle update]
+//!   -> g2p (and advection)
+//! which for the default explicit solver reads time_step -> sort -> p2g -> stress_forces ->
+//! grid_update -> boundary -> deformation -> plasticity (only when a material is plastic) -> g2p.
 #include <mpm/core/config.h>
 #include <mpm/core/pipeline.h>
 #include <mpm/core/scene_settings.h>
 #include <mpm/core/state.h>
 #include <mpm/geometry/collider.h>
 #include <mpm/solid/material.h>
+#include <mpm/solid/solid_solver.h>
+
+#include <memory>
 
 #include <cstdint>
 #include <string>
@@ -21,7 +26,8 @@ struct SolidScene {
   SceneSettings<dim> settings;
   std::vector<Material<dim>> materials;
   geometry::ColliderSet<dim> colliders;
-  MpmState<dim> state;  //!< particles seeded, grid sized to the domain
+  std::shared_ptr<const SolidSolver<dim>> solver;
+  MpmState<dim> state;  //!< particles seeded (with the solver's channels), grid sized to the domain
 };
 
 //! The "materials" list (at least one entry; names unique).
@@ -39,23 +45,24 @@ template <int dim>
 void add_particles(SolidScene<dim>& scene, const std::vector<Vec<dim>>& positions, double volume,
                    std::uint16_t m, const Vec<dim>& velocity, const std::string& where);
 
-//! A scene with an empty particle set and the grid sized to the settings' domain.
+//! A scene with an empty particle set, the grid sized to the settings' domain and the solid
+//! solver called `solver` (solid_solver_names()).
 template <int dim>
 SolidScene<dim> make_solid_scene(SceneSettings<dim> settings, std::vector<Material<dim>> materials,
-                                 geometry::ColliderSet<dim> colliders);
+                                 geometry::ColliderSet<dim> colliders, const std::string& solver = "explicit");
 
 //! Seeds the optional "bodies" list of `scene` (box, sphere or mesh shapes).
 template <int dim>
 void seed_bodies(SolidScene<dim>& solid, const Config& scene);
 
-//! Reads settings, materials, colliders and bodies. Apps with their own body keys build the
+//! Reads settings, materials, colliders, the solver and bodies. Apps with their own body keys build the
 //! scene with make_solid_scene and add_particles instead.
 template <int dim>
 SolidScene<dim> load_solid_scene(const Config& scene);
 
-//! The explicit symplectic-Euler pipeline for `scene`.
+//! The pipeline of the header comment for `scene` and its solver.
 template <int dim>
-Pipeline<MpmState<dim>> make_explicit_pipeline(const SolidScene<dim>& scene);
+Pipeline<MpmState<dim>> make_solid_pipeline(const SolidScene<dim>& scene);
 
 //! Total elastic energy sum_p V_p^0 psi(F_p^E) [J].
 template <int dim>

@@ -1,6 +1,7 @@
 #pragma once
 //! The definitions of mpm::Runner (runner.h), included only by the translation units that
 //! instantiate it: libmpm/src/core/runner.cpp for MpmState and libcoupling for its state.
+#include <mpm/core/advance.h>
 #include <mpm/core/error.h>
 #include <mpm/core/runner.h>
 #include <mpm/io/checkpoint.h>
@@ -57,6 +58,7 @@ std::vector<std::string> Runner<dim, State>::columns(State& state, const Pipelin
   if (all.size() > 1)
     for (const PhaseRef<dim>& phase : all) c.push_back(runner_detail::phase_column("mass", phase.name));
   for (const auto& [name, fn] : extra_) c.push_back(name);
+  for (const Diagnostic& d : pipeline.diagnostics()) c.push_back(d.name);
   // A stage that runs twice in a step (e.g. a phase's boundary again after the projection)
   // gets its own column: seconds_<name>, seconds_<name>_2, ...
   std::map<std::string, int> runs;
@@ -69,6 +71,13 @@ std::vector<std::string> Runner<dim, State>::columns(State& state, const Pipelin
   for (const std::string& name : c)
     if (!unique.insert(name).second) throw std::logic_error(app_ + ": diagnostics column '" + name + "' added twice");
   return c;
+}
+
+template <int dim, class State>
+std::vector<double> Runner<dim, State>::history_or_zero(const std::string& column) const {
+  const auto& all = csv_.columns();
+  if (std::find(all.begin(), all.end(), column) != all.end()) return csv_.column(column);
+  return std::vector<double>(csv_.column("frame").size(), 0.0);
 }
 
 template <int dim, class State>
@@ -140,6 +149,7 @@ void Runner<dim, State>::append_diagnostics(State& state, int frame, const Pipel
   r.push_back(std::sqrt(max_speed2));
   if (phase_mass.size() > 1) r.insert(r.end(), phase_mass.begin(), phase_mass.end());
   for (const auto& [name, fn] : extra_) r.push_back(fn(state));
+  for (const Diagnostic& d : pipeline.diagnostics()) r.push_back(d.value);
   const StageTimes& t = pipeline.times();
   for (std::size_t s = 0; s < t.seconds.size(); ++s) {
     r.push_back(t.seconds[s] - stage_seconds_at_last_frame_[s]);
@@ -147,22 +157,6 @@ void Runner<dim, State>::append_diagnostics(State& state, int frame, const Pipel
   }
   steps_at_last_frame_ = state.step;
   csv_.append(r);
-}
-
-template <int dim, class State>
-void Runner<dim, State>::advance(State& state, Pipeline<State>& pipeline, double t_end, int frame) {
-  int steps = 0;
-  while (state.time < t_end - 1e-12 * settings_.frame_dt) {
-    state.dt_limit = t_end - state.time;
-    pipeline.step(state);
-    if (!(state.dt > 0.0) || ++steps > settings_.max_steps_per_frame)
-      throw NumericalError("stage 'time_step': the time step collapsed to " + runner_detail::number(state.dt) +
-                           " s at t = " + runner_detail::number(state.time) + " s (more than " +
-                           std::to_string(settings_.max_steps_per_frame) + " steps in frame " +
-                           std::to_string(frame) + ")");
-    state.time = state.dt >= state.dt_limit ? t_end : state.time + state.dt;
-    ++state.step;
-  }
 }
 
 template <int dim, class State>
@@ -182,7 +176,8 @@ void Runner<dim, State>::run(State& state, Pipeline<State>& pipeline) {
 
   const int frames = settings_.frame_count();
   for (int frame = first_frame + 1; frame <= frames; ++frame) {
-    advance(state, pipeline, std::min(frame * settings_.frame_dt, settings_.end_time), frame);
+    advance(state, pipeline, std::min(frame * settings_.frame_dt, settings_.end_time),
+            settings_.max_steps_per_frame, 1e-12 * settings_.frame_dt);
     append_diagnostics(state, frame, pipeline);
     write_frame(state, frame);
     const bool checkpoint = frame == frames ||

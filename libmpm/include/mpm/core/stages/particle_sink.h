@@ -51,6 +51,8 @@ public:
 
   //! Mass removed since the start of the run [kg] (a restarted run included).
   double removed_mass() const { return removed_mass_; }
+  //! outflow_mass: the mass removed since the start [kg].
+  std::vector<Diagnostic> diagnostics() const override { return {{"outflow_mass", removed_mass_, true}}; }
   std::size_t removed_count() const { return removed_count_; }
   const std::vector<SinkRegion<dim>>& regions() const { return regions_; }
 

@@ -56,6 +56,8 @@ public:
   std::int64_t layers_by(double t) const;
   //! Mass emitted from start to the end of the last run's step [kg] (N(t + dt) n_A m_p).
   double emitted_mass() const { return double(emitted_) * double(face_points_.size()) * settings_.particle_mass; }
+  //! inflow_mass: the mass emitted since the start [kg].
+  std::vector<Diagnostic> diagnostics() const override { return {{"inflow_mass", emitted_mass(), true}}; }
   //! Particles per layer n_A.
   std::size_t layer_size() const { return face_points_.size(); }
   const Settings& settings() const { return settings_; }

@@ -1,4 +1,5 @@
 #pragma once
+#include <mpm/core/scene_settings.h>
 #include <mpm/core/stage.h>
 #include <mpm/core/state.h>
 
@@ -27,5 +28,17 @@ public:
 private:
   Settings settings_;
 };
+
+//! The scene's time keys (cfl, wave_cfl, max_dt) with the fastest wave the scene's explicit
+//! update must resolve [m/s]: every pipeline builds its time-step settings here.
+template <int dim>
+typename TimeStepControl<dim>::Settings time_step_settings(const SceneSettings<dim>& scene, double wave_speed) {
+  typename TimeStepControl<dim>::Settings dt;
+  dt.cfl = scene.cfl;
+  dt.wave_cfl = scene.wave_cfl;
+  dt.max_dt = scene.max_dt;
+  dt.wave_speed = wave_speed;
+  return dt;
+}
 
 }  // namespace mpm::stages

@@ -1,41 +1,8 @@
-#include <coupling/shared_nodes.h>
-#include <coupling/stages/coupled_stages.h>
+#include <coupling/stages/mixture_projection.h>
 
-#include <algorithm>
-#include <cmath>
+#include <coupling/shared_nodes.h>
 
 namespace coupling::stages {
-
-template <int dim>
-void CoupledTimeStep<dim>::run(CoupledState<dim>& s) {
-  double dt = s.dt_limit;
-  if (s.has_fluid) dt = std::min(dt, fluid_.stable_dt(s.fluid));
-  if (s.has_sediment) dt = std::min(dt, sediment_.stable_dt(s.sediment));
-  s.dt = dt;
-  for (mpm::MpmState<dim>* phase : {&s.fluid, &s.sediment}) {
-    phase->time = s.time;
-    phase->dt = dt;
-    phase->dt_limit = s.dt_limit;
-    phase->step = s.step;
-  }
-}
-
-template <int dim>
-void VolumeFractionStage<dim>::run(CoupledState<dim>& s) {
-  const mpm::SparseGrid<dim>& gs = s.sediment.grid;
-  const double node_volume = std::pow(gs.dx(), dim);
-  phi_.resize(gs.node_storage());
-  for (std::size_t k = 0; k < phi_.size(); ++k) phi_[k] = gs.mass[k] / (rho_s_ * node_volume);
-  if (s.has_fluid) {
-    const mpm::SparseGrid<dim>& gw = s.fluid.grid;
-    require_same_lattice(gs, gw, name());
-    for_each_shared_node(gs, gw, [&](std::size_t ks, std::size_t kw) {
-      const double grains = gs.mass[ks] / rho_s_, liquid = gw.mass[kw] / rho_w_;
-      if (grains + liquid > 0.0) phi_[ks] = grains / (grains + liquid);
-    });
-  }
-  s.fractions = clamp_fractions(phi_, min_fluid_);
-}
 
 template <int dim>
 MixtureProjection<dim>::MixtureProjection(double fluid_density, double sediment_density, drag::DragLaw law,
@@ -102,10 +69,6 @@ void MixtureProjection<dim>::run(CoupledState<dim>& s) {
   }
 }
 
-template class CoupledTimeStep<2>;
-template class CoupledTimeStep<3>;
-template class VolumeFractionStage<2>;
-template class VolumeFractionStage<3>;
 template class MixtureProjection<2>;
 template class MixtureProjection<3>;
 

@@ -1,0 +1,38 @@
+#pragma once
+//! The step loop of every run (the Runner's frames, coupled tests, user codes): steps a
+//! pipeline until the state's clock reaches a target time. The time-step stage clips dt to
+//! state.dt_limit, the time left, so the step that takes all of it ends exactly on t_end.
+#include <mpm/core/error.h>
+#include <mpm/core/pipeline.h>
+
+#include <cstdint>
+#include <cstdio>
+#include <string>
+
+namespace mpm {
+
+//! Steps `pipeline` until state.time is within `slack` [s] of t_end. NumericalError, naming the
+//! time-step stage, when a step is not positive or more than `max_steps` steps do not get
+//! there (a collapsing step ends the run instead of hanging it). State has time, dt, dt_limit
+//! and step (MpmState, libcoupling's CoupledState).
+template <class State>
+void advance(State& state, Pipeline<State>& pipeline, double t_end, std::int64_t max_steps = 1000000,
+             double slack = 0.0) {
+  std::int64_t steps = 0;
+  while (state.time < t_end - slack) {
+    state.dt_limit = t_end - state.time;
+    pipeline.step(state);
+    if (!(state.dt > 0.0) || ++steps > max_steps) {
+      char why[256];
+      std::snprintf(why, sizeof why,
+                    "stage 'time_step': the time step collapsed to %.6g s at t = %.6g s (more than %lld steps "
+                    "to reach t = %.6g s)",
+                    state.dt, state.time, static_cast<long long>(max_steps), t_end);
+      throw NumericalError(why);
+    }
+    state.time = state.dt >= state.dt_limit ? t_end : state.time + state.dt;
+    ++state.step;
+  }
+}
+
+}  // namespace mpm

@@ -1,0 +1,39 @@
+#pragma once
+//! The explicit symplectic-Euler elastoplastic step (docs/architecture.md, "The explicit solid
+//! step"): grid_update() = stress_forces -> grid_update (forces and gravity);
+//! particle_update() = deformation -> plasticity (only when a material is plastic). Stable for
+//! dt < dx / c, c the fastest elastic wave of the materials.
+#include <mpm/solid/solid_solver.h>
+
+namespace mpm::solid {
+
+template <int dim>
+class ExplicitSolver final : public SolidSolver<dim> {
+public:
+  using typename SolidSolver<dim>::Stages;
+  ExplicitSolver(std::vector<Material<dim>> materials, bool stress_free_particles);
+  std::string name() const override { return "explicit"; }
+  void add_channels(Particles<dim>& particles) const override { particles.enable_deformation(); }
+  double wave_speed() const override;
+  Stages grid_update() const override;
+  Stages particle_update() const override;
+
+private:
+  std::vector<Material<dim>> materials_;
+  bool stress_free_particles_;
+};
+
+//! Particles that carry no stress: the grid update adds gravity only and the particles keep no
+//! deformation state.
+template <int dim>
+class GrainSolver final : public SolidSolver<dim> {
+public:
+  using typename SolidSolver<dim>::Stages;
+  std::string name() const override { return "grains"; }
+  void add_channels(Particles<dim>& /*particles*/) const override {}
+  double wave_speed() const override { return 0.0; }
+  Stages grid_update() const override;
+  Stages particle_update() const override { return {}; }
+};
+
+}  // namespace mpm::solid

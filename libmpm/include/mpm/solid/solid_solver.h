@@ -1,0 +1,50 @@
+#pragma once
+//! The solid-step interface: what a solid solver adds to a step, so that a solid scene and the
+//! sediment of a coupled scene assemble their pipelines from the same solver and a scene can
+//! swap it (`solver:` in a solid scene, `sediment.solver:` in a coupled one). A pipeline runs
+//!   time_step -> sort -> p2g -> grid_update() -> boundary -> particle_update() -> g2p
+//! and a coupled step puts the exchange and the mixture projection between grid_update() and
+//! particle_update() (libcoupling). An implicit solver enforces walls and colliders inside its
+//! grid update as well; the boundary stage after it then leaves its velocities unchanged.
+#include <mpm/core/particles.h>
+#include <mpm/core/stage.h>
+#include <mpm/core/state.h>
+#include <mpm/solid/material.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace mpm::solid {
+
+template <int dim>
+class SolidSolver {
+public:
+  using Stages = std::vector<std::unique_ptr<Stage<MpmState<dim>>>>;
+  virtual ~SolidSolver() = default;
+  virtual std::string name() const = 0;
+  //! Gives `particles` the channels the solver's stages read (idempotent).
+  virtual void add_channels(Particles<dim>& particles) const = 0;
+  //! The fastest wave the update must resolve [m/s] (the time step keeps dt <= wave_cfl dx / c);
+  //! 0 when the update is stable at any step.
+  virtual double wave_speed() const = 0;
+  //! From the transferred grid momentum to the grid velocity before the boundary conditions.
+  virtual Stages grid_update() const = 0;
+  //! From the final grid velocity to the particle state that g2p completes.
+  virtual Stages particle_update() const = 0;
+};
+
+//! "explicit": symplectic Euler on the elastoplastic materials (explicit_solver.h).
+//! "grains": stress-free particles (discrete grains; gravity, and in a coupled scene buoyancy and
+//! drag, move them).
+std::vector<std::string> solid_solver_names();
+
+//! The solver called `name` (one of solid_solver_names()) over `materials`. With
+//! `stress_free_particles` some particles carry the index stress_free_material and add no stress
+//! (a sediment that switches between continuum and discrete grains). InputError for another name
+//! or for "explicit" without materials.
+template <int dim>
+std::shared_ptr<const SolidSolver<dim>> make_solid_solver(const std::string& name, std::vector<Material<dim>> materials,
+                                                          bool stress_free_particles = false);
+
+}  // namespace mpm::solid
