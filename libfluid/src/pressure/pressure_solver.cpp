@@ -20,9 +20,19 @@ std::unique_ptr<PressureSolver<dim>> make_pressure_solver(const std::string& nam
   if (name == "mgpcg") return std::make_unique<MgpcgSolver<dim>>();
   if (name == "cg") return std::make_unique<CgSolver<dim>>();
   if (name == "jacobi_pcg") return std::make_unique<JacobiPcgSolver<dim>>();
+#if FLUID_WITH_CHOLMOD
   if (name == "cholmod") return std::make_unique<CholmodSolver<dim>>();
+#else
+  if (name == "cholmod")
+    throw mpm::InputError("pressure solver 'cholmod' is not in this build (configured with SEDIMENT_WITH_CHOLMOD=OFF)");
+#endif
+#if FLUID_WITH_HYPRE
   if (name == "hypre_pfmg") return std::make_unique<HyprePfmgSolver<dim>>();
   if (name == "hypre_boomeramg") return std::make_unique<HypreBoomerAmgSolver<dim>>();
+#else
+  if (name == "hypre_pfmg" || name == "hypre_boomeramg")
+    throw mpm::InputError("pressure solver '" + name + "' is not in this build (configured with SEDIMENT_WITH_HYPRE=OFF)");
+#endif
   std::string accepted;
   for (const std::string& n : pressure_solver_names()) accepted += (accepted.empty() ? "" : ", ") + n;
   throw mpm::InputError("unknown pressure solver '" + name + "' (accepted: " + accepted + ")");

@@ -18,7 +18,7 @@ std::shared_ptr<const SolidSolver<dim>> make_solid_solver(const std::string& nam
                                                           bool stress_free_particles) {
   if (name == "grains") return std::make_shared<GrainSolver<dim>>();
   if (name == "explicit") {
-    verify<InputError>(!materials.empty(), "solid solver 'explicit' needs at least one material");
+    MPM_VERIFY(!materials.empty(), InputError, "solid solver 'explicit' needs at least one material");
     return std::make_shared<ExplicitSolver<dim>>(std::move(materials), stress_free_particles);
   }
   std::string names;

@@ -16,6 +16,7 @@
 //! when it lies within a factor 10 of the target (the recurrence drifts from it by round-off).
 //! A breakdown (d.A d <= 0 or r.z <= 0: A or M not positive on the Krylov space, or NaN) stops
 //! the iteration and is reported as not converged.
+#include <mpm/core/error.h>
 #include <mpm/core/solve/solve_control.h>
 #include <mpm/core/solve/vector_space.h>
 
@@ -42,6 +43,7 @@ SolveResult conjugate_gradient(Operator&& A, Preconditioner&& M, const Vector& b
   using T = typename Vector::value_type;
   const auto start = std::chrono::steady_clock::now();
   const std::size_t n = b.size();
+  MPM_ASSERT(n == 0 || std::isfinite(dot(b, b)));
   if (x.size() != n) x.assign(n, zero<T>());
   Vector r(n), z(n), d(n), Ad(n);
   const double b_norm = std::sqrt(dot(b, b));
