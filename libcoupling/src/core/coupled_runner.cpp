@@ -1,5 +1,5 @@
 #include <coupling/coupled_runner.h>
-#include <mpm/core/detail/runner_impl.h>
+#include <mpm/core/runner_impl.h>
 
 namespace mpm {
 

@@ -1,12 +1,10 @@
 #include <coupling/volume_fraction.h>
-#include <mpm/core/detail/transfer_loops.h>
 #include <mpm/core/error.h>
+#include <mpm/core/transfer.h>
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <string>
-#include <variant>
 
 namespace coupling {
 
@@ -17,26 +15,11 @@ void sediment_fraction(const mpm::Particles<dim>& sediment, const mpm::ParticleB
   mpm::verify<mpm::InputError>(
       sediment_density > 0.0,
       "sediment volume fraction: sediment density " + std::to_string(sediment_density) + ": expected > 0");
-  phi.assign(grid.node_storage(), 0.0);
   // phi_i = sum_p w_ip V_p / V_i: scatter V_p / V_i = m_p / (rho_s dx^dim) with the P2G weights.
   const double scale = 1.0 / (sediment_density * std::pow(grid.dx(), dim));
-  using Node = Eigen::Matrix<double, 1, 1>;
-  const std::array<mpm::detail::ChannelView, 1> channels{mpm::detail::scalar_view(phi)};
-  std::visit(
-      [&](const auto& k) {
-        using K = std::decay_t<decltype(k)>;
-        mpm::detail::scatter<dim, 1>(
-            grid, buckets, channels,
-            [&](std::uint32_t p, const mpm::detail::PatchFrame<dim>& f, double* patch) {
-              mpm::detail::Stencil<dim, K::support> st;
-              st.template compute<false>(k, f.cells(sediment.x[p]), f.origin);
-              Node c[dim + 1];
-              for (Node& ci : c) ci.setZero();
-              c[0](0) = sediment.mass[p] * scale;
-              mpm::detail::spread<false>(st, c, patch);
-            });
-      },
-      kernel);
+  std::vector<double> share(sediment.size());
+  for (std::size_t p = 0; p < share.size(); ++p) share[p] = sediment.mass[p] * scale;
+  mpm::scalar_to_grid(share, sediment, buckets, kernel, grid, phi);
 }
 
 VolumeFractions clamp_fractions(const std::vector<double>& phi, double min_fluid) {

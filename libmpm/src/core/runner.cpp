@@ -1,4 +1,4 @@
-#include <mpm/core/detail/runner_impl.h>
+#include <mpm/core/runner_impl.h>
 
 namespace mpm {
 

@@ -83,12 +83,34 @@ void velocity_gradient(const Particles<dim>& P, const ParticleBuckets<dim>& buck
   }, kernel);
 }
 
+template <int dim>
+void scalar_to_grid(const std::vector<double>& values, const Particles<dim>& P, const ParticleBuckets<dim>& buckets,
+                    const Kernel& kernel, const SparseGrid<dim>& grid, std::vector<double>& out) {
+  out.assign(grid.node_storage(), 0.0);
+  using Node = Eigen::Matrix<double, 1, 1>;
+  const std::array<detail::ChannelView, 1> channels{detail::scalar_view(out)};
+  std::visit([&](const auto& k) {
+    using K = std::decay_t<decltype(k)>;
+    detail::scatter<dim, 1>(grid, buckets, channels, [&](std::uint32_t p, const PatchFrame<dim>& f, double* patch) {
+      Stencil<dim, K::support> st;
+      st.template compute<false>(k, f.cells(P.x[p]), f.origin);
+      Node c[dim + 1];
+      for (Node& ci : c) ci.setZero();
+      c[0](0) = values[p];
+      detail::spread<false>(st, c, patch);
+    });
+  }, kernel);
+}
+
 #define MPM_INSTANTIATE(dim)                                                                      \
   template void particles_to_grid(const Particles<dim>&, const ParticleBuckets<dim>&,            \
                                   const Kernel&, const TransferScheme&, SparseGrid<dim>&);         \
   template void momentum_to_velocity(SparseGrid<dim>&, const TransferScheme&);                    \
   template void grid_to_particles(Particles<dim>&, const ParticleBuckets<dim>&, const Kernel&,    \
                                   const TransferScheme&, const SparseGrid<dim>&, double);          \
+  template void scalar_to_grid(const std::vector<double>&, const Particles<dim>&,                 \
+                               const ParticleBuckets<dim>&, const Kernel&, const SparseGrid<dim>&,  \
+                               std::vector<double>&);                                               \
   template void velocity_gradient(const Particles<dim>&, const ParticleBuckets<dim>&,             \
                                   const Kernel&, const SparseGrid<dim>&, std::vector<Mat<dim>>&);
 MPM_INSTANTIATE(2)

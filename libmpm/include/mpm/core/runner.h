@@ -11,7 +11,7 @@
 //! function, state.h) writes one particle series per phase named after it (fluid_NNNN.h5 +
 //! fluid.xdmf, sediment_NNNN.h5 + sediment.xdmf), draws them all in one preview, sums the
 //! diagnostics over the phases and adds a mass_<phase> column per phase, and stores every
-//! phase in one checkpoint. The definitions are in detail/runner_impl.h; libmpm instantiates
+//! phase in one checkpoint. The definitions are in runner_impl.h; libmpm instantiates
 //! Runner<dim> for MpmState, libcoupling for its state.
 #include <mpm/core/command_line.h>
 #include <mpm/core/config.h>

@@ -38,6 +38,13 @@ void grid_to_particles(Particles<dim>& particles, const ParticleBuckets<dim>& bu
                        const Kernel& kernel, const TransferScheme& scheme,
                        const SparseGrid<dim>& grid, double dt);
 
+//! out_i = sum_p w_ip values[p] on every node (out sized to the grid's node storage, zeroed
+//! first): a per-particle quantity carried to the grid with the P2G weights (a volume fraction).
+template <int dim>
+void scalar_to_grid(const std::vector<double>& values, const Particles<dim>& particles,
+                    const ParticleBuckets<dim>& buckets, const Kernel& kernel, const SparseGrid<dim>& grid,
+                    std::vector<double>& out);
+
 //! Velocity gradient grad v_p = sum_i v_i (grad w_ip)^T [1/s] for every particle.
 template <int dim>
 void velocity_gradient(const Particles<dim>& particles, const ParticleBuckets<dim>& buckets,

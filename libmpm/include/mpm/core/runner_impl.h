@@ -1,6 +1,8 @@
 #pragma once
-//! The definitions of mpm::Runner (runner.h), included only by the translation units that
-//! instantiate it: libmpm/src/core/runner.cpp for MpmState and libcoupling for its state.
+//! The definitions of mpm::Runner (runner.h). Public so that a library with its own state type
+//! can instantiate the Runner for it: libmpm/src/core/runner.cpp does for MpmState, libcoupling
+//! for CoupledState (`template class mpm::Runner<dim, MyState>;` in one translation unit, with a
+//! `phases(MyState&)` found by argument-dependent lookup, state.h).
 #include <mpm/core/advance.h>
 #include <mpm/core/error.h>
 #include <mpm/core/runner.h>
