@@ -88,8 +88,10 @@ int run(const CommandLine& cl, const Config& scene) {
   // 2. Settings, water, walls, particles.
   SceneSettings<dim> settings = parse_scene_settings<dim>(scene, domain);
   auto colliders = geometry::parse_colliders<dim>(scene, domain.lo, domain.hi, layer);
-  fluid::FluidScene<dim> water = fluid::make_fluid_scene(settings, fluid::parse_fluid_material(scene.child("fluid")),
-                                                         fluid::parse_pressure_settings(scene), colliders);
+  const Config liquid = scene.child("fluid");
+  fluid::FluidScene<dim> water = fluid::make_fluid_scene(settings, fluid::parse_fluid_material(liquid),
+                                                         fluid::parse_pressure_settings(scene), colliders,
+                                                         fluid::parse_fluid_solver(liquid));
   Vec<dim> hi = Vec<dim>::Zero();
   hi[0] = a;
   hi[1] = H;

@@ -42,8 +42,10 @@ int run(const CommandLine& cl, const Config& scene) {
   // 2. Settings, liquid, walls, particles.
   SceneSettings<dim> settings = parse_scene_settings<dim>(scene, domain);
   auto colliders = geometry::parse_colliders<dim>(scene, domain.lo, domain.hi, layer);
-  fluid::FluidScene<dim> liquid = fluid::make_fluid_scene(settings, fluid::parse_fluid_material(scene.child("fluid")),
-                                                          fluid::parse_pressure_settings(scene), colliders);
+  const Config water = scene.child("fluid");
+  fluid::FluidScene<dim> liquid = fluid::make_fluid_scene(settings, fluid::parse_fluid_material(water),
+                                                          fluid::parse_pressure_settings(scene), colliders,
+                                                          fluid::parse_fluid_solver(water));
   Vec<dim> hi = Vec<dim>::Constant(W);
   hi[1] = h;
   fluid::add_fluid_particles<dim>(liquid, geometry::seed_box<dim>(Vec<dim>::Zero(), hi, dx, ppc, 0.0, 1),

@@ -4,12 +4,13 @@
 //! pressure solver, a clear-fluid scene no sediment stages.
 //!
 //! The coupled step, one Stage<CoupledState> each (OnPhase runs a phase's own stage):
-//!   time_step -> sort (both) -> p2g (both) -> volume_fraction -> grid_update (fluid, gravity)
-//!   -> the sediment solver's grid update (explicit: stress_forces -> grid_update; grains:
-//!   grid_update) -> viscosity (fluid, mu > 0) -> exchange -> boundary (both)
-//!   -> mixture_pressure -> boundary (sediment) -> the sediment solver's particle update
-//!   (explicit: deformation + plasticity) -> g2p (both) -> reclassify (a continuum sediment
-//!   with `switching`: stages/reclassify_sediment.h)
+//!   time_step -> sort (both) -> p2g (both) -> volume_fraction -> the fluid solver's grid
+//!   update (projection: grid_update (gravity) -> viscosity, mu > 0) -> the sediment solver's
+//!   grid update (explicit: stress_forces -> grid_update; grains: grid_update) -> exchange
+//!   -> boundary (both) -> mixture_pressure (a clear fluid: the fluid solver's projection)
+//!   -> boundary (sediment) -> the particle updates of both solvers (explicit: deformation +
+//!   plasticity) -> g2p (both) -> reclassify (a continuum sediment with `switching`:
+//!   stages/reclassify_sediment.h)
 #include <coupling/coupled_state.h>
 #include <coupling/drag/drag_law.h>
 #include <coupling/stages/reclassify_sediment.h>
@@ -55,6 +56,9 @@ struct CoupledScene {
   std::optional<drag::DragLaw> drag;           //!< set iff both phases are
   //! The sediment's solid solver, built from SedimentPhase::solver (null without a sediment).
   std::shared_ptr<const mpm::solid::SolidSolver<dim>> solid_solver;
+  //! The liquid's fluid solver (fluid/solver/fluid_solver.h; null without a fluid). With a
+  //! sediment the mixture projection stands in for its projection, so it must be incompressible.
+  std::shared_ptr<const fluid::FluidSolver<dim>> fluid_solver;
   CoupledState<dim> state;
   //! Inflow and outflow (flow_boundary_config.h), already applied to `colliders`: the inflow
   //! emits fluid (fraction 1), the outflow removes particles of both phases.
@@ -66,14 +70,15 @@ struct CoupledScene {
 //! A scene without particles; a grid is allocated for each phase present. InputError when
 //! both phases are present without a drag law, or neither is, or the sediment's solver does
 //! not match its materials (explicit needs them, grains has none), or it switches without a
-//! continuum material.
+//! continuum material, or a sediment meets a fluid solver that is not incompressible.
 template <int dim>
 CoupledScene<dim> make_coupled_scene(mpm::SceneSettings<dim> settings,
                                      mpm::geometry::ColliderSet<dim> colliders,
                                      std::optional<fluid::FluidMaterial> fluid,
                                      fluid::stages::PressureSettings pressure,
                                      std::optional<SedimentPhase<dim>> sediment,
-                                     std::optional<drag::DragLaw> drag);
+                                     std::optional<drag::DragLaw> drag,
+                                     const std::string& fluid_solver = "projection");
 
 //! Fluid particles of volume `volume` [m^dim] each, in a region of fluid fraction n_w (the
 //! particle mass is n_w rho_w V_p, Gao et al. 2018); InputError naming `where` when one lies

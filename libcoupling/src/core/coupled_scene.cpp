@@ -4,11 +4,9 @@
 #include <coupling/stages/mixture_projection.h>
 #include <coupling/stages/volume_fraction_stage.h>
 #include <coupling/stages/on_phase.h>
-#include <fluid/stages/implicit_viscosity.h>
 #include <mpm/core/error.h>
 #include <mpm/core/stages/grid_boundary.h>
 #include <mpm/core/stages/grid_to_particles.h>
-#include <mpm/core/stages/grid_velocity_update.h>
 #include <mpm/core/stages/particle_sink.h>
 #include <mpm/core/stages/particle_source.h>
 #include <mpm/core/stages/particles_to_grid.h>
@@ -27,7 +25,7 @@ CoupledScene<dim> make_coupled_scene(mpm::SceneSettings<dim> settings,
                                      std::optional<fluid::FluidMaterial> fluid,
                                      fluid::stages::PressureSettings pressure,
                                      std::optional<SedimentPhase<dim>> sediment,
-                                     std::optional<drag::DragLaw> drag) {
+                                     std::optional<drag::DragLaw> drag, const std::string& fluid_solver) {
   mpm::verify<mpm::InputError>(fluid || sediment, "coupled scene: neither a fluid nor a sediment phase");
   mpm::verify<mpm::InputError>(!(fluid && sediment) || drag.has_value(),
                                "coupled scene: a fluid and a sediment phase need a drag law");
@@ -42,7 +40,15 @@ CoupledScene<dim> make_coupled_scene(mpm::SceneSettings<dim> settings,
   CoupledState<dim> state;
   state.has_fluid = fluid.has_value();
   state.has_sediment = sediment.has_value();
-  if (fluid) state.fluid = mpm::initial_state(settings);
+  std::shared_ptr<const fluid::FluidSolver<dim>> liquid;
+  if (fluid) {
+    state.fluid = mpm::initial_state(settings);
+    liquid = fluid::make_fluid_solver<dim>(fluid_solver, *fluid, pressure, colliders, settings);
+    mpm::verify<mpm::InputError>(!sediment || liquid->incompressible(),
+                                 "coupled scene: fluid solver '" + fluid_solver +
+                                     "' is not incompressible; a sediment needs the mixture projection");
+    liquid->add_channels(state.fluid.particles);
+  }
   std::shared_ptr<const mpm::solid::SolidSolver<dim>> solid;
   if (sediment) {
     state.sediment = mpm::initial_state(settings);
@@ -51,7 +57,7 @@ CoupledScene<dim> make_coupled_scene(mpm::SceneSettings<dim> settings,
   }
   if (!(fluid && sediment)) drag.reset();
   return {std::move(settings), std::move(colliders), fluid, std::move(pressure), std::move(sediment), drag,
-          std::move(solid), std::move(state), {}, {}, {}};
+          std::move(solid), std::move(liquid), std::move(state), {}, {}, {}};
 }
 
 template <int dim>
@@ -89,9 +95,9 @@ mpm::Pipeline<CoupledState<dim>> make_coupled_pipeline(const CoupledScene<dim>& 
   const bool continuum = sandy && !scene.sediment->materials.empty();
   const bool switching = continuum && scene.sediment->switching.has_value();
 
-  // Free fall as a wave speed (fluid_scene.h) for both phases; the sediment adds its solver's.
+  // Each phase's solver limits its step; a sediment falls through a free surface too.
   const double free_surface = fluid::free_surface_wave_speed(scene.settings, scene.colliders);
-  const auto dt = ms::time_step_settings(scene.settings, free_surface);
+  const auto dt = ms::time_step_settings(scene.settings, wet ? scene.fluid_solver->wave_speed() : free_surface);
   const auto dt_sediment =
       ms::time_step_settings(scene.settings, std::max(free_surface, sandy ? scene.solid_solver->wave_speed() : 0.0));
 
@@ -122,13 +128,10 @@ mpm::Pipeline<CoupledState<dim>> make_coupled_pipeline(const CoupledScene<dim>& 
   if (wet && sandy)
     p.add(std::make_unique<stages::VolumeFractionStage<dim>>(scene.fluid->density, scene.sediment->density,
                                                              scene.sediment->min_fluid_fraction));
-  if (wet) on(Phase::fluid, std::make_unique<ms::GridVelocityUpdate<dim>>(false));
+  if (wet)
+    for (auto& stage : scene.fluid_solver->grid_update()) on(Phase::fluid, std::move(stage));
   if (sandy)
     for (auto& stage : scene.solid_solver->grid_update()) on(Phase::sediment, std::move(stage));
-  if (wet && scene.fluid->viscosity > 0.0)
-    on(Phase::fluid, std::make_unique<fluid::stages::ImplicitViscosity<dim>>(
-                         scene.fluid->viscosity / scene.fluid->density, scene.colliders,
-                         mpm::solve::SolveControl{1e-10, 0.0, 1000}));
   if (wet && sandy) p.add(std::make_unique<stages::ExchangeStage<dim>>(*scene.drag));
   both([&] { return std::make_unique<ms::GridBoundary<dim>>(scene.colliders); });
   if (wet && sandy) {
@@ -138,9 +141,10 @@ mpm::Pipeline<CoupledState<dim>> make_coupled_pipeline(const CoupledScene<dim>& 
     // nodes do not shield: impose the sediment's wall conditions again.
     on(Phase::sediment, std::make_unique<ms::GridBoundary<dim>>(scene.colliders));
   } else if (wet) {
-    on(Phase::fluid, std::make_unique<fluid::stages::PressureProjection<dim>>(
-                         scene.fluid->density, scene.colliders, scene.pressure));
+    for (auto& stage : scene.fluid_solver->projection()) on(Phase::fluid, std::move(stage));
   }
+  if (wet)
+    for (auto& stage : scene.fluid_solver->particle_update()) on(Phase::fluid, std::move(stage));
   if (sandy)
     for (auto& stage : scene.solid_solver->particle_update()) on(Phase::sediment, std::move(stage));
   both([] { return std::make_unique<ms::GridToParticles<dim>>(); });
@@ -153,7 +157,8 @@ mpm::Pipeline<CoupledState<dim>> make_coupled_pipeline(const CoupledScene<dim>& 
 #define COUPLED_SCENE(dim)                                                                                 \
   template CoupledScene<dim> make_coupled_scene(                                                           \
       mpm::SceneSettings<dim>, mpm::geometry::ColliderSet<dim>, std::optional<fluid::FluidMaterial>,       \
-      fluid::stages::PressureSettings, std::optional<SedimentPhase<dim>>, std::optional<drag::DragLaw>);   \
+      fluid::stages::PressureSettings, std::optional<SedimentPhase<dim>>, std::optional<drag::DragLaw>,    \
+      const std::string&);                                                                                \
   template void add_fluid_particles(CoupledScene<dim>&, const std::vector<mpm::Vec<dim>>&, double, double, \
                                     const mpm::Vec<dim>&, const std::string&);                             \
   template void add_sediment_particles(CoupledScene<dim>&, const std::vector<mpm::Vec<dim>>&, double,      \

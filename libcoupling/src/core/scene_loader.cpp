@@ -84,8 +84,10 @@ CoupledScene<dim> load_coupled_scene(const mpm::Config& scene) {
   mpm::geometry::add_flow_boundaries(flow, colliders);
   std::optional<fluid::FluidMaterial> water;
   fluid::stages::PressureSettings pressure;
+  std::string fluid_solver = "projection";
   if (const std::optional<mpm::Config> f = scene.optional_child("fluid")) {
     water = fluid::parse_fluid_material(*f);
+    fluid_solver = fluid::parse_fluid_solver(*f);
     pressure = fluid::parse_pressure_settings(scene);
   }
   const std::optional<mpm::Config> sediment = scene.optional_child("sediment");
@@ -96,7 +98,7 @@ CoupledScene<dim> load_coupled_scene(const mpm::Config& scene) {
   if (water && sand) drag = drag::parse_drag_law(scene);
   if (flow.inflow && !water) scene.fail("inflow", "the inflow emits fluid, but the scene has no `fluid` map");
   CoupledScene<dim> out =
-      make_coupled_scene<dim>(std::move(settings), std::move(colliders), water, pressure, sand, drag);
+      make_coupled_scene<dim>(std::move(settings), std::move(colliders), water, pressure, sand, drag, fluid_solver);
   out.flow = std::move(flow);
 
   // The grain volume fraction of a body leaves the pore fluid at least n_min.

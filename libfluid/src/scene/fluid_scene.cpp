@@ -1,10 +1,8 @@
 #include <fluid/scene/fluid_scene.h>
-#include <fluid/stages/implicit_viscosity.h>
 
 #include <mpm/core/error.h>
 #include <mpm/core/stages/grid_boundary.h>
 #include <mpm/core/stages/grid_to_particles.h>
-#include <mpm/core/stages/grid_velocity_update.h>
 #include <mpm/core/stages/particle_sink.h>
 #include <mpm/core/stages/particle_source.h>
 #include <mpm/core/stages/particles_to_grid.h>
@@ -31,6 +29,8 @@ FluidMaterial parse_fluid_material(const Config& fluid) {
   return m;
 }
 
+std::string parse_fluid_solver(const Config& fluid) { return fluid.choice("solver", "projection", fluid_solver_names()); }
+
 stages::PressureSettings parse_pressure_settings(const Config& scene) {
   stages::PressureSettings s;
   const std::optional<Config> p = scene.optional_child("pressure");
@@ -48,9 +48,12 @@ stages::PressureSettings parse_pressure_settings(const Config& scene) {
 
 template <int dim>
 FluidScene<dim> make_fluid_scene(mpm::SceneSettings<dim> settings, FluidMaterial fluid,
-                                 stages::PressureSettings pressure, mpm::geometry::ColliderSet<dim> colliders) {
+                                 stages::PressureSettings pressure, mpm::geometry::ColliderSet<dim> colliders,
+                                 const std::string& solver) {
   mpm::MpmState<dim> state = mpm::initial_state(settings);
-  return {std::move(settings), fluid, std::move(pressure), std::move(colliders), std::move(state), {}};
+  std::shared_ptr<const FluidSolver<dim>> s = make_fluid_solver<dim>(solver, fluid, pressure, colliders, settings);
+  s->add_channels(state.particles);
+  return {std::move(settings), fluid, std::move(pressure), std::move(colliders), std::move(s), std::move(state), {}};
 }
 
 
@@ -78,20 +81,12 @@ FluidScene<dim> load_fluid_scene(const Config& scene) {
                                                         mpm::wall_layer(settings.kernel, settings.dx));
   mpm::geometry::FlowBoundaries<dim> flow = mpm::geometry::parse_flow_boundaries<dim>(scene, settings);
   mpm::geometry::add_flow_boundaries(flow, colliders);
-  FluidScene<dim> s = make_fluid_scene(std::move(settings), parse_fluid_material(scene.child("fluid")),
-                                       parse_pressure_settings(scene), std::move(colliders));
+  const Config fluid = scene.child("fluid");
+  FluidScene<dim> s = make_fluid_scene(std::move(settings), parse_fluid_material(fluid), parse_pressure_settings(scene),
+                                       std::move(colliders), parse_fluid_solver(fluid));
   s.flow = std::move(flow);
   seed_fluid_bodies(s, scene);
   return s;
-}
-
-template <int dim>
-double free_surface_wave_speed(const mpm::SceneSettings<dim>& settings, const mpm::geometry::ColliderSet<dim>& colliders) {
-  // The free-fall limit as a "wave speed": wave_cfl dx / sqrt(|g| dx) = wave_cfl sqrt(dx / |g|);
-  // and moving obstacles (a cavity lid) drag the liquid next to them at their speed.
-  double speed = std::sqrt(settings.gravity.norm() * settings.dx);
-  for (const auto& c : colliders.colliders()) speed = std::max(speed, c.velocity().norm());
-  return speed;
 }
 
 template <int dim>
@@ -99,8 +94,7 @@ mpm::Pipeline<mpm::MpmState<dim>> make_fluid_pipeline(const FluidScene<dim>& sce
   namespace ms = mpm::stages;
   mpm::Pipeline<mpm::MpmState<dim>> p({"particle.x", "particle.v", "particle.C", "particle.mass",
                                        "particle.volume0", "particle.material"});
-  p.add(std::make_unique<ms::TimeStepControl<dim>>(
-      ms::time_step_settings(scene.settings, free_surface_wave_speed(scene.settings, scene.colliders))));
+  p.add(std::make_unique<ms::TimeStepControl<dim>>(ms::time_step_settings(scene.settings, scene.solver->wave_speed())));
   // Outflow, then inflow, before the sort that rebuilds the buckets.
   if (auto regions = mpm::geometry::flow_sink_regions(scene.flow, scene.settings); !regions.empty())
     p.add(std::make_unique<ms::ParticleSink<dim>>(std::move(regions)));
@@ -111,13 +105,11 @@ mpm::Pipeline<mpm::MpmState<dim>> make_fluid_pipeline(const FluidScene<dim>& sce
   p.add(std::make_unique<ms::ParticlesToGrid<dim>>());
   const bool periodic = scene.state.grid.is_periodic();
   if (periodic) p.add(std::make_unique<ms::PeriodicFold<dim>>());
-  p.add(std::make_unique<ms::GridVelocityUpdate<dim>>(false));
-  if (scene.fluid.viscosity > 0.0)
-    p.add(std::make_unique<stages::ImplicitViscosity<dim>>(scene.fluid.viscosity / scene.fluid.density,
-                                                           scene.colliders, mpm::solve::SolveControl{1e-10, 0.0, 1000}));
+  for (auto& stage : scene.solver->grid_update()) p.add(std::move(stage));
   p.add(std::make_unique<ms::GridBoundary<dim>>(scene.colliders));
-  p.add(std::make_unique<stages::PressureProjection<dim>>(scene.fluid.density, scene.colliders, scene.pressure));
+  for (auto& stage : scene.solver->projection()) p.add(std::move(stage));
   if (periodic) p.add(std::make_unique<ms::PeriodicFill<dim>>());
+  for (auto& stage : scene.solver->particle_update()) p.add(std::move(stage));
   p.add(std::make_unique<ms::GridToParticles<dim>>());
   if (periodic) p.add(std::make_unique<ms::PeriodicWrap<dim>>());
   return p;
@@ -125,12 +117,11 @@ mpm::Pipeline<mpm::MpmState<dim>> make_fluid_pipeline(const FluidScene<dim>& sce
 
 #define FLUID_SCENE(dim)                                                                                   \
   template FluidScene<dim> make_fluid_scene(mpm::SceneSettings<dim>, FluidMaterial, stages::PressureSettings, \
-                                            mpm::geometry::ColliderSet<dim>);                              \
+                                            mpm::geometry::ColliderSet<dim>, const std::string&);          \
   template void add_fluid_particles(FluidScene<dim>&, const std::vector<Vec<dim>>&, double, const Vec<dim>&, \
                                     const std::string&);                                                   \
   template void seed_fluid_bodies(FluidScene<dim>&, const Config&);                                        \
   template FluidScene<dim> load_fluid_scene<dim>(const Config&);                                           \
-  template double free_surface_wave_speed(const mpm::SceneSettings<dim>&, const mpm::geometry::ColliderSet<dim>&); \
   template mpm::Pipeline<mpm::MpmState<dim>> make_fluid_pipeline(const FluidScene<dim>&);
 FLUID_SCENE(2)
 FLUID_SCENE(3)

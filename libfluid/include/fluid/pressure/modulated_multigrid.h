@@ -7,8 +7,9 @@
 //! which vanishes at 0 and on the three lines (pi, pi, t), (pi, t, pi), (t, pi, pi): the modes
 //! (-1)^(i+j) f(k) (and permutations) have no nodal gradient for any f. Near (pi, pi, pi) the
 //! symbol is quartic (a^2 b^2 + b^2 c^2 + c^2 a^2 in the offsets). A smooth coarse space
-//! cannot represent these modes and no point smoother reduces them, so the geometric V-cycle
-//! of multigrid.h grows from 686 to 2450 CG iterations from 32^3 to 64^3 (dam break).
+//! cannot represent these modes and no point smoother reduces them, so the iteration count of
+//! CG with the geometric V-cycle of multigrid.h grows steeply with resolution
+//! (docs/performance.md, 'Multigrid design measurements').
 //!
 //! Construction (recursive, per "space": a matrix over a set of cells of a box):
 //!  * P0: cell-centred multilinear interpolation from the 2x-coarser box (weights 3/4, 1/4 per
@@ -25,33 +26,35 @@
 //!    The child's matrix is the Galerkin product A_k = P_k^T A P_k, and the child is built
 //!    the same way, so each family gets its own coarse hierarchy with the near-null patterns
 //!    of its own operator at the next scale (the smooth child A_000 is again NodeCell-like;
-//!    A_111 is the quartic operator, whose near-null lines lie on the axes). The 3D dam
-//!    break tree has 20, 51 and 133 spaces at 16^3, 32^3 and 64^3.
+//!    A_111 is the quartic operator, whose near-null lines lie on the axes). The number of
+//!    spaces in the tree grows with resolution (docs/performance.md, 'Multigrid design
+//!    measurements').
 //!  * Cross terms P_j^T A P_k (j != k) are dropped: each child corrects on its own. For
 //!    constant beta on a periodic box the patterns are A-orthogonal harmonics, so this loses
-//!    little: in a two-level prototype (exact coarse solves, 3D dam break 16^3 and 24^3) the
-//!    coupled coarse system took 7 and 8 iterations, the separate ones 13 and 13, at a fifth
-//!    of the coupled system's nonzeros.
+//!    little: in a two-level prototype the separate coarse systems took more iterations than
+//!    the coupled one, at a fraction of its nonzeros (docs/performance.md, 'Multigrid design
+//!    measurements').
 //!  * Combining the children: on the fine level additively (all from one residual: one
 //!    product with the largest matrix); on every coarser space multiplicatively, children
 //!    0, 1, .., K-1, .., 1, 0, each from the updated residual. The palindrome keeps the cycle
 //!    symmetric, and it makes each child's cycle a convergent iteration (an A-norm
 //!    contraction), which the additive sum is not where children overlap: additive on every
-//!    space took 13, 14, 17, 22 iterations from 16^3 to 128^3 (two cycles per child even
-//!    broke CG down: the sum overcorrects); this way 12, 10, 10, 9-10. Multiplicative on the
-//!    fine level too took 10, 8, 8 (16^3-64^3) but 1.5x the time at 64^3.
+//!    space let the iteration count grow with resolution (two cycles per child even broke CG
+//!    down: the sum overcorrects); this way it stays flat. Multiplicative on the fine level
+//!    too saves iterations but costs more time than it saves (docs/performance.md, 'Multigrid
+//!    design measurements').
 //!  * Smoother: one forward Gauss-Seidel sweep before the coarse corrections and one backward
 //!    sweep after (the adjoint), so the cycle is a symmetric positive definite map on the
 //!    range of A and CG stays valid.
 //!  * Bottom: the Moore-Penrose pseudo-inverse of a space with at most max_bottom_unknowns
 //!    unknowns (covers singular closed boxes); a space that can neither coarsen (odd periodic
 //!    count) nor be inverted is smoothed only.
-//! Measured (bench_pressure --threads 1, 3D dam break, rtol 1e-8): 12, 10, 10, 9 iterations
-//! at 16^3, 32^3, 64^3, 128^3 (plain CG 388, 1354, 5000+); nonzeros of all levels over the
-//! fine ones ("operator complexity") 2.6, 3.7, 4.4: the Galerkin stencils have 5^3 points.
-//! The set-up costs about one to one and a half solves (0.82 s set-up, 0.55 s solve at 64^3;
-//! 8.4 and 5.4 s at 128^3). The fine level's children and the rows of the Galerkin products
-//! run in parallel. docs/performance.md compares the other back-ends.
+//! The iteration count stays flat under refinement where plain CG's grows. The Galerkin
+//! stencils have 5^3 points, so the nonzeros of all levels ("operator complexity") are a few
+//! times the fine ones and grow slowly with resolution, and the set-up (the Galerkin products)
+//! costs about as much as a solve. The fine level's children and the rows of the Galerkin
+//! products run in parallel. docs/performance.md has the figures ('Multigrid design
+//! measurements') and compares the other back-ends ('Pressure solvers').
 #include <fluid/pressure/cell_operator.h>
 
 #include <Eigen/Dense>

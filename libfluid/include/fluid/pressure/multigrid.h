@@ -12,35 +12,35 @@
 //!    R = P^T / 2^dim, so that R A P ~ A_2dx; both are applied one axis at a time. At the box
 //!    faces the missing coarse neighbour is the mirror image of the nearest coarse cell:
 //!    -x for Poisson (p = 0 on the face: Dirichlet), +x for NodeCell (walls: Neumann), as the
-//!    fine operator does. Constant extrapolation for Poisson gave 17 -> 22 iterations from
-//!    256^2 -> 1024^2 (Jacobi smoother); the mirror gives 8 -> 8 (red-black smoother).
+//!    fine operator does. Constant extrapolation at the faces let the Poisson iteration count
+//!    grow with resolution; the mirror image keeps it flat (docs/performance.md, 'Multigrid
+//!    design measurements').
 //!  * Smoother: Poisson: red-black Gauss-Seidel (same-colour cells do not couple), red then
 //!    black before the coarse correction, black then red after. 2D NodeCell: the same with
 //!    columns of even and odd x as the two colours, on the explicit row
 //!    (A p)_c = sum_{corners n} beta_n (p_c - p_c'(n)) / (2 dx^2), c'(n) the cell diagonally
 //!    across n (the face-neighbour entries vanish, see below); it replaced damped Jacobi, which
-//!    needed two products with A per sweep: dam break 2D 256^2, 12 -> 11 iterations,
-//!    0.087 -> 0.043 s (bench_pressure, loaded machine). A periodic x axis with an odd count
-//!    is not supported (supports() is false; MGPCG then uses ModulatedMultigrid). 3D NodeCell
-//!    is not supported either: its 3^dim stencil couples same-colour cells, and its near-null
-//!    space is not smooth (modulated_multigrid.h handles it).
+//!    needed two products with A per sweep and took more time and iterations
+//!    (docs/performance.md, 'Multigrid design measurements'). A periodic x axis with an odd
+//!    count is not supported (supports() is false; MGPCG then uses ModulatedMultigrid). 3D
+//!    NodeCell is not supported either: its 3^dim stencil couples same-colour cells, and its
+//!    near-null space is not smooth (modulated_multigrid.h handles it).
 //!  * Bottom: the Moore-Penrose pseudo-inverse of the coarsest matrix (dense), which also
 //!    covers the singular closed-box NodeCell operator. The hierarchy is rebuilt every solve,
-//!    so coarsening goes down to <= 32 fluid cells: at 256 the dense eigensolve was 13.3 of the
-//!    13.7 ms set-up per solve at 32x30 cells (settling), pressure 0.73 s vs 0.11 s for CG;
-//!    at 32 the set-up is 0.45 ms (mostly the power iteration for omega), pressure 0.13 s,
-//!    14.3 -> 16.8 iterations; 48x6 channel: 0.60 -> 0.03 s (CG 0.02-0.03 s), 1 -> 8
-//!    iterations. bench_pressure counts stay flat (2D dam break 11 -> 12 at 256^2).
+//!    so coarsening goes down to <= 32 fluid cells: with a larger bottom the dense eigensolve
+//!    dominated the set-up and made the pressure solve of small scenes slower than plain CG;
+//!    the smaller bottom costs small scenes a few iterations and leaves the bench_pressure
+//!    counts about flat (docs/performance.md, 'Multigrid design measurements').
 //!  * Checkerboard modes (2D NodeCell): in 2D, A = D B D^T couples only diagonal neighbours
 //!    (the face-neighbour entry sums s_x s_x' + s_y s_y' = 0 over the shared corners), so the
 //!    red and black cells decouple and S A S = A for S = diag((-1)^(i+j)), for any beta and
 //!    free surface. Smooth transfers cannot represent the near-null modes S q (q smooth)
 //!    and Jacobi does not reduce them, so the preconditioner is M = V + S V S: the second
-//!    V-cycle sees them as smooth. Measured: 46 -> 179 iterations 64^2 -> 256^2 without,
-//!    11 -> 11 -> 12 for 64^2 -> 256^2 -> 1024^2 with (dam break, rtol 1e-8). S also
-//!    commutes with the column smoother (it reads only same-parity cells), so apply() shares
-//!    the fine-level smoothing of the two V-cycles (one pre- and one post-smoothing around
-//!    both coarse corrections) and builds exactly the same M.
+//!    V-cycle sees them as smooth. Without the S V S term the iteration count grows with
+//!    resolution; with it, it stays flat (docs/performance.md, 'Multigrid design
+//!    measurements'). S also commutes with the column smoother (it reads only same-parity
+//!    cells), so apply() shares the fine-level smoothing of the two V-cycles (one pre- and one
+//!    post-smoothing around both coarse corrections) and builds exactly the same M.
 //!    In 3D S A S != A for every sign pattern, and the near-null set is three lines of Fourier
 //!    space: modulated_multigrid.h gives each its own Galerkin coarse space.
 //!  * Periodic axes: stencils, transfers (the 1/4 neighbour wraps) and smoothers wrap; such an

@@ -1,7 +1,9 @@
 #pragma once
 //! Assembles a free-surface LANS fluid scene from a scene file (DESIGN.md):
-//!   time_step -> [sink -> source] -> sort -> p2g -> grid_update (gravity) -> viscosity (only when mu > 0)
-//!   -> boundary -> pressure -> g2p (and advection)
+//!   time_step -> [sink -> source] -> sort -> p2g -> [solver grid update] -> boundary
+//!   -> [solver projection] -> [solver particle update] -> g2p (and advection)
+//! which for the default solver (fluid.solver: projection, solver/projection_solver.h) reads
+//!   ... p2g -> grid_update (gravity) -> viscosity (only when mu > 0) -> boundary -> pressure -> g2p
 //! with periodic_fold after p2g, periodic_fill before g2p and periodic_wrap after it when the
 //! scene has a periodic axis (mpm/core/stages/periodic_boundary.h).
 //! The projection leaves every node that a wall or collider prescribes untouched, so the
@@ -10,6 +12,7 @@
 //!   fluid:                   # the liquid
 //!     density: 1000          # rho_w [kg/m^3] > 0
 //!     viscosity: 1.0e-3      # dynamic viscosity mu [Pa s] >= 0 (0: inviscid, no viscosity stage)
+//!     solver: projection     # one of fluid_solver_names()
 //!   pressure:                # optional
 //!     solver: mgpcg          # one of pressure_solver_names()
 //!     tolerance: 1.0e-8      # relative residual |b - A p| / |b|, in (0, 1)
@@ -23,6 +26,7 @@
 //! on the fluid as prescribed node velocities; use `contact: sticky` (no-slip): the pressure
 //! does not act on nodes inside a wall, so the tangential velocity a slip wall leaves there
 //! would not be corrected.
+#include <fluid/solver/fluid_solver.h>
 #include <fluid/stages/pressure_projection.h>
 
 #include <mpm/core/config.h>
@@ -33,15 +37,11 @@
 #include <mpm/geometry/collider.h>
 #include <mpm/geometry/flow_boundary_config.h>
 
+#include <memory>
 #include <string>
 #include <vector>
 
 namespace fluid {
-
-struct FluidMaterial {
-  double density = 1000.0;  //!< rho_w [kg/m^3]
-  double viscosity = 0.0;   //!< dynamic viscosity mu [Pa s]
-};
 
 template <int dim>
 struct FluidScene {
@@ -49,19 +49,24 @@ struct FluidScene {
   FluidMaterial fluid;
   stages::PressureSettings pressure;
   mpm::geometry::ColliderSet<dim> colliders;
-  mpm::MpmState<dim> state;  //!< particles seeded, grid sized to the domain
+  std::shared_ptr<const FluidSolver<dim>> solver;  //!< fluid.solver (fluid_solver.h)
+  mpm::MpmState<dim> state;  //!< particles seeded (with the solver's channels), grid sized to the domain
   mpm::geometry::FlowBoundaries<dim> flow;  //!< inflow/outflow (already applied to `colliders`)
 };
 
 //! The `fluid` map: density > 0, viscosity >= 0.
 FluidMaterial parse_fluid_material(const mpm::Config& fluid);
+//! `solver` of the `fluid` map: one of fluid_solver_names(), default "projection".
+std::string parse_fluid_solver(const mpm::Config& fluid);
 //! The optional `pressure` map of `scene` (defaults: mgpcg, 1e-8, 1000 iterations, stop).
 stages::PressureSettings parse_pressure_settings(const mpm::Config& scene);
 
-//! A scene with no particles and the grid sized to the settings' domain.
+//! A scene with no particles, the grid sized to the settings' domain and the fluid solver called
+//! `solver` (fluid_solver_names()).
 template <int dim>
 FluidScene<dim> make_fluid_scene(mpm::SceneSettings<dim> settings, FluidMaterial fluid,
-                                 stages::PressureSettings pressure, mpm::geometry::ColliderSet<dim> colliders);
+                                 stages::PressureSettings pressure, mpm::geometry::ColliderSet<dim> colliders,
+                                 const std::string& solver = "projection");
 
 //! Appends fluid particles of volume `volume` [m^dim] each at `positions`, moving with
 //! `velocity`; InputError naming `where` when one lies outside the domain.
@@ -77,14 +82,8 @@ void seed_fluid_bodies(FluidScene<dim>& fluid, const mpm::Config& scene);
 template <int dim>
 FluidScene<dim> load_fluid_scene(const mpm::Config& scene);
 
-//! The speed that limits the time step of a free surface: sqrt(|g| dx), so that dt <= wave_cfl
-//! sqrt(dx / |g|), or a faster moving collider. The coupled scenes use it for both phases.
-template <int dim>
-double free_surface_wave_speed(const mpm::SceneSettings<dim>& settings, const mpm::geometry::ColliderSet<dim>& colliders);
-
-//! The fluid pipeline for `scene`. Besides the particle CFL, dt <= wave_cfl sqrt(dx / |g|)
-//! (a particle starting from rest falls less than wave_cfl^2 dx / 2 in one step) and
-//! dt <= wave_cfl dx / |v_c| for every moving collider c.
+//! The fluid pipeline of the header comment for `scene` and its solver; besides the particle
+//! CFL, dt <= wave_cfl dx / c with c the solver's wave_speed().
 template <int dim>
 mpm::Pipeline<mpm::MpmState<dim>> make_fluid_pipeline(const FluidScene<dim>& scene);
 
