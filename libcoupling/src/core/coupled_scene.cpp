@@ -10,6 +10,7 @@
 #include <mpm/core/stages/particle_source.h>
 #include <mpm/core/stages/particles_to_grid.h>
 #include <mpm/core/stages/sort_particles.h>
+#include <mpm/solid/solid_channels.h>
 #include <mpm/solid/stages/deformation_update.h>
 #include <mpm/solid/stages/return_map.h>
 #include <mpm/solid/stages/stress_forces.h>
@@ -17,6 +18,7 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <tuple>
 
 namespace coupling {
 
@@ -42,7 +44,8 @@ CoupledScene<dim> make_coupled_scene(mpm::SceneSettings<dim> settings,
   if (fluid) state.fluid = mpm::initial_state(settings);
   if (sediment) {
     state.sediment = mpm::initial_state(settings);
-    if (!sediment->materials.empty()) state.sediment.particles.enable_deformation();
+    // A continuum sediment is a solid: its grains carry F and the plastic state.
+    if (!sediment->materials.empty()) mpm::solid::add_solid_channels(state.sediment.particles);
   }
   if (!(fluid && sediment)) drag.reset();
   return {std::move(settings), std::move(colliders), fluid, std::move(pressure), std::move(sediment), drag,
@@ -99,13 +102,11 @@ mpm::Pipeline<CoupledState<dim>> make_coupled_pipeline(const CoupledScene<dim>& 
       dt_sediment.wave_speed = std::max(dt_sediment.wave_speed, m.wave_speed());
 
   std::vector<std::string> initial;
-  for (const auto& [present, phase] :
-       {std::pair{wet, std::string("fluid.")}, std::pair{sandy, std::string("sediment.")}})
+  for (const auto& [present, phase, particles] :
+       {std::tuple{wet, std::string("fluid."), &scene.state.fluid.particles},
+        std::tuple{sandy, std::string("sediment."), &scene.state.sediment.particles}})
     if (present)
-      for (const char* f : {"particle.x", "particle.v", "particle.C", "particle.mass", "particle.volume0",
-                            "particle.material"})
-        initial.push_back(phase + f);
-  if (continuum) initial.insert(initial.end(), {"sediment.particle.F", "sediment.particle.plastic"});
+      for (const std::string& f : mpm::particle_fields(*particles)) initial.push_back(phase + f);
   mpm::Pipeline<CoupledState<dim>> p(initial);
 
   auto on = [&](Phase phase, auto stage) { p.add(std::make_unique<OnPhase<dim>>(phase, std::move(stage))); };

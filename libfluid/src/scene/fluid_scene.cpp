@@ -97,8 +97,7 @@ mpm::Pipeline<mpm::MpmState<dim>> make_fluid_pipeline(const FluidScene<dim>& sce
   dt.wave_speed = std::sqrt(scene.settings.gravity.norm() * scene.settings.dx);
   for (const auto& c : scene.colliders.colliders()) dt.wave_speed = std::max(dt.wave_speed, c.velocity().norm());
 
-  mpm::Pipeline<mpm::MpmState<dim>> p({"particle.x", "particle.v", "particle.C", "particle.mass",
-                                       "particle.volume0", "particle.material"});
+  mpm::Pipeline<mpm::MpmState<dim>> p(mpm::particle_fields(scene.state.particles));
   p.add(std::make_unique<ms::TimeStepControl<dim>>(dt));
   // Outflow, then inflow, before the sort that rebuilds the buckets.
   if (auto regions = mpm::geometry::flow_sink_regions(scene.flow, scene.settings); !regions.empty())

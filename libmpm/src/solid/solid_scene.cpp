@@ -8,6 +8,7 @@
 #include <mpm/geometry/body_config.h>
 #include <mpm/geometry/collider_config.h>
 #include <mpm/geometry/seeding.h>
+#include <mpm/solid/solid_channels.h>
 #include <mpm/solid/solid_scene.h>
 #include <mpm/solid/stages/deformation_update.h>
 #include <mpm/solid/stages/return_map.h>
@@ -52,7 +53,6 @@ void add_particles(SolidScene<dim>& scene, const std::vector<Vec<dim>>& position
   if (const OutsideDomain outside = first_outside_domain(scene.settings, positions); !outside.why.empty())
     throw InputError(where + ": " + outside.why);
   Particles<dim>& P = scene.state.particles;
-  P.enable_deformation();
   const double mass = scene.materials.at(m).density * volume;
   for (const Vec<dim>& x : positions) P.push_back(x, velocity, mass, volume, m);
 }
@@ -76,8 +76,9 @@ void seed_body(SolidScene<dim>& scene, const Config& body) {
   Eigen::Matrix<double, 3, 1> omega = Eigen::Matrix<double, 3, 1>::Zero();
   if constexpr (dim == 2) omega[2] = body.number("angular_velocity", 0.0, Range::any());
   else omega = body.vector<3>("angular_velocity", Vec<3>::Zero());
+  std::vector<Mat<dim>>& F = elastic_F(P);
   for (std::size_t p = first; p < P.size(); ++p) {
-    P.F[p] = stretch.asDiagonal();
+    F[p] = stretch.asDiagonal();
     Eigen::Matrix<double, 3, 1> r = Eigen::Matrix<double, 3, 1>::Zero();
     r.template head<dim>() = P.x[p] - centroid;
     P.v[p] += omega.cross(r).template head<dim>();
@@ -89,6 +90,9 @@ template <int dim>
 SolidScene<dim> make_solid_scene(SceneSettings<dim> settings, std::vector<Material<dim>> materials,
                                  geometry::ColliderSet<dim> colliders) {
   MpmState<dim> state = initial_state(settings);
+  // Declared before seeding, even for a scene without bodies: the solid stages read them, and a
+  // restart loads them into this particle set.
+  add_solid_channels(state.particles);
   return {std::move(settings), std::move(materials), std::move(colliders), std::move(state)};
 }
 
@@ -115,8 +119,7 @@ Pipeline<MpmState<dim>> make_explicit_pipeline(const SolidScene<dim>& scene) {
   dt.max_dt = scene.settings.max_dt;
   for (const auto& m : scene.materials) dt.wave_speed = std::max(dt.wave_speed, m.wave_speed());
 
-  Pipeline<MpmState<dim>> p({"particle.x", "particle.v", "particle.C", "particle.mass", "particle.volume0",
-                             "particle.material", "particle.F", "particle.plastic"});
+  Pipeline<MpmState<dim>> p(particle_fields(scene.state.particles));
   p.add(std::make_unique<stages::TimeStepControl<dim>>(dt));
   p.add(std::make_unique<stages::SortParticles<dim>>());
   p.add(std::make_unique<stages::ParticlesToGrid<dim>>());
@@ -132,8 +135,9 @@ Pipeline<MpmState<dim>> make_explicit_pipeline(const SolidScene<dim>& scene) {
 template <int dim>
 double elastic_energy(const MpmState<dim>& state, const std::vector<Material<dim>>& materials) {
   const Particles<dim>& P = state.particles;
+  const std::vector<Mat<dim>>& F = elastic_F(P);
   double e = 0.0;
-  for (std::size_t p = 0; p < P.size(); ++p) e += P.volume0[p] * materials[P.material[p]].energy(P.F[p]);
+  for (std::size_t p = 0; p < P.size(); ++p) e += P.volume0[p] * materials[P.material[p]].energy(F[p]);
   return e;
 }
 
