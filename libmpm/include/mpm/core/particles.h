@@ -79,7 +79,8 @@ struct Particles {
   //! Sets the number of particles to n, keeping the first min(n, size()). New particles get zero
   //! in the kinematic channels and each extra channel's initial value.
   void resize(std::size_t n) {
-    visit_channels(*this, [n](const ChannelInfo&, auto& values, const auto& initial) { values.resize(n, initial); });
+    visit_channels(*this,
+                   [n](const ChannelInfo&, auto& values, const auto& initial) { values.resize(n, initial); });
   }
 
   //! Declares the extra channel `name` holding T (double, Vec<dim>, Mat<dim> or std::uint16_t)
@@ -92,17 +93,17 @@ struct Particles {
   std::vector<T>& add_channel(const std::string& name, const T& initial, ChannelUse use) {
     static_assert(is_channel_type<T>, "a particle channel holds double, Vec<dim>, Mat<dim> or std::uint16_t");
     if (std::vector<T>* existing = find_channel<T>(name)) return *existing;
-    verify(!has_channel(name),
-           "particle channel '" + name + "' exists with type " + type_of(name) + ", not " + type_name<T>());
-    verify(is_identifier(name) && (use.output_name.empty() || is_identifier(use.output_name)),
-           "particle channel '" + name + "' (output name '" + use.output_name +
-               "'): names are letters, digits and '_'");
+    if (has_channel(name))
+      throw Error("particle channel '" + name + "' exists with type " + type_of(name) + ", not " + type_name<T>());
+    if (!is_identifier(name) || !(use.output_name.empty() || is_identifier(use.output_name)))
+      throw Error("particle channel '" + name + "' (output name '" + use.output_name +
+                  "'): names are letters, digits and '_'");
     if (use.output) {
       const std::string& shown = use.output_name.empty() ? name : use.output_name;
       for_each_channel([&](const ChannelInfo& info, const auto&) {
-        verify(!info.use.output || info.frame_name() != shown, "particle channel '" + name + "': channel '" +
-                                                                   info.name + "' is written to frames as '" +
-                                                                   shown + "' already");
+        if (info.use.output && info.frame_name() == shown)
+          throw Error("particle channel '" + name + "': channel '" + info.name + "' is written to frames as '" +
+                      shown + "' already");
       });
     }
     Extra& extra =
