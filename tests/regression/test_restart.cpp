@@ -3,16 +3,19 @@
 // and sediment, one checkpoint holding both). The run writes 10 frames with checkpoint_every
 // = 4; a copy of its output folder loses every file written after frame 4 (as if the run had
 // died there) and is continued with --restart checkpoint_0004.h5. Then every particle channel
-// of every phase of the later checkpoints (mpm::io::load_checkpoint) and every dataset of the
+// of every phase of the later checkpoints (mpm::io::load_checkpoint into particles that declare
+// the solid channels where the app's scene does) and every dataset of the
 // later <series>_NNNN.h5 (HDF5 C API) must be equal bit for bit, the .xdmf files byte for
 // byte, and diagnostics.csv row for row (17 significant digits, so equal text is equal bits)
 // except the seconds_* timings.
 #include <mpm/io/checkpoint.h>
+#include <mpm/solid/solid_channels.h>
 
 #include <doctest/doctest.h>
 #include <hdf5.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -32,23 +35,32 @@ namespace {
 const fs::path kWork = RESTART_WORK_DIR;
 constexpr int kFrames = 10, kCheckpointEvery = 4;
 
-//! An app and its reduced scene: 10 frames of frame_dt, the phases of its checkpoints and
-//! the particle series they are written to, and the results that depend on the final state
-//! only (duration-like results also depend on the history before the restart).
+//! An app and its reduced scene: 10 frames of frame_dt, the phases of its checkpoints, those of
+//! solid particles (which carry the solid channels), the particle series they are written to,
+//! and the results that depend on the final state only (duration-like results also depend on
+//! the history before the restart).
 struct RestartCase {
   std::string app, scene, sets;
   double frame_dt;
-  std::vector<std::string> phases, series, final_results;
+  std::vector<std::string> phases, solid_phases, series, final_results;
 };
 
-const RestartCase kColumnCollapse{COLUMN_COLLAPSE_APP, "column_collapse.yaml", "--set column.cells_per_width=10",
-                                  0.02, {""}, {"particles"}, {"runout", "final_height", "normalized_runout"}};
+const RestartCase kColumnCollapse{COLUMN_COLLAPSE_APP,
+                                  "column_collapse.yaml",
+                                  "--set column.cells_per_width=10",
+                                  0.02,
+                                  {""},
+                                  {""},
+                                  {"particles"},
+                                  {"runout", "final_height", "normalized_runout"}};
 #ifdef SETTLING_APP
+// Discrete grains (no sediment material): no phase is solid.
 const RestartCase kSettling{SETTLING_APP,
                             "settling.yaml",
                             "--set column.cells_per_width=16 --set measure.start=0",
                             0.01,
                             {"fluid", "sediment"},
+                            {},
                             {"fluid", "sediment"},
                             {"terminal_velocity_stokes", "hindered_velocity"}};
 #endif
@@ -78,30 +90,41 @@ std::vector<std::string> split(const std::string& line) {
   return fields;
 }
 
-//! Every double of `a` equals the one of `b` in all its bits (NaN payloads and -0 included).
-template <class T>
-bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
-  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
-}
-
-void check_checkpoints_equal(const fs::path& a, const fs::path& b, const std::string& phase) {
-  mpm::io::CheckpointHeader ha, hb;
-  const mpm::Particles<2> pa = mpm::io::load_checkpoint<2>(a, ha, phase);
-  const mpm::Particles<2> pb = mpm::io::load_checkpoint<2>(b, hb, phase);
+void check_checkpoints_equal(const fs::path& a, const fs::path& b, const std::string& phase, bool solid) {
   INFO(a.filename().string() << " phase '" << phase << "'");
+  mpm::io::CheckpointHeader ha, hb;
+  mpm::Particles<2> pa, pb;
+  if (solid) {
+    mpm::solid::add_solid_channels(pa);
+    mpm::solid::add_solid_channels(pb);
+  }
+  mpm::io::load_checkpoint<2>(a, ha, pa, phase);
+  mpm::io::load_checkpoint<2>(b, hb, pb, phase);
   CHECK(ha.frame == hb.frame);
   CHECK(ha.step == hb.step);
   CHECK(std::memcmp(&ha.time, &hb.time, sizeof(double)) == 0);
   CHECK(std::memcmp(&ha.dt_previous, &hb.dt_previous, sizeof(double)) == 0);
   REQUIRE(pa.size() > 0);
-  CHECK(same_bits(pa.x, pb.x));
-  CHECK(same_bits(pa.v, pb.v));
-  CHECK(same_bits(pa.C, pb.C));
-  CHECK(same_bits(pa.mass, pb.mass));
-  CHECK(same_bits(pa.volume0, pb.volume0));
-  CHECK(same_bits(pa.material, pb.material));
-  CHECK(same_bits(pa.F, pb.F));
-  CHECK(same_bits(pa.plastic, pb.plastic));
+  CHECK(pa.has_channel("F") == solid);
+  // Every channel, the kinematic and the solid ones, in the same order in both and equal in all
+  // bits (NaN payloads and -0 included).
+  std::vector<std::string> names;
+  std::vector<std::vector<unsigned char>> bytes;
+  pa.for_each_channel([&](const mpm::ChannelInfo& info, const auto& values) {
+    const auto* first = reinterpret_cast<const unsigned char*>(values.data());
+    names.push_back(info.name);
+    bytes.emplace_back(first, first + values.size() * sizeof(values[0]));
+  });
+  std::size_t c = 0;
+  pb.for_each_channel([&](const mpm::ChannelInfo& info, const auto& values) {
+    REQUIRE(c < names.size());
+    INFO("channel " << info.name);
+    const auto* first = reinterpret_cast<const unsigned char*>(values.data());
+    CHECK(info.name == names[c]);
+    CHECK(std::vector<unsigned char>(first, first + values.size() * sizeof(values[0])) == bytes[c]);
+    ++c;
+  });
+  CHECK(c == names.size());
 }
 
 //! Names of the datasets in the root group of an open HDF5 file.
@@ -166,9 +189,11 @@ std::string numbered(const std::string& stem, int frame, const std::string& ext)
 
 void check_particle_state(const RestartCase& c, const fs::path& full, const fs::path& restarted) {
   for (const int frame : {2 * kCheckpointEvery, kFrames})
-    for (const std::string& phase : c.phases)
+    for (const std::string& phase : c.phases) {
+      const bool solid = std::find(c.solid_phases.begin(), c.solid_phases.end(), phase) != c.solid_phases.end();
       check_checkpoints_equal(full / numbered("checkpoint", frame, ".h5"),
-                              restarted / numbered("checkpoint", frame, ".h5"), phase);
+                              restarted / numbered("checkpoint", frame, ".h5"), phase, solid);
+    }
   for (const std::string& series : c.series) {
     for (int frame = kCheckpointEvery + 1; frame <= kFrames; ++frame) {
       check_particle_files_equal(full / numbered(series, frame, ".h5"), restarted / numbered(series, frame, ".h5"));

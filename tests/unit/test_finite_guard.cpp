@@ -7,6 +7,7 @@
 #include <mpm/core/stages/particles_to_grid.h>
 #include <mpm/core/stages/sort_particles.h>
 #include <mpm/geometry/seeding.h>
+#include <mpm/solid/solid_channels.h>
 #include <mpm/solid/solid_scene.h>
 #include <mpm/solid/stages/deformation_update.h>
 #include <mpm/solid/stages/stress_forces.h>
@@ -99,7 +100,7 @@ TEST_CASE("a non-finite F stops 'stress_forces' and 'deformation' naming the par
     Scene scene;
     MpmState<2>& s = scene.solid.state;
     const std::size_t p = s.particles.size() / 2;
-    s.particles.F[p](1, 0) = bad;
+    solid::elastic_F(s.particles)[p](1, 0) = bad;
     const std::string expected = "particle " + std::to_string(p) + " has non-finite ";
     CHECK(numerical_error([&] { stages::StressForces<2>(scene.solid.materials).run(s); }) ==
           "stage 'stress_forces': " + expected + "Kirchhoff stress");

@@ -8,6 +8,7 @@
 #include <mpm/io/particle_output.h>
 #include <mpm/io/png_preview.h>
 #include <mpm/io/summary_json.h>
+#include <mpm/solid/solid_channels.h>
 
 #include <Eigen/LU>
 #include <doctest/doctest.h>
@@ -75,23 +76,31 @@ bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
          (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
 }
 
+//! An empty particle set with the solid channels F and plastic when `solid`: what a scene
+//! declares before it loads a checkpoint.
+template <int dim>
+Particles<dim> declared(bool solid) {
+  Particles<dim> p;
+  if (solid) solid::add_solid_channels(p);
+  return p;
+}
+
 //! Random particles, with values that only a bit-exact store preserves: -0, a subnormal, a NaN
-//! with a payload, and non-representable decimals.
+//! with a payload, and non-representable decimals; with random solid channels when `deformation`.
 template <int dim>
 Particles<dim> random_particles(std::size_t n, bool deformation, unsigned seed) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
-  Particles<dim> p;
+  Particles<dim> p = declared<dim>(deformation);
   for (std::size_t i = 0; i < n; ++i)
     p.push_back(Vec<dim>::NullaryExpr([&] { return u(rng); }),
                 Vec<dim>::NullaryExpr([&] { return u(rng); }), 1.0 + u(rng), 1e-3 * (1.5 + u(rng)),
                 static_cast<std::uint16_t>(rng() % 7));
   for (auto& C : p.C) C = Mat<dim>::NullaryExpr([&] { return u(rng); });
   if (deformation) {
-    p.enable_deformation();
-    for (auto& F : p.F)
+    for (auto& F : solid::elastic_F(p))
       F = Mat<dim>::Identity() + 0.1 * Mat<dim>::NullaryExpr([&] { return u(rng); });
-    for (auto& plastic : p.plastic) plastic = 0.01 * u(rng);
+    for (auto& plastic : solid::plastic_state(p)) plastic = 0.01 * u(rng);
   }
   p.v[0][0] = -0.0;
   p.mass[1] = std::numeric_limits<double>::denorm_min();
@@ -236,7 +245,9 @@ TEST_CASE_TEMPLATE("checkpoint round trip is bit-identical", Dim, std::integral_
                                      {{"3.pressure/p", {0.1, -2.5e-300, 7.0}}, {"empty", {}}}};
     io::save_checkpoint(dir / "c.h5", p, saved);
     io::CheckpointHeader loaded;
-    const Particles<dim> q = io::load_checkpoint<dim>(dir / "c.h5", loaded);
+    // Particles seeded before the load are replaced.
+    Particles<dim> q = random_particles<dim>(3, deformation, 11);
+    io::load_checkpoint(dir / "c.h5", loaded, q);
 
     CHECK(same_bits(p.x, q.x));
     CHECK(same_bits(p.v, q.v));
@@ -244,9 +255,11 @@ TEST_CASE_TEMPLATE("checkpoint round trip is bit-identical", Dim, std::integral_
     CHECK(same_bits(p.mass, q.mass));
     CHECK(same_bits(p.volume0, q.volume0));
     CHECK(same_bits(p.material, q.material));
-    CHECK(same_bits(p.F, q.F));
-    CHECK(same_bits(p.plastic, q.plastic));
-    CHECK(q.has_deformation() == deformation);
+    if (deformation) {
+      CHECK(same_bits(solid::elastic_F(p), solid::elastic_F(q)));
+      CHECK(same_bits(solid::plastic_state(p), solid::plastic_state(q)));
+    }
+    CHECK(q.has_channel("F") == deformation);
     CHECK(loaded.dim == dim);
     CHECK(loaded.frame == saved.frame);
     CHECK(loaded.step == saved.step);
@@ -261,28 +274,34 @@ TEST_CASE_TEMPLATE("checkpoint round trip is bit-identical", Dim, std::integral_
     io::save_checkpoint<dim>(dir / "two.h5", {{"fluid", &fluid}, {"sediment", &grains}},
                              {dim, 1, 2, 0.5, 1e-3, "d", {}});
     io::CheckpointHeader header;
-    const Particles<dim> f = io::load_checkpoint<dim>(dir / "two.h5", header, "fluid");
-    const Particles<dim> g = io::load_checkpoint<dim>(dir / "two.h5", header, "sediment");
+    Particles<dim> f = declared<dim>(false), g = declared<dim>(true);
+    io::load_checkpoint(dir / "two.h5", header, f, "fluid");
+    io::load_checkpoint(dir / "two.h5", header, g, "sediment");
     CHECK(same_bits(f.x, fluid.x));
     CHECK(same_bits(f.C, fluid.C));
-    CHECK_FALSE(f.has_deformation());
+    CHECK_FALSE(f.has_channel("F"));
     CHECK(same_bits(g.v, grains.v));
-    CHECK(same_bits(g.F, grains.F));
-    CHECK(g.has_deformation());
-    CHECK_THROWS_WITH_AS(io::load_checkpoint<dim>(dir / "two.h5", header, "air"),
+    CHECK(same_bits(solid::elastic_F(g), solid::elastic_F(grains)));
+    // The grains' F in particles that do not declare it, and the reverse.
+    Particles<dim> plain;
+    CHECK_THROWS_WITH_AS(io::load_checkpoint(dir / "two.h5", header, plain, "sediment"),
+                         doctest::Contains("phase 'sediment' stores the particle channel 'F'"), InputError);
+    CHECK_THROWS_WITH_AS(io::load_checkpoint(dir / "two.h5", header, g, "fluid"),
+                         doctest::Contains("phase 'fluid' has no particle channel 'F'"), InputError);
+    CHECK_THROWS_WITH_AS(io::load_checkpoint(dir / "two.h5", header, f, "air"),
                          doctest::Contains("no particle phase 'air'"), InputError);
-    CHECK_THROWS_AS(io::load_checkpoint<dim>(dir / "two.h5", header), InputError);
+    CHECK_THROWS_AS(io::load_checkpoint(dir / "two.h5", header, f), InputError);
   }
-  SUBCASE("an empty particle set keeps its deformation flag") {
+  SUBCASE("an empty particle set keeps its channels") {
     for (const bool deformation : {false, true}) {
-      Particles<dim> empty;
-      if (deformation) empty.enable_deformation();
-      io::save_checkpoint(dir / "empty.h5", empty, {dim, 0, 0, 0.0, 0.0, "", {}});
+      io::save_checkpoint(dir / "empty.h5", declared<dim>(deformation), {dim, 0, 0, 0.0, 0.0, "", {}});
       io::CheckpointHeader header;
-      const Particles<dim> q = io::load_checkpoint<dim>(dir / "empty.h5", header);
+      Particles<dim> q = random_particles<dim>(4, deformation, 12);
+      io::load_checkpoint(dir / "empty.h5", header, q);
       CHECK(q.size() == 0);
-      CHECK(q.has_deformation() == deformation);
       CHECK(header.scene_digest.empty());
+      Particles<dim> other = declared<dim>(!deformation);
+      CHECK_THROWS_AS(io::load_checkpoint(dir / "empty.h5", header, other), InputError);
     }
   }
 }
@@ -294,35 +313,38 @@ TEST_CASE("loading a wrong, missing or corrupt checkpoint throws naming the file
   };
   io::CheckpointHeader header;
   io::save_checkpoint(dir / "3d.h5", random_particles<3>(10, true, 1), {3, 1, 2, 0.5, 1e-3, "d", {}});
+  Particles<2> in_2d = declared<2>(true);
+  Particles<3> in_3d = declared<3>(true);
 
   try {
-    io::load_checkpoint<2>(dir / "3d.h5", header);
+    io::load_checkpoint(dir / "3d.h5", header, in_2d);
     FAIL("no InputError for the wrong dimension");
   } catch (const InputError& e) {
     CHECK(names_file(e, dir / "3d.h5"));
     CHECK(std::string(e.what()).find("3D") != std::string::npos);
   }
   try {
-    io::load_checkpoint<3>(dir / "missing.h5", header);
+    io::load_checkpoint(dir / "missing.h5", header, in_3d);
     FAIL("no IoError for a missing file");
   } catch (const IoError& e) {
     CHECK(names_file(e, dir / "missing.h5"));
   }
   write_text(dir / "garbage.h5", "this is not an HDF5 file");
-  CHECK_THROWS_AS(io::load_checkpoint<3>(dir / "garbage.h5", header), IoError);
+  CHECK_THROWS_AS(io::load_checkpoint(dir / "garbage.h5", header, in_3d), IoError);
 
   const std::string whole = read_text(dir / "3d.h5");
   write_text(dir / "truncated.h5", whole.substr(0, whole.size() / 2));
   try {
-    io::load_checkpoint<3>(dir / "truncated.h5", header);
+    io::load_checkpoint(dir / "truncated.h5", header, in_3d);
     FAIL("no IoError for a truncated file");
   } catch (const IoError& e) {
     CHECK(names_file(e, dir / "truncated.h5"));
   }
   CHECK(header.frame == 0);  // untouched by the failed loads
+  CHECK(in_3d.size() == 0);
 
   io::write_particles(dir / "particles_0000.h5", random_particles<3>(4, false, 2), 0.0, 0);
-  CHECK_THROWS_AS(io::load_checkpoint<3>(dir / "particles_0000.h5", header), InputError);
+  CHECK_THROWS_AS(io::load_checkpoint(dir / "particles_0000.h5", header, in_3d), InputError);
 }
 
 TEST_CASE("particle HDF5 file holds the documented datasets") {
@@ -355,12 +377,12 @@ TEST_CASE("particle HDF5 file holds the documented datasets") {
     CHECK(velocity[3 * i + 1] == p.v[i][1]);
     CHECK(velocity[3 * i + 2] == 0.0);
     CHECK(speed[i] == p.v[i].norm());
-    CHECK(J[i] == p.F[i].determinant());
+    CHECK(J[i] == solid::elastic_F(p)[i].determinant());
     CHECK(material[i] == p.material[i]);
   }
   CHECK(same_bits(mass, p.mass));
   CHECK(same_bits(volume0, p.volume0));
-  CHECK(same_bits(plastic, p.plastic));
+  CHECK(same_bits(plastic, solid::plastic_state(p)));
   CHECK(read_attribute<double>(file, "time", H5T_NATIVE_DOUBLE) == 0.125);
   CHECK(read_attribute<int>(file, "frame", H5T_NATIVE_INT) == 7);
   CHECK(read_attribute<int>(file, "dim", H5T_NATIVE_INT) == 2);

@@ -12,6 +12,7 @@
 #include <mpm/core/stages/particles_to_grid.h>
 #include <mpm/core/stages/sort_particles.h>
 #include <mpm/geometry/seeding.h>
+#include <mpm/solid/solid_channels.h>
 
 #include <algorithm>
 #include <cmath>
@@ -51,10 +52,12 @@ sediment: )") + kSand);
   const auto x = mpm::geometry::seed_box<2>(Vec<2>::Constant(lo), Vec<2>::Constant(hi), dx, 4, 0.0, 1);
   add_sediment_particles<2>(b.scene, x, phi * mpm::geometry::particle_volume<2>(dx, 4), Vec<2>::Zero(), "block");
   mpm::Particles<2>& P = b.scene.state.sediment.particles;
+  std::vector<Mat<2>>& F = mpm::solid::elastic_F(P);
+  std::vector<double>& plastic = mpm::solid::plastic_state(P);
   for (std::size_t p = 0; p < P.size(); ++p) {
     P.material[p] = material;
-    P.F[p] = F0;
-    P.plastic[p] = plastic0;
+    F[p] = F0;
+    plastic[p] = plastic0;
     b.interior.push_back((P.x[p].array() > lo + 3 * dx).all() && (P.x[p].array() < hi - 3 * dx).all());
   }
   using stages::OnPhase;
@@ -115,6 +118,8 @@ TEST_CASE("reclassify: phi_p of a uniform block, hysteresis, stress-free start")
     stages::ReclassifySediment<2> reclassify(band, kRhoS, 0, false);
     reclassify.run(b.scene.state);
     const mpm::Particles<2>& P = b.scene.state.sediment.particles;
+    const std::vector<Mat<2>>& F = mpm::solid::elastic_F(P);
+    const std::vector<double>& plastic = mpm::solid::plastic_state(P);
     int checked = 0;
     for (std::size_t p = 0; p < P.size(); ++p) {
       if (!b.interior[p]) continue;
@@ -123,8 +128,8 @@ TEST_CASE("reclassify: phi_p of a uniform block, hysteresis, stress-free start")
       REQUIRE(P.material[p] == c.after);
       // A particle that is or was discrete restarts stress-free; a continuum one keeps F^E.
       const bool reset = c.before == discrete_grain || c.after == discrete_grain;
-      REQUIRE((P.F[p] - (reset ? Mat<2>::Identity() : squeezed)).norm() == 0.0);
-      REQUIRE(P.plastic[p] == (reset ? 0.0 : 0.2));
+      REQUIRE((F[p] - (reset ? Mat<2>::Identity() : squeezed)).norm() == 0.0);
+      REQUIRE(plastic[p] == (reset ? 0.0 : 0.2));
     }
     CHECK(checked == 6 * 6 * 4);
     const auto switched = std::count_if(P.material.begin(), P.material.end(), [&](auto m) { return m != c.before; });
@@ -172,9 +177,10 @@ TEST_CASE("reclassify: a bed deposited as discrete grains does not expand when i
     CoupledScene<2> scene = load_coupled_scene<2>(bed_scene(switching, "", wet));
     CoupledState<2>& s = scene.state;
     mpm::Particles<2>& P = s.sediment.particles;
+    std::vector<Mat<2>>& F = mpm::solid::elastic_F(P);
     for (std::size_t p = 0; p < P.size(); ++p) {
       P.material[p] = material;
-      P.F[p] = 0.9 * Mat<2>::Identity();
+      F[p] = 0.9 * Mat<2>::Identity();
     }
     Run r{top(s), top(s), grain_volume(s), 0.0, 0.0, {}};
     auto pipeline = make_coupled_pipeline(scene);
@@ -183,7 +189,7 @@ TEST_CASE("reclassify: a bed deposited as discrete grains does not expand when i
       r.highest = std::max(r.highest, top(s));
     }
     r.grains = grain_volume(s);
-    for (std::size_t p = 0; p < P.size(); ++p) r.volume += P.volume0[p] * P.F[p].determinant();
+    for (std::size_t p = 0; p < P.size(); ++p) r.volume += P.volume0[p] * F[p].determinant();
     r.counts = count_sediment(s);
     MESSAGE((wet ? "wet" : "dry") << ", switching '" << switching << "': top " << r.top0 << " -> highest " << r.highest << " m, "
                           << r.counts.discrete << " of " << P.size() << " discrete, t = " << s.time << " s");

@@ -49,6 +49,7 @@
 #include <mpm/core/stages/time_step_control.h>
 #include <mpm/geometry/seeding.h>
 #include <mpm/solid/material.h>
+#include <mpm/solid/solid_channels.h>
 #include <mpm/solid/stages/deformation_update.h>
 #include <mpm/solid/stages/stress_forces.h>
 
@@ -135,19 +136,22 @@ public:
   std::vector<std::string> writes() const override { return channels(); }
   void run(MpmState<2>& s) override {
     Particles<2> next;
-    next.enable_deformation();
+    solid::add_solid_channels(next);
+    std::vector<Mat<2>>& next_F = solid::elastic_F(next);
     std::vector<Vec<2>> X;
-    auto append = [&](const Particles<2>& from, const std::vector<Vec<2>>& X_from, std::size_t p,
-                      const Vec<2>& shift) {
+    auto append = [&](const Particles<2>& from, const std::vector<Mat<2>>& F_from,
+                      const std::vector<Vec<2>>& X_from, std::size_t p, const Vec<2>& shift) {
       next.push_back(from.x[p] + shift, from.v[p], from.mass[p], from.volume0[p], from.material[p]);
       next.C.back() = from.C[p];
-      next.F.back() = from.F[p];
+      next_F.back() = F_from[p];
       X.push_back(X_from[p] + shift);
     };
+    const std::vector<Mat<2>>& F_now = solid::elastic_F(s.particles);
     for (std::size_t p = 0; p < s.particles.size(); ++p)
-      if (in_square(ref_.X[p])) append(s.particles, ref_.X, p, Vec<2>::Zero());
+      if (in_square(ref_.X[p])) append(s.particles, F_now, ref_.X, p, Vec<2>::Zero());
     // A snapshot of the square, since `next` grows while its images are appended.
     const Particles<2> square = next;
+    const std::vector<Mat<2>>& F_square = solid::elastic_F(square);
     const std::vector<Vec<2>> X_square = X;
     for (int sy = -1; sy <= 1; ++sy)
       for (int sx = -1; sx <= 1; ++sx) {
@@ -155,7 +159,7 @@ public:
         const Vec<2> shift(sx, sy);
         for (std::size_t p = 0; p < square.size(); ++p) {
           const Vec<2> y = square.x[p] + shift;
-          if (y.minCoeff() > -band_ && y.maxCoeff() < 1.0 + band_) append(square, X_square, p, shift);
+          if (y.minCoeff() > -band_ && y.maxCoeff() < 1.0 + band_) append(square, F_square, X_square, p, shift);
         }
       }
     s.particles = std::move(next);
@@ -252,7 +256,7 @@ MmsErrors run_mms(int cells, const Kernel& kernel, const MmsSettings& in) {
   ReferencePositions ref;
   const int ppc = 4;
   const double volume = geometry::particle_volume<2>(dx, ppc);
-  state.particles.enable_deformation();
+  solid::add_solid_channels(state.particles);
   for (const Vec<2>& X : geometry::seed_box<2>(Vec<2>::Zero(), Vec<2>::Ones(), dx, ppc, 0.0, 1)) {
     state.particles.push_back(X, field.velocity(X, 0.0), in.density * volume, volume, 0);
     state.particles.C.back() = field.velocity_gradient(X, 0.0);
@@ -264,8 +268,7 @@ MmsErrors run_mms(int cells, const Kernel& kernel, const MmsSettings& in) {
   dt.wave_speed = material.wave_speed();
   dt.wave_cfl = in.wave_cfl;
   dt.max_dt = in.end_time / steps;  // equal steps, the last one ends at T
-  Pipeline<MpmState<2>> pipeline({"particle.x", "particle.v", "particle.C", "particle.mass", "particle.volume0",
-                                   "particle.material", "particle.F"});
+  Pipeline<MpmState<2>> pipeline(particle_fields(state.particles));
   pipeline.add(std::make_unique<stages::TimeStepControl<2>>(dt));
   pipeline.add(std::make_unique<PeriodicImages>(ref, band));
   pipeline.add(std::make_unique<stages::SortParticles<2>>());

@@ -16,6 +16,7 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <tuple>
 
 namespace coupling {
 
@@ -92,8 +93,8 @@ mpm::Pipeline<CoupledState<dim>> make_coupled_pipeline(const CoupledScene<dim>& 
   using stages::OnPhase;
   using stages::Phase;
   const bool wet = scene.fluid.has_value(), sandy = scene.sediment.has_value();
-  const bool continuum = sandy && !scene.sediment->materials.empty();
-  const bool switching = continuum && scene.sediment->switching.has_value();
+  // make_coupled_scene refused switching without a continuum material.
+  const bool switching = sandy && scene.sediment->switching.has_value();
 
   // Each phase's solver limits its step; a sediment falls through a free surface too.
   const double free_surface = fluid::free_surface_wave_speed(scene.settings, scene.colliders);
@@ -102,13 +103,11 @@ mpm::Pipeline<CoupledState<dim>> make_coupled_pipeline(const CoupledScene<dim>& 
       ms::time_step_settings(scene.settings, std::max(free_surface, sandy ? scene.solid_solver->wave_speed() : 0.0));
 
   std::vector<std::string> initial;
-  for (const auto& [present, phase] :
-       {std::pair{wet, std::string("fluid.")}, std::pair{sandy, std::string("sediment.")}})
+  for (const auto& [present, phase, particles] :
+       {std::tuple{wet, std::string("fluid."), &scene.state.fluid.particles},
+        std::tuple{sandy, std::string("sediment."), &scene.state.sediment.particles}})
     if (present)
-      for (const char* f : {"particle.x", "particle.v", "particle.C", "particle.mass", "particle.volume0",
-                            "particle.material"})
-        initial.push_back(phase + f);
-  if (continuum) initial.insert(initial.end(), {"sediment.particle.F", "sediment.particle.plastic"});
+      for (const std::string& f : mpm::particle_fields(*particles)) initial.push_back(phase + f);
   mpm::Pipeline<CoupledState<dim>> p(initial);
 
   auto on = [&](Phase phase, auto stage) { p.add(std::make_unique<OnPhase<dim>>(phase, std::move(stage))); };

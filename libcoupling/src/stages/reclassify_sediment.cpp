@@ -10,6 +10,7 @@
 #include <coupling/stages/reclassify_sediment.h>
 #include <mpm/core/error.h>
 #include <mpm/core/particle_buckets.h>
+#include <mpm/solid/solid_channels.h>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -88,6 +89,8 @@ void ReclassifySediment<dim>::run(CoupledState<dim>& s) {
       s.sediment.kernel);
 
   to_discrete_ = to_continuum_ = 0;
+  std::vector<mpm::Mat<dim>>& F = mpm::solid::elastic_F(P);
+  std::vector<double>& plastic = mpm::solid::plastic_state(P);
   for (std::size_t p = 0; p < P.size(); ++p) {
     const bool was_discrete = P.material[p] == discrete_grain;
     if (was_discrete && phi_p_[p] > thresholds_.dense_above) {
@@ -98,8 +101,8 @@ void ReclassifySediment<dim>::run(CoupledState<dim>& s) {
       ++to_discrete_;
     }
     if (was_discrete || P.material[p] == discrete_grain) {
-      P.F[p] = mpm::Mat<dim>::Identity();
-      P.plastic[p] = 0.0;
+      F[p] = mpm::Mat<dim>::Identity();
+      plastic[p] = 0.0;
     }
   }
 }

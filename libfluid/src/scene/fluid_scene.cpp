@@ -92,8 +92,7 @@ FluidScene<dim> load_fluid_scene(const Config& scene) {
 template <int dim>
 mpm::Pipeline<mpm::MpmState<dim>> make_fluid_pipeline(const FluidScene<dim>& scene) {
   namespace ms = mpm::stages;
-  mpm::Pipeline<mpm::MpmState<dim>> p({"particle.x", "particle.v", "particle.C", "particle.mass",
-                                       "particle.volume0", "particle.material"});
+  mpm::Pipeline<mpm::MpmState<dim>> p(mpm::particle_fields(scene.state.particles));
   p.add(std::make_unique<ms::TimeStepControl<dim>>(ms::time_step_settings(scene.settings, scene.solver->wave_speed())));
   // Outflow, then inflow, before the sort that rebuilds the buckets.
   if (auto regions = mpm::geometry::flow_sink_regions(scene.flow, scene.settings); !regions.empty())

@@ -12,13 +12,12 @@ namespace mpm::io::detail {
 template <int dim>
 void verify_channel_sizes(const Particles<dim>& p, const std::filesystem::path& file) {
   const std::size_t n = p.size();
-  const bool kinematic = p.v.size() == n && p.C.size() == n && p.mass.size() == n &&
-                         p.volume0.size() == n && p.material.size() == n;
-  const std::size_t nf = p.has_deformation() ? n : 0;
-  const bool deformation = p.F.size() == nf && p.plastic.size() == nf;
-  if (!kinematic || !deformation)
-    throw Error("cannot write '" + file.string() + "': the particle channels differ in length (" +
-                std::to_string(n) + " positions)");
+  p.for_each_channel([&](const ChannelInfo& info, const auto& values) {
+    if (values.size() != n)
+      throw Error("cannot write '" + file.string() + "': the particle channels differ in length (" +
+                  std::to_string(n) + " positions, " + std::to_string(values.size()) + " values of '" + info.name +
+                  "')");
+  });
 }
 
 }  // namespace mpm::io::detail

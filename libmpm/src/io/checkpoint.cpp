@@ -6,27 +6,52 @@
 #include "channel_sizes.h"
 #include "hdf5_file.h"
 
+#include <algorithm>
 #include <sstream>
+#include <string>
+#include <type_traits>
 #include <utility>
+#include <variant>
+#include <vector>
 
 namespace mpm::io {
 namespace {
 
 constexpr const char* kFormat = "mpm-checkpoint";
-constexpr std::int32_t kVersion = 1;
+// 2: the channels of a phase are listed in "<phase>.channels" (1 had fixed datasets and a
+// deformation flag).
+constexpr std::int32_t kVersion = 2;
 
 // Eigen's fixed-size vectors and matrices are plain arrays of doubles, so a channel is one
 // contiguous block of N * rows * cols doubles.
 static_assert(sizeof(Vec<2>) == 2 * sizeof(double) && sizeof(Vec<3>) == 3 * sizeof(double));
 static_assert(sizeof(Mat<2>) == 4 * sizeof(double) && sizeof(Mat<3>) == 9 * sizeof(double));
 
-template <class Matrix>
-const double* doubles(const std::vector<Matrix>& channel) {
-  return channel.empty() ? nullptr : channel.front().data();
+//! The first scalar of a channel (nullptr when it is empty): its values as HDF5 reads and writes them.
+template <class Channel>
+auto* scalars(Channel& values) {
+  using T = typename std::remove_const_t<Channel>::value_type;
+  if constexpr (std::is_arithmetic_v<T>) {
+    return values.data();
+  } else {
+    decltype(values.front().data()) first = nullptr;
+    if (!values.empty()) first = values.front().data();
+    return first;
+  }
 }
-template <class Matrix>
-double* doubles(std::vector<Matrix>& channel) {
-  return channel.empty() ? nullptr : channel.front().data();
+
+//! The dataset shape of n values of T: N x dim for a vector, N x dim*dim for a matrix, else N.
+template <int dim, class T>
+detail::Shape shape_of(hsize_t n) {
+  if constexpr (std::is_same_v<T, Vec<dim>>) return {n, hsize_t(dim)};
+  else if constexpr (std::is_same_v<T, Mat<dim>>) return {n, hsize_t(dim * dim)};
+  else return {n};
+}
+
+std::string describe(const detail::Shape& shape) {
+  std::string text;
+  for (const hsize_t d : shape) text += (text.empty() ? "" : " x ") + std::to_string(d);
+  return text;
 }
 
 //! "x" of the unnamed phase, "fluid/x" of the phase "fluid"; likewise for root attributes.
@@ -35,6 +60,19 @@ std::string dataset(const std::string& phase, const std::string& name) {
 }
 std::string attribute(const std::string& phase, const std::string& name) {
   return phase.empty() ? name : phase + "." + name;
+}
+
+std::vector<std::string> lines(const std::string& text) {
+  std::vector<std::string> found;
+  std::stringstream in(text);
+  for (std::string line; std::getline(in, line);) found.push_back(line);
+  return found;
+}
+
+std::string joined(const std::vector<std::string>& names) {
+  std::string text;
+  for (const std::string& name : names) text += (text.empty() ? "" : ", ") + name;
+  return text.empty() ? "none" : text;
 }
 
 }  // namespace
@@ -49,17 +87,15 @@ void save_checkpoint(const std::filesystem::path& path, const std::vector<Checkp
     for (const auto& [name, particles] : phases) {
       const Particles<dim>& p = *particles;
       detail::verify_channel_sizes(p, path);
-      const hsize_t n = p.size(), nf = p.has_deformation() ? n : 0, d = dim, dd = dim * dim;
-      const auto at = [&](const char* channel) { return dataset(name, channel); };
-      file.write(at("x"), doubles(p.x), {n, d});
-      file.write(at("v"), doubles(p.v), {n, d});
-      file.write(at("C"), doubles(p.C), {n, dd});
-      file.write(at("mass"), p.mass.data(), {n});
-      file.write(at("volume0"), p.volume0.data(), {n});
-      file.write(at("material"), p.material.data(), {n});
-      file.write(at("F"), doubles(p.F), {nf, dd});
-      file.write(at("plastic"), p.plastic.data(), {nf});
-      file.write_attribute<std::int32_t>(attribute(name, "deformation"), p.has_deformation());
+      std::string stored;
+      p.for_each_channel([&](const ChannelInfo& info, const auto& values) {
+        if (!info.use.checkpoint) return;
+        using T = typename std::decay_t<decltype(values)>::value_type;
+        file.write(dataset(name, info.name), scalars(values), shape_of<dim, T>(values.size()));
+        stored += (stored.empty() ? "" : "\n") + info.name;
+      });
+      file.write_attribute<std::int64_t>(attribute(name, "particles"), static_cast<std::int64_t>(p.size()));
+      file.write_attribute(attribute(name, "channels"), stored);
     }
     file.write_attribute("format", std::string(kFormat));
     file.write_attribute("version", kVersion);
@@ -82,8 +118,8 @@ void save_checkpoint(const std::filesystem::path& path, const std::vector<Checkp
 }
 
 template <int dim>
-Particles<dim> load_checkpoint(const std::filesystem::path& path, CheckpointHeader& header,
-                               const std::string& phase) {
+void load_checkpoint(const std::filesystem::path& path, CheckpointHeader& header, Particles<dim>& into,
+                     const std::string& phase) {
   using detail::Hdf5File;
   const Hdf5File file(path, Hdf5File::Mode::read);
   const std::string name = "'" + path.string() + "'";
@@ -107,8 +143,7 @@ Particles<dim> load_checkpoint(const std::filesystem::path& path, CheckpointHead
   loaded.dt_previous = file.read_attribute<double>("dt_previous");
   loaded.scene_digest = file.read_string_attribute("scene_digest");
   if (file.has_attribute("stage_data")) {
-    std::stringstream names(file.read_string_attribute("stage_data"));
-    for (std::string entry; std::getline(names, entry);) {
+    for (const std::string& entry : lines(file.read_string_attribute("stage_data"))) {
       const detail::Shape shape = file.shape("stages/" + entry);
       if (shape.size() != 1) throw IoError("checkpoint " + name + " is corrupt: stages/" + entry + " is not 1D");
       std::vector<double> values(shape[0]);
@@ -117,44 +152,65 @@ Particles<dim> load_checkpoint(const std::filesystem::path& path, CheckpointHead
     }
   }
 
-  if (!file.has_attribute(attribute(phase, "deformation")))
+  if (!file.has_attribute(attribute(phase, "channels")))
     throw InputError("checkpoint " + name + " holds no particle phase '" + phase + "'");
-  const auto at = [&](const char* channel) { return dataset(phase, channel); };
-  const detail::Shape x_shape = file.shape(at("x"));
-  if (x_shape.size() != 2)
-    throw IoError("checkpoint " + name + " is corrupt: dataset x is not N x " +
-                  std::to_string(dim));
-  const bool deformation = file.read_attribute<std::int32_t>(attribute(phase, "deformation")) != 0;
-  const hsize_t n = x_shape[0], nf = deformation ? n : 0, d = dim, dd = dim * dim;
+  const std::string where = "checkpoint " + name + (phase.empty() ? "" : " phase '" + phase + "'");
+  const auto count = file.read_attribute<std::int64_t>(attribute(phase, "particles"));
+  if (count < 0) throw IoError(where + " is corrupt: " + std::to_string(count) + " particles");
+  const auto n = static_cast<hsize_t>(count);
+  const std::vector<std::string> stored = lines(file.read_string_attribute(attribute(phase, "channels")));
 
-  Particles<dim> p;
-  // The flag matters even without particles: particles added later get F = I.
-  if (deformation) p.enable_deformation();
-  p.x.resize(n);
-  p.v.resize(n);
-  p.C.resize(n);
-  p.mass.resize(n);
-  p.volume0.resize(n);
-  p.material.resize(n);
-  p.F.resize(nf);
-  p.plastic.resize(nf);
-  file.read(at("x"), doubles(p.x), {n, d});
-  file.read(at("v"), doubles(p.v), {n, d});
-  file.read(at("C"), doubles(p.C), {n, dd});
-  file.read(at("mass"), p.mass.data(), {n});
-  file.read(at("volume0"), p.volume0.data(), {n});
-  file.read(at("material"), p.material.data(), {n});
-  file.read(at("F"), doubles(p.F), {nf, dd});
-  file.read(at("plastic"), p.plastic.data(), {nf});
+  // The file must store exactly the channels the scene's particles keep in checkpoints, each in
+  // its shape: checked in full before anything is allocated or read.
+  std::vector<std::string> declared;
+  into.for_each_channel([&](const ChannelInfo& info, const auto&) {
+    if (info.use.checkpoint) declared.push_back(info.name);
+  });
+  for (const std::string& channel : stored)
+    if (std::find(declared.begin(), declared.end(), channel) == declared.end())
+      throw InputError(where + " stores the particle channel '" + channel +
+                       "', which the scene's particles do not declare (they keep " + joined(declared) +
+                       "): it was written by another scene");
+  into.for_each_channel([&](const ChannelInfo& info, const auto& values) {
+    if (!info.use.checkpoint) return;
+    using T = typename std::decay_t<decltype(values)>::value_type;
+    const std::string set = dataset(phase, info.name);
+    if (std::find(stored.begin(), stored.end(), info.name) == stored.end() || !file.has(set))
+      throw InputError(where + " has no particle channel '" + info.name + "' (it stores " + joined(stored) +
+                       "): it was written by another scene");
+    const detail::Shape expected = shape_of<dim, T>(n), shape = file.shape(set);
+    if (shape != expected)
+      throw InputError(where + ": particle channel '" + info.name + "' has shape " + describe(shape) +
+                       ", expected " + describe(expected) + " (" + Particles<dim>::template type_name<T>() + ")");
+  });
+
+  // Read into buffers first, so that `into` stays whole if a read fails; then swapped into
+  // place, so that references to its channels stay valid. Particles seeded before the restart
+  // are dropped, and channels that checkpoints do not keep start from their initial value.
+  using Buffer = std::variant<std::vector<double>, std::vector<Vec<dim>>, std::vector<Mat<dim>>,
+                              std::vector<std::uint16_t>>;
+  std::vector<Buffer> buffers;
+  into.for_each_channel([&](const ChannelInfo& info, const auto& values) {
+    if (!info.use.checkpoint) return;
+    using T = typename std::decay_t<decltype(values)>::value_type;
+    std::vector<T> buffer(n);
+    file.read(dataset(phase, info.name), scalars(buffer), shape_of<dim, T>(n));
+    buffers.emplace_back(std::move(buffer));
+  });
+  into.resize(0);
+  into.resize(n);
+  std::size_t next = 0;
+  into.for_each_channel([&](const ChannelInfo& info, auto& values) {
+    if (info.use.checkpoint) values.swap(std::get<std::decay_t<decltype(values)>>(buffers[next++]));
+  });
   header = std::move(loaded);
-  return p;
 }
 
 template void save_checkpoint<2>(const std::filesystem::path&, const std::vector<CheckpointPhase<2>>&,
                                  const CheckpointHeader&);
 template void save_checkpoint<3>(const std::filesystem::path&, const std::vector<CheckpointPhase<3>>&,
                                  const CheckpointHeader&);
-template Particles<2> load_checkpoint<2>(const std::filesystem::path&, CheckpointHeader&, const std::string&);
-template Particles<3> load_checkpoint<3>(const std::filesystem::path&, CheckpointHeader&, const std::string&);
+template void load_checkpoint<2>(const std::filesystem::path&, CheckpointHeader&, Particles<2>&, const std::string&);
+template void load_checkpoint<3>(const std::filesystem::path&, CheckpointHeader&, Particles<3>&, const std::string&);
 
 }  // namespace mpm::io

@@ -110,6 +110,14 @@ Shape Hdf5File::shape(const std::string& dataset) const {
   return dims;
 }
 
+bool Hdf5File::holds_integers(const std::string& dataset) const {
+  const Handle set(H5Dopen2(file_, dataset.c_str(), H5P_DEFAULT), H5Dclose);
+  if (!set.valid()) fail("cannot open dataset '" + dataset + "'");
+  const Handle type(H5Dget_type(set), H5Tclose);
+  if (!type.valid()) fail("cannot read the type of dataset '" + dataset + "'");
+  return H5Tget_class(type) == H5T_INTEGER;
+}
+
 void Hdf5File::read_raw(const std::string& dataset, hid_t memory_type, void* data,
                         const Shape& expected) const {
   const Shape stored = shape(dataset);

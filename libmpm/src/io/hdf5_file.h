@@ -62,6 +62,8 @@ public:
   }
   bool has(const std::string& dataset) const;
   Shape shape(const std::string& dataset) const;
+  //! Whether the dataset stores integers (else floating-point numbers).
+  bool holds_integers(const std::string& dataset) const;
 
   //! Scalar attributes of the root group.
   template <class T>

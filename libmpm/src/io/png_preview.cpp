@@ -11,6 +11,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -39,47 +41,33 @@ Rgb viridis(double t) {
   return c;
 }
 
-enum class ColorBy { speed, material, J, plastic, height };
-
-ColorBy parse_color_by(const std::string& name) {
-  constexpr std::pair<const char*, ColorBy> kNames[] = {{"speed", ColorBy::speed},
-                                                        {"material", ColorBy::material},
-                                                        {"J", ColorBy::J},
-                                                        {"plastic", ColorBy::plastic},
-                                                        {"height", ColorBy::height}};
-  for (const auto& [text, by] : kNames)
-    if (name == text) return by;
-  throw InputError("png preview: color_by '" + name +
-                   "' is not one of speed, material, J, plastic, height");
-}
-
-//! The attribute named by color_by, one value per particle.
+//! The attribute named by color_by, one value per particle: `speed` (|v|), `height` (y), or a
+//! scalar that particle frames show under that name (io/particle_output.h): `material`, `mass`,
+//! `J` = det F^E or `plastic` of solid particles, any extra channel marked `output`.
 template <int dim>
 std::vector<double> attribute(const Particles<dim>& p, const std::string& color_by) {
-  const ColorBy by = parse_color_by(color_by);
-  verify<InputError>((by != ColorBy::J && by != ColorBy::plastic) || p.has_deformation(),
-                     "png preview: color_by '" + color_by + "' needs particles with deformation");
   std::vector<double> values(p.size());
-  const auto fill = [&](auto value_of) {
-    for (std::size_t i = 0; i < values.size(); ++i) values[i] = value_of(i);
-  };
-  switch (by) {
-    case ColorBy::speed:
-      fill([&](std::size_t i) { return p.v[i].norm(); });
-      break;
-    case ColorBy::material:
-      fill([&](std::size_t i) { return double(p.material[i]); });
-      break;
-    case ColorBy::J:
-      fill([&](std::size_t i) { return p.F[i].determinant(); });
-      break;
-    case ColorBy::plastic:
-      fill([&](std::size_t i) { return p.plastic[i]; });
-      break;
-    case ColorBy::height:
-      fill([&](std::size_t i) { return p.x[i][1]; });
-      break;
+  if (color_by == "speed" || color_by == "height") {
+    for (std::size_t i = 0; i < values.size(); ++i) values[i] = color_by == "speed" ? p.v[i].norm() : p.x[i][1];
+    return values;
   }
+  std::string known = "speed, height";
+  bool found = false;
+  p.for_each_channel([&](const ChannelInfo& info, const auto& channel) {
+    using T = typename std::decay_t<decltype(channel)>::value_type;
+    if constexpr (!std::is_same_v<T, Vec<dim>>) {  // frames show vectors as vectors, not one value
+      if (!info.use.output) return;
+      known += ", " + info.frame_name();
+      if (info.frame_name() != color_by) return;
+      found = true;
+      for (std::size_t i = 0; i < values.size(); ++i) {
+        if constexpr (std::is_same_v<T, Mat<dim>>) values[i] = channel[i].determinant();
+        else values[i] = static_cast<double>(channel[i]);
+      }
+    }
+  });
+  verify<InputError>(found, "png preview: color_by '" + color_by + "' is not a value of these particles (" +
+                                known + ")");
   return values;
 }
 

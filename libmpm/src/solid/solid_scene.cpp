@@ -7,6 +7,7 @@
 #include <mpm/geometry/body_config.h>
 #include <mpm/geometry/collider_config.h>
 #include <mpm/geometry/seeding.h>
+#include <mpm/solid/solid_channels.h>
 #include <mpm/solid/solid_scene.h>
 
 #include <Eigen/Geometry>
@@ -71,8 +72,9 @@ void seed_body(SolidScene<dim>& scene, const Config& body) {
   Eigen::Matrix<double, 3, 1> omega = Eigen::Matrix<double, 3, 1>::Zero();
   if constexpr (dim == 2) omega[2] = body.number("angular_velocity", 0.0, Range::any());
   else omega = body.vector<3>("angular_velocity", Vec<3>::Zero());
+  std::vector<Mat<dim>>& F = elastic_F(P);
   for (std::size_t p = first; p < P.size(); ++p) {
-    P.F[p] = stretch.asDiagonal();
+    F[p] = stretch.asDiagonal();
     Eigen::Matrix<double, 3, 1> r = Eigen::Matrix<double, 3, 1>::Zero();
     r.template head<dim>() = P.x[p] - centroid;
     P.v[p] += omega.cross(r).template head<dim>();
@@ -84,6 +86,8 @@ template <int dim>
 SolidScene<dim> make_solid_scene(SceneSettings<dim> settings, std::vector<Material<dim>> materials,
                                  geometry::ColliderSet<dim> colliders, const std::string& solver) {
   MpmState<dim> state = initial_state(settings);
+  // The solver declares its channels before seeding, even for a scene without bodies: its
+  // stages read them, and a restart loads them into this particle set.
   std::shared_ptr<const SolidSolver<dim>> s = make_solid_solver<dim>(solver, materials);
   s->add_channels(state.particles);
   return {std::move(settings), std::move(materials), std::move(colliders), std::move(s), std::move(state)};
@@ -107,8 +111,7 @@ SolidScene<dim> load_solid_scene(const Config& scene) {
 
 template <int dim>
 Pipeline<MpmState<dim>> make_solid_pipeline(const SolidScene<dim>& scene) {
-  Pipeline<MpmState<dim>> p({"particle.x", "particle.v", "particle.C", "particle.mass", "particle.volume0",
-                             "particle.material", "particle.F", "particle.plastic"});
+  Pipeline<MpmState<dim>> p(particle_fields(scene.state.particles));
   p.add(std::make_unique<stages::TimeStepControl<dim>>(
       stages::time_step_settings(scene.settings, scene.solver->wave_speed())));
   p.add(std::make_unique<stages::SortParticles<dim>>());
@@ -123,8 +126,9 @@ Pipeline<MpmState<dim>> make_solid_pipeline(const SolidScene<dim>& scene) {
 template <int dim>
 double elastic_energy(const MpmState<dim>& state, const std::vector<Material<dim>>& materials) {
   const Particles<dim>& P = state.particles;
+  const std::vector<Mat<dim>>& F = elastic_F(P);
   double e = 0.0;
-  for (std::size_t p = 0; p < P.size(); ++p) e += P.volume0[p] * materials[P.material[p]].energy(P.F[p]);
+  for (std::size_t p = 0; p < P.size(); ++p) e += P.volume0[p] * materials[P.material[p]].energy(F[p]);
   return e;
 }
 

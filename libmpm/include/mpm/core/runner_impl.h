@@ -107,9 +107,10 @@ int Runner<dim, State>::open_output(State& state, Pipeline<State>& pipeline) {
                      "--restart continues a run in its output folder, but '" + out_.string() +
                          "' holds no diagnostics.csv: pass --out with the folder of the run that wrote '" +
                          *cl_.restart + "'");
+  // Each phase's particles, as the scene built them, declare the channels the checkpoint must hold.
   io::CheckpointHeader header;
   for (const PhaseRef<dim>& phase : phases(state))
-    *phase.particles = io::load_checkpoint<dim>(*cl_.restart, header, phase.name);
+    io::load_checkpoint<dim>(*cl_.restart, header, *phase.particles, phase.name);
   verify<InputError>(header.dim == dim, "checkpoint '" + *cl_.restart + "' is " + std::to_string(header.dim) +
                                             "D, the scene is " + std::to_string(dim) + "D");
   verify<InputError>(header.scene_digest == scene_digest(),

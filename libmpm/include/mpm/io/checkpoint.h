@@ -1,16 +1,23 @@
 #pragma once
-//! Restart files: every particle channel stored bit-exactly in HDF5, with the clock of the run.
+//! Restart files: every particle channel marked `checkpoint` (core/particles.h) stored
+//! bit-exactly in HDF5, with the clock of the run.
 //!
-//! Datasets: x, v (N x dim); C, F (N x dim*dim, each matrix flattened column-major as Eigen
-//! stores it); mass, volume0, plastic (N); material (N, uint16). Doubles are stored as IEEE
-//! doubles, so a restarted run continues from the same bits. F and plastic have 0 rows when
-//! the particles carry no deformation. Root attributes: format "mpm-checkpoint", version,
-//! deformation (Particles::has_deformation(), which holds even for 0 particles) and the
-//! CheckpointHeader fields. The file is replaced atomically (io/atomic_file.h).
+//! Format version 2. Each stored channel is a dataset named after it: a Vec channel N x dim, a
+//! matrix channel N x dim*dim (flattened column-major as Eigen stores it), a double or uint16
+//! channel N. Every particle set stores x, v, C, mass, volume0 and material; solid particles add
+//! F and plastic (solid/solid_channels.h). Doubles are stored as IEEE doubles, so a restarted run
+//! continues from the same bits. Root attributes: format "mpm-checkpoint", version, the
+//! CheckpointHeader fields and, per phase, "particles" (N, which holds even for 0 particles) and
+//! "channels" (the names of the stored channels, one a line). The file is replaced atomically
+//! (io/atomic_file.h).
 //!
 //! A state of several particle phases (the coupled fluid and sediment) stores each phase's
-//! datasets in a group named after it ("fluid/x", ...) and its deformation flag in the root
-//! attribute "<name>.deformation"; the unnamed phase "" uses the root, as above.
+//! datasets in a group named after it ("fluid/x", ...) and its attributes as "<name>.particles"
+//! and "<name>.channels"; the unnamed phase "" uses the root, as above.
+//!
+//! Loading fills a particle set whose channels the scene has declared already (seeding declares
+//! them), so the file must store exactly the channels that set marks `checkpoint`: one missing
+//! or one the set does not declare (the F of a solid in a fluid phase) means another scene.
 #include <mpm/core/particles.h>
 #include <mpm/core/stage.h>
 
@@ -49,12 +56,15 @@ void save_checkpoint(const std::filesystem::path& path, const Particles<dim>& p,
   save_checkpoint<dim>(path, {{"", &p}}, header);
 }
 
-//! Fills `header` from the file. Throws IoError for a missing, unreadable or corrupt file and
-//! InputError for a file that is not a checkpoint or holds the other dimension.
-//! Reads the phase `phase` ("" for a single-phase state); InputError when the file has no such
-//! phase.
+//! Fills `header` and the particles of `into` (phase `phase`, "" for a single-phase state) from
+//! the file: every channel of `into` marked `checkpoint` is read; the others get their initial
+//! value. Throws IoError for a missing, unreadable or corrupt file and InputError for a file that
+//! is not a checkpoint, holds the other dimension, has no such phase, lacks a channel of `into`
+//! or stores one with the wrong shape, or stores a channel that `into` does not declare (the
+//! messages name the file, the phase and the channel). `header` and `into` are left untouched
+//! when it throws.
 template <int dim>
-Particles<dim> load_checkpoint(const std::filesystem::path& path, CheckpointHeader& header,
-                               const std::string& phase = "");
+void load_checkpoint(const std::filesystem::path& path, CheckpointHeader& header, Particles<dim>& into,
+                     const std::string& phase = "");
 
 }  // namespace mpm::io

@@ -1,13 +1,16 @@
 #pragma once
 //! Per-frame particle output for ParaView: one HDF5 file per frame, described by XDMF 3.
 //!
-//! particles_0007.h5 holds, for N particles (SI units):
-//!   position [m] and velocity [m/s] as N x 3 (2D padded with z = 0 so that ParaView shows it),
-//!   mass [kg], volume0 [m^dim], material (int32 index), speed = |v| [m/s], and, when the
-//!   particles carry deformation, J = det F^E and plastic (the Drucker-Prager volume correction);
-//! and the root attributes time [s], frame and dim. particles_0007.xdmf next to it describes the
-//! frame as a Polyvertex grid, and particles.xdmf gathers the frames as a time series.
-//! All files are replaced atomically (io/atomic_file.h).
+//! particles_0007.h5 holds, for N particles (SI units), every channel marked `output`
+//! (core/particles.h) under its frame name: a Vec channel as N x 3 (2D padded with z = 0 so that
+//! ParaView shows it), a matrix channel as its determinant (N), a uint16 channel as int32 (N), a
+//! double channel as it is (N). That is position [m] and velocity [m/s] (x and v), mass [kg],
+//! volume0 [m^dim] and material (int32 index) for every particle set, J = det F^E and plastic
+//! (the Drucker-Prager volume correction) for solid particles (solid/solid_channels.h); and the
+//! derived speed = |v| [m/s]. Root attributes: time [s], frame, dim and "attributes" (the
+//! datasets besides position, one a line, in the order the XDMF lists them).
+//! particles_0007.xdmf next to it describes the frame as a Polyvertex grid, and particles.xdmf
+//! gathers the frames as a time series. All files are replaced atomically (io/atomic_file.h).
 #include <mpm/core/particles.h>
 
 #include <filesystem>

@@ -21,7 +21,8 @@ struct PreviewOptions {
   std::array<double, 3> domain_lo{0.0, 0.0, 0.0};  //!< [m]; the image shows [lo, hi] in x and y
   std::array<double, 3> domain_hi{1.0, 1.0, 1.0};  //!< [m]
   int width_px = 640;              //!< the height follows from the aspect ratio of the domain
-  std::string color_by = "speed";  //!< "speed", "material", "J", "plastic" or "height" (y)
+  //! "speed", "height" (y) or a scalar of the particle frames: "material", "J", "plastic", ...
+  std::string color_by = "speed";
   double point_radius_px = 2.0;
   //! Attribute values mapped to the ends of the colour map; unset: min and max of the finite
   //! values in the frame (auto ranges make frames of a movie incomparable, so fix it for movies).
@@ -47,8 +48,8 @@ void write_png_preview(const std::filesystem::path& path, const std::vector<Prev
                        const PreviewOptions& options);
 
 //! A single particle set, drawn with options.point_radius_px.
-//! Throws InputError for invalid options (also for J or plastic without deformation) and
-//! IoError when the file cannot be written.
+//! Throws InputError for invalid options (also for a color_by the particles do not carry, such
+//! as J without the solid channels) and IoError when the file cannot be written.
 template <int dim>
 void write_png_preview(const std::filesystem::path& path, const Particles<dim>& p,
                        const PreviewOptions& options);

@@ -3,6 +3,7 @@
 //! step"): grid_update() = stress_forces -> grid_update (forces and gravity);
 //! particle_update() = deformation -> plasticity (only when a material is plastic). Stable for
 //! dt < dx / c, c the fastest elastic wave of the materials.
+#include <mpm/solid/solid_channels.h>
 #include <mpm/solid/solid_solver.h>
 
 namespace mpm::solid {
@@ -13,7 +14,7 @@ public:
   using typename SolidSolver<dim>::Stages;
   ExplicitSolver(std::vector<Material<dim>> materials, bool stress_free_particles);
   std::string name() const override { return "explicit"; }
-  void add_channels(Particles<dim>& particles) const override { particles.enable_deformation(); }
+  void add_channels(Particles<dim>& particles) const override { add_solid_channels(particles); }
   double wave_speed() const override;
   Stages grid_update() const override;
   Stages particle_update() const override;

@@ -2,6 +2,7 @@
 // grad v_p = sum_i v_i^{n+1} (grad w_ip)^T, with the grid velocities after boundary conditions.
 // The trial F^E of a plastic material is projected afterwards by stage 'plasticity'.
 #include <mpm/core/finite_guard.h>
+#include <mpm/solid/solid_channels.h>
 #include <mpm/solid/stages/deformation_update.h>
 
 #include <tbb/parallel_for.h>
@@ -11,12 +12,12 @@ namespace mpm::stages {
 template <int dim>
 void DeformationUpdate<dim>::run(MpmState<dim>& s) {
   Particles<dim>& P = s.particles;
+  std::vector<Mat<dim>>& F = solid::elastic_F(P);
   velocity_gradient(P, s.buckets, s.kernel, s.grid, grad_v_);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.size(), 4096), [&](const auto& r) {
-    for (std::size_t p = r.begin(); p != r.end(); ++p)
-      P.F[p] = (Mat<dim>::Identity() + s.dt * grad_v_[p]) * P.F[p];
+    for (std::size_t p = r.begin(); p != r.end(); ++p) F[p] = (Mat<dim>::Identity() + s.dt * grad_v_[p]) * F[p];
   });
-  check_finite(P.F, name(), "particle", "deformation gradient F");
+  check_finite(F, name(), "particle", "deformation gradient F");
 }
 
 template class DeformationUpdate<2>;

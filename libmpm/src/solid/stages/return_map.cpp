@@ -3,6 +3,7 @@
 // correction of Tampubolon et al. 2017) or the von Mises cylinder (paper sec. 4.2.2),
 // F^E = U exp(H) V^T. Elastic materials are skipped; the model is chosen outside the loop.
 #include <mpm/core/finite_guard.h>
+#include <mpm/solid/solid_channels.h>
 #include <mpm/solid/stages/return_map.h>
 
 #include <tbb/parallel_for.h>
@@ -19,18 +20,20 @@ bool any_plastic(const std::vector<Material<dim>>& materials) {
 template <int dim>
 void ReturnMap<dim>::run(MpmState<dim>& s) {
   Particles<dim>& P = s.particles;
+  std::vector<Mat<dim>>& F = solid::elastic_F(P);
+  std::vector<double>& plastic = solid::plastic_state(P);
   for (std::size_t m = 0; m < materials_.size(); ++m) {
     std::visit([&](const auto& model) {
       using Model = std::decay_t<decltype(model)>;
       if constexpr (!std::is_same_v<Model, plasticity::NoPlasticity>) {
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.size(), 4096), [&](const auto& r) {
           for (std::size_t p = r.begin(); p != r.end(); ++p)
-            if (P.material[p] == m) model.project(P.F[p], P.plastic[p]);
+            if (P.material[p] == m) model.project(F[p], plastic[p]);
         });
       }
     }, materials_[m].plasticity);
   }
-  check_finite(P.F, name(), "particle", "elastic deformation gradient F^E");
+  check_finite(F, name(), "particle", "elastic deformation gradient F^E");
 }
 
 template bool any_plastic(const std::vector<Material<2>>&);

@@ -5,19 +5,23 @@
 // the particle loop. Precondition: particles sorted into buckets (stage 'sort').
 #include <mpm/core/detail/bucket_loops.h>
 #include <mpm/core/finite_guard.h>
+#include <mpm/solid/solid_channels.h>
 #include <mpm/solid/stages/stress_forces.h>
 
 #include <tbb/parallel_for.h>
+
+#include <utility>
 
 namespace mpm::stages {
 
 namespace {
 template <int dim>
-void check_not_inverted(const Particles<dim>& P, std::size_t m, std::string_view model) {
+void check_not_inverted(const Particles<dim>& P, const std::vector<Mat<dim>>& F, std::size_t m,
+                        std::string_view model) {
   for (std::size_t p = 0; p < P.size(); ++p)
-    if (P.material[p] == m && !(P.F[p].determinant() > 0.0))
+    if (P.material[p] == m && !(F[p].determinant() > 0.0))
       throw NumericalError("stage 'stress_forces': particle " + std::to_string(p) + " is inverted (det F = " +
-                           std::to_string(P.F[p].determinant()) + "); the " + std::string(model) +
+                           std::to_string(F[p].determinant()) + "); the " + std::string(model) +
                            " model is undefined for det F <= 0 (fixed_corotated handles inversion)");
 }
 }  // namespace
@@ -25,17 +29,18 @@ void check_not_inverted(const Particles<dim>& P, std::size_t m, std::string_view
 template <int dim>
 void StressForces<dim>::run(MpmState<dim>& s) {
   Particles<dim>& P = s.particles;
+  const std::vector<Mat<dim>>& F = solid::elastic_F(std::as_const(P));
   // The material loops below write only listed materials: stress-free particles keep zero.
   if (stress_free_particles_) weighted_stress_.assign(P.size(), Mat<dim>::Zero());
   else weighted_stress_.resize(P.size());
   for (std::size_t m = 0; m < materials_.size(); ++m) {
     std::visit([&](const auto& model) {
       using Model = std::decay_t<decltype(model)>;
-      if constexpr (!Model::supports_inversion) check_not_inverted(P, m, Model::name);
+      if constexpr (!Model::supports_inversion) check_not_inverted(P, F, m, Model::name);
       tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.size(), 4096), [&](const auto& r) {
         for (std::size_t p = r.begin(); p != r.end(); ++p)
           if (P.material[p] == m)
-            weighted_stress_[p] = P.volume0[p] * model.first_piola(P.F[p]) * P.F[p].transpose();
+            weighted_stress_[p] = P.volume0[p] * model.first_piola(F[p]) * F[p].transpose();
       });
     }, materials_[m].elastic);
   }
