@@ -12,6 +12,7 @@
 #include <coupling/stages/mixture_projection.h>
 #include <coupling/stages/volume_fraction_stage.h>
 #include <coupling/stages/on_phase.h>
+#include <fluid/stages/equation_of_state.h>
 #include <mpm/core/advance.h>
 #include <doctest/doctest.h>
 #include <mpm/core/stages/grid_velocity_update.h>
@@ -341,4 +342,72 @@ sediment: {solver: )" + solid + ", density: 2650" + material + "}\n");
     CAPTURE(solid);
     CHECK(difference < 1e-6);
   }
+}
+
+TEST_CASE("a clear-fluid coupled scene runs either fluid solver with the same bookkeeping; a sediment needs "
+          "an incompressible one") {
+  // A square blob of water squeezed towards its centre while it falls, far from every wall: the
+  // pressure forces are internal, so the mass holds exactly and the momentum grows by M g t.
+  for (const std::string solver : {"projection", "weakly_compressible"}) {
+    CAPTURE(solver);
+    const mpm::Config cfg = mpm::Config::parse(R"(
+dim: 2
+domain: {lo: [0, 0], hi: [1, 1]}
+grid: {dx: 0.03125}
+time: {end: 1, cfl: 0.4}
+gravity: [0, -9.81]
+fluid: {density: 1000, viscosity: 0, solver: )" + solver + "}\n");
+    const mpm::SceneSettings<2> settings = mpm::parse_scene_settings<2>(cfg);
+    CoupledScene<2> scene =
+        make_coupled_scene<2>(settings, {}, fluid::parse_fluid_material(cfg.child("fluid")),
+                              fluid::parse_pressure_settings(cfg), std::nullopt, std::nullopt,
+                              fluid::parse_fluid_solver(cfg.child("fluid")));
+    REQUIRE(scene.fluid_solver->name() == solver);
+    const Vec<2> centre(0.5, 0.6);
+    const double dx = settings.dx, Vp = mpm::geometry::particle_volume<2>(dx, 4);
+    for (const Vec<2>& x : mpm::geometry::seed_box<2>(Vec<2>(0.4, 0.5), Vec<2>(0.6, 0.7), dx, 4, 0.0, 1))
+      add_fluid_particles<2>(scene, {x}, Vp, 1.0, -0.5 * (x - centre), "blob");
+    auto pipeline = make_coupled_pipeline(scene);
+    CoupledState<2>& s = scene.state;
+    const mpm::Particles<2>& P = s.fluid.particles;
+    auto momentum = [&] {
+      Vec<2> sum = Vec<2>::Zero();
+      for (std::size_t p = 0; p < P.size(); ++p) sum += P.mass[p] * P.v[p];
+      return sum;
+    };
+    const double mass = P.total_mass();
+    const Vec<2> before = momentum();
+    mpm::advance(s, pipeline, 0.05);
+    double scale = 0.0;
+    for (std::size_t p = 0; p < P.size(); ++p) scale += P.mass[p] * P.v[p].norm();
+    CHECK(P.total_mass() == mass);
+    // The weakly compressible pressure is a particle stress, whose grid forces sum to zero: the
+    // momentum holds to round-off. The projection's impulse misses the surface nodes that hold
+    // mass but are no corner of a fluid cell (docs/coupling.md, spurious currents), so a blob
+    // that is not symmetric on the grid drifts: measured 0.3 % of sum m |v| here, bounded at 1 %.
+    const double drift = (momentum() - before - mass * 0.05 * settings.gravity).norm();
+    CHECK(drift <= (solver == "projection" ? 1e-2 : 1e-12) * scale);
+    // The pressure acted: the projection solved, or the squeezed liquid changed volume.
+    for (const mpm::Diagnostic& d : pipeline.diagnostics())
+      if (d.name == "pressure_iterations") CHECK(d.value > 0.0);
+    if (const auto* J = P.find_channel<double>(fluid::kVolumeRatio)) {
+      double change = 0.0;
+      for (const double j : *J) change = std::max(change, std::abs(j - 1.0));
+      CHECK(change > 1e-3);
+    }
+  }
+  const mpm::Config sandy = mpm::Config::parse(R"(
+dim: 2
+domain: {lo: [0, 0], hi: [1, 1]}
+grid: {dx: 0.0625}
+time: {end: 1}
+fluid: {density: 1000, viscosity: 1.0e-3, solver: weakly_compressible}
+sediment: {density: 2650}
+)");
+  CHECK_THROWS_WITH_AS(
+      make_coupled_scene<2>(mpm::parse_scene_settings<2>(sandy), {}, fluid::parse_fluid_material(sandy.child("fluid")),
+                            {}, parse_sediment_phase<2>(sandy.child("sediment")),
+                            drag::make_drag_law("stokes", {1e-4, 1e-3, 1000.0}),
+                            fluid::parse_fluid_solver(sandy.child("fluid"))),
+      doctest::Contains("not incompressible"), mpm::InputError);
 }

@@ -78,7 +78,7 @@ CoupledScene<dim> make_coupled_scene(mpm::SceneSettings<dim> settings,
                                      fluid::stages::PressureSettings pressure,
                                      std::optional<SedimentPhase<dim>> sediment,
                                      std::optional<drag::DragLaw> drag,
-                                     const std::string& fluid_solver = "projection");
+                                     const fluid::FluidSolverSettings& fluid_solver = {});
 
 //! Fluid particles of volume `volume` [m^dim] each, in a region of fluid fraction n_w (the
 //! particle mass is n_w rho_w V_p, Gao et al. 2018); InputError naming `where` when one lies

@@ -26,7 +26,7 @@ CoupledScene<dim> make_coupled_scene(mpm::SceneSettings<dim> settings,
                                      std::optional<fluid::FluidMaterial> fluid,
                                      fluid::stages::PressureSettings pressure,
                                      std::optional<SedimentPhase<dim>> sediment,
-                                     std::optional<drag::DragLaw> drag, const std::string& fluid_solver) {
+                                     std::optional<drag::DragLaw> drag, const fluid::FluidSolverSettings& fluid_solver) {
   mpm::verify<mpm::InputError>(fluid || sediment, "coupled scene: neither a fluid nor a sediment phase");
   mpm::verify<mpm::InputError>(!(fluid && sediment) || drag.has_value(),
                                "coupled scene: a fluid and a sediment phase need a drag law");
@@ -46,7 +46,7 @@ CoupledScene<dim> make_coupled_scene(mpm::SceneSettings<dim> settings,
     state.fluid = mpm::initial_state(settings);
     liquid = fluid::make_fluid_solver<dim>(fluid_solver, *fluid, pressure, colliders, settings);
     mpm::verify<mpm::InputError>(!sediment || liquid->incompressible(),
-                                 "coupled scene: fluid solver '" + fluid_solver +
+                                 "coupled scene: fluid solver '" + fluid_solver.name +
                                      "' is not incompressible; a sediment needs the mixture projection");
     liquid->add_channels(state.fluid.particles);
   }
@@ -157,7 +157,7 @@ mpm::Pipeline<CoupledState<dim>> make_coupled_pipeline(const CoupledScene<dim>& 
   template CoupledScene<dim> make_coupled_scene(                                                           \
       mpm::SceneSettings<dim>, mpm::geometry::ColliderSet<dim>, std::optional<fluid::FluidMaterial>,       \
       fluid::stages::PressureSettings, std::optional<SedimentPhase<dim>>, std::optional<drag::DragLaw>,    \
-      const std::string&);                                                                                \
+      const fluid::FluidSolverSettings&);                                                                 \
   template void add_fluid_particles(CoupledScene<dim>&, const std::vector<mpm::Vec<dim>>&, double, double, \
                                     const mpm::Vec<dim>&, const std::string&);                             \
   template void add_sediment_particles(CoupledScene<dim>&, const std::vector<mpm::Vec<dim>>&, double,      \

@@ -84,7 +84,7 @@ CoupledScene<dim> load_coupled_scene(const mpm::Config& scene) {
   mpm::geometry::add_flow_boundaries(flow, colliders);
   std::optional<fluid::FluidMaterial> water;
   fluid::stages::PressureSettings pressure;
-  std::string fluid_solver = "projection";
+  fluid::FluidSolverSettings fluid_solver;
   if (const std::optional<mpm::Config> f = scene.optional_child("fluid")) {
     water = fluid::parse_fluid_material(*f);
     fluid_solver = fluid::parse_fluid_solver(*f);

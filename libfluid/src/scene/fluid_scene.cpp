@@ -29,7 +29,15 @@ FluidMaterial parse_fluid_material(const Config& fluid) {
   return m;
 }
 
-std::string parse_fluid_solver(const Config& fluid) { return fluid.choice("solver", "projection", fluid_solver_names()); }
+FluidSolverSettings parse_fluid_solver(const Config& fluid) {
+  FluidSolverSettings s;
+  s.name = fluid.choice("solver", s.name, fluid_solver_names());
+  if (s.name == "weakly_compressible") {
+    s.speed_of_sound = fluid.number("speed_of_sound", s.speed_of_sound, Range::positive());
+    s.eos_exponent = fluid.number("eos_exponent", s.eos_exponent, Range::closed(1.0, 100.0));
+  }
+  return s;
+}
 
 stages::PressureSettings parse_pressure_settings(const Config& scene) {
   stages::PressureSettings s;
@@ -49,7 +57,7 @@ stages::PressureSettings parse_pressure_settings(const Config& scene) {
 template <int dim>
 FluidScene<dim> make_fluid_scene(mpm::SceneSettings<dim> settings, FluidMaterial fluid,
                                  stages::PressureSettings pressure, mpm::geometry::ColliderSet<dim> colliders,
-                                 const std::string& solver) {
+                                 const FluidSolverSettings& solver) {
   mpm::MpmState<dim> state = mpm::initial_state(settings);
   std::shared_ptr<const FluidSolver<dim>> s = make_fluid_solver<dim>(solver, fluid, pressure, colliders, settings);
   s->add_channels(state.particles);
@@ -116,7 +124,7 @@ mpm::Pipeline<mpm::MpmState<dim>> make_fluid_pipeline(const FluidScene<dim>& sce
 
 #define FLUID_SCENE(dim)                                                                                   \
   template FluidScene<dim> make_fluid_scene(mpm::SceneSettings<dim>, FluidMaterial, stages::PressureSettings, \
-                                            mpm::geometry::ColliderSet<dim>, const std::string&);          \
+                                            mpm::geometry::ColliderSet<dim>, const FluidSolverSettings&); \
   template void add_fluid_particles(FluidScene<dim>&, const std::vector<Vec<dim>>&, double, const Vec<dim>&, \
                                     const std::string&);                                                   \
   template void seed_fluid_bodies(FluidScene<dim>&, const Config&);                                        \

@@ -1,6 +1,5 @@
 #include <fluid/solver/projection_solver.h>
 
-#include <fluid/stages/implicit_viscosity.h>
 #include <fluid/stages/pressure_projection.h>
 
 #include <mpm/core/stages/grid_velocity_update.h>
@@ -11,9 +10,7 @@ template <int dim>
 typename ProjectionSolver<dim>::Stages ProjectionSolver<dim>::grid_update() const {
   Stages s;
   s.push_back(std::make_unique<mpm::stages::GridVelocityUpdate<dim>>(false));
-  if (fluid_.viscosity > 0.0)
-    s.push_back(std::make_unique<stages::ImplicitViscosity<dim>>(fluid_.viscosity / fluid_.density, colliders_,
-                                                                 mpm::solve::SolveControl{1e-10, 0.0, 1000}));
+  append_viscosity<dim>(s, fluid_, colliders_);
   return s;
 }
 

@@ -2,4 +2,5 @@ list(APPEND FLUID_SOURCES
   src/stages/prescribed_nodes.cpp
   src/stages/pressure_projection.cpp
   src/stages/implicit_viscosity.cpp
+  src/stages/equation_of_state.cpp
 )

@@ -102,6 +102,27 @@ void scalar_to_grid(const std::vector<double>& values, const Particles<dim>& P, 
   }, kernel);
 }
 
+template <int dim>
+void stress_to_grid_forces(const std::vector<Mat<dim>>& weighted_stress, const Particles<dim>& P,
+                           const ParticleBuckets<dim>& buckets, const Kernel& kernel, SparseGrid<dim>& g) {
+  g.force.assign(g.node_storage(), Vec<dim>::Zero());
+  std::array<ChannelView, dim> channels;
+  for (int a = 0; a < dim; ++a) channels[a] = component_view<dim>(g.force, a);
+  const double inv_dx = 1.0 / g.dx();
+  std::visit([&](const auto& k) {
+    using K = std::decay_t<decltype(k)>;
+    detail::scatter<dim, dim>(g, buckets, channels, [&](std::uint32_t p, const PatchFrame<dim>& f, double* patch) {
+      Stencil<dim, K::support> st;
+      st.compute(k, f.cells(P.x[p]), f.origin);
+      const Mat<dim> A = -inv_dx * weighted_stress[p];
+      st.for_each_node([&](int node, double, const Vec<dim>& grad, const Vec<dim>&) {
+        const Vec<dim> fi = A * grad;
+        for (int a = 0; a < dim; ++a) patch[node * dim + a] += fi[a];
+      });
+    });
+  }, kernel);
+}
+
 #define MPM_INSTANTIATE(dim)                                                                      \
   template void particles_to_grid(const Particles<dim>&, const ParticleBuckets<dim>&,            \
                                   const Kernel&, const TransferScheme&, SparseGrid<dim>&);         \
@@ -111,6 +132,8 @@ void scalar_to_grid(const std::vector<double>& values, const Particles<dim>& P, 
   template void scalar_to_grid(const std::vector<double>&, const Particles<dim>&,                 \
                                const ParticleBuckets<dim>&, const Kernel&, const SparseGrid<dim>&,  \
                                std::vector<double>&);                                               \
+  template void stress_to_grid_forces(const std::vector<Mat<dim>>&, const Particles<dim>&,        \
+                                      const ParticleBuckets<dim>&, const Kernel&, SparseGrid<dim>&);   \
   template void velocity_gradient(const Particles<dim>&, const ParticleBuckets<dim>&,             \
                                   const Kernel&, const SparseGrid<dim>&, std::vector<Mat<dim>>&);
 MPM_INSTANTIATE(2)

@@ -56,8 +56,10 @@ struct FluidScene {
 
 //! The `fluid` map: density > 0, viscosity >= 0.
 FluidMaterial parse_fluid_material(const mpm::Config& fluid);
-//! `solver` of the `fluid` map: one of fluid_solver_names(), default "projection".
-std::string parse_fluid_solver(const mpm::Config& fluid);
+//! `solver` of the `fluid` map (one of fluid_solver_names(), default "projection") and the keys
+//! of that solver: weakly_compressible reads speed_of_sound (c [m/s] > 0, default 20) and
+//! eos_exponent (gamma >= 1, default 7).
+FluidSolverSettings parse_fluid_solver(const mpm::Config& fluid);
 //! The optional `pressure` map of `scene` (defaults: mgpcg, 1e-8, 1000 iterations, stop).
 stages::PressureSettings parse_pressure_settings(const mpm::Config& scene);
 
@@ -66,7 +68,7 @@ stages::PressureSettings parse_pressure_settings(const mpm::Config& scene);
 template <int dim>
 FluidScene<dim> make_fluid_scene(mpm::SceneSettings<dim> settings, FluidMaterial fluid,
                                  stages::PressureSettings pressure, mpm::geometry::ColliderSet<dim> colliders,
-                                 const std::string& solver = "projection");
+                                 const FluidSolverSettings& solver = {});
 
 //! Appends fluid particles of volume `volume` [m^dim] each at `positions`, moving with
 //! `velocity`; InputError naming `where` when one lies outside the domain.

@@ -26,6 +26,13 @@ struct FluidMaterial {
   double viscosity = 0.0;   //!< dynamic viscosity mu [Pa s]
 };
 
+//! The `solver` of a `fluid` map and the keys only that solver reads.
+struct FluidSolverSettings {
+  std::string name = "projection";  //!< one of fluid_solver_names()
+  double speed_of_sound = 20.0;     //!< weakly_compressible: c [m/s] (equation_of_state.h)
+  double eos_exponent = 7.0;        //!< weakly_compressible: gamma of the Tait equation
+};
+
 template <int dim>
 class FluidSolver {
 public:
@@ -47,16 +54,23 @@ public:
   virtual Stages particle_update() const = 0;
 };
 
-//! "projection": the incompressible LANS step (projection_solver.h).
+//! "projection": the incompressible LANS step (projection_solver.h); "weakly_compressible": the
+//! pressure from each particle's volume by an equation of state (weakly_compressible_solver.h).
 std::vector<std::string> fluid_solver_names();
 
-//! The solver called `name` (one of fluid_solver_names()); `colliders` are the obstacles the
+//! The solver `solver.name` (one of fluid_solver_names()); `colliders` are the obstacles the
 //! boundary stage applies, `settings` the scene's (dx, gravity). InputError for another name.
 template <int dim>
-std::shared_ptr<const FluidSolver<dim>> make_fluid_solver(const std::string& name, const FluidMaterial& fluid,
+std::shared_ptr<const FluidSolver<dim>> make_fluid_solver(const FluidSolverSettings& solver, const FluidMaterial& fluid,
                                                           const stages::PressureSettings& pressure,
                                                           const mpm::geometry::ColliderSet<dim>& colliders,
                                                           const mpm::SceneSettings<dim>& settings);
+
+//! Appends the implicit viscosity stage to `stages` when the fluid is viscous (mu > 0), with the
+//! Dirichlet velocities of `colliders`: every solver's grid update ends with it.
+template <int dim>
+void append_viscosity(typename FluidSolver<dim>::Stages& stages, const FluidMaterial& fluid,
+                      const mpm::geometry::ColliderSet<dim>& colliders);
 
 //! The speed that limits the time step of a free surface: sqrt(|g| dx), so that dt <= wave_cfl
 //! sqrt(dx / |g|) (a particle starting from rest falls less than wave_cfl^2 dx / 2 in one step),

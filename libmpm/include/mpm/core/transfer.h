@@ -45,6 +45,13 @@ void scalar_to_grid(const std::vector<double>& values, const Particles<dim>& par
                     const ParticleBuckets<dim>& buckets, const Kernel& kernel, const SparseGrid<dim>& grid,
                     std::vector<double>& out);
 
+//! grid.force_i = - sum_p S_p grad w_ip on every node (zeroed first), S_p = V_p^0 tau_p the
+//! particle's volume-weighted Kirchhoff stress [N m]: the internal forces of an elastic solid, of
+//! a weakly compressible fluid, of any stress carried by particles (Gao et al. 2017, eq. 1-2).
+template <int dim>
+void stress_to_grid_forces(const std::vector<Mat<dim>>& weighted_stress, const Particles<dim>& particles,
+                           const ParticleBuckets<dim>& buckets, const Kernel& kernel, SparseGrid<dim>& grid);
+
 //! Velocity gradient grad v_p = sum_i v_i (grad w_ip)^T [1/s] for every particle.
 template <int dim>
 void velocity_gradient(const Particles<dim>& particles, const ParticleBuckets<dim>& buckets,

@@ -3,8 +3,8 @@
 // with tau = P F^T the Kirchhoff stress of the elastic part (multiplicative plasticity keeps
 // all stress in F^E). The constitutive model is chosen per material by std::visit outside
 // the particle loop. Precondition: particles sorted into buckets (stage 'sort').
-#include <mpm/core/detail/bucket_loops.h>
 #include <mpm/core/finite_guard.h>
+#include <mpm/core/transfer.h>
 #include <mpm/solid/solid_channels.h>
 #include <mpm/solid/stages/stress_forces.h>
 
@@ -46,23 +46,7 @@ void StressForces<dim>::run(MpmState<dim>& s) {
   }
   check_finite(weighted_stress_, name(), "particle", "Kirchhoff stress");
 
-  SparseGrid<dim>& g = s.grid;
-  g.force.assign(g.node_storage(), Vec<dim>::Zero());
-  std::array<detail::ChannelView, dim> channels;
-  for (int a = 0; a < dim; ++a) channels[a] = detail::component_view<dim>(g.force, a);
-  const double inv_dx = 1.0 / g.dx();
-  std::visit([&](const auto& kernel) {
-    using K = std::decay_t<decltype(kernel)>;
-    detail::scatter<dim, dim>(g, s.buckets, channels, [&](std::uint32_t p, const detail::PatchFrame<dim>& f, double* patch) {
-      detail::Stencil<dim, K::support> st;
-      st.compute(kernel, f.cells(P.x[p]), f.origin);
-      const Mat<dim> A = -inv_dx * weighted_stress_[p];
-      st.for_each_node([&](int node, double, const Vec<dim>& grad, const Vec<dim>&) {
-        const Vec<dim> fi = A * grad;
-        for (int a = 0; a < dim; ++a) patch[node * dim + a] += fi[a];
-      });
-    });
-  }, s.kernel);
+  stress_to_grid_forces(weighted_stress_, P, s.buckets, s.kernel, s.grid);
 }
 
 template class StressForces<2>;

@@ -1,0 +1,67 @@
+#pragma once
+//! The stages of a weakly compressible fluid (solver/weakly_compressible_solver.h): the liquid
+//! carries its volume ratio J = V / V^0 per particle, its pressure follows from J by the Tait
+//! equation of state (Monaghan 1994; Becker & Teschner 2007, eq. 7), and the pressure acts as a
+//! particle stress, so no linear system is solved: the time step resolves the speed of sound.
+#include <mpm/core/stage.h>
+#include <mpm/core/state.h>
+
+#include <string>
+#include <vector>
+
+namespace fluid {
+
+//! p(J) = B ((rho / rho_0)^gamma - 1) with rho / rho_0 = 1 / J and B = rho_0 c^2 / gamma, so that
+//! c is the speed of sound at rest. A stretched liquid (J > 1) holds no tension: p = 0 there, so
+//! a free surface and spray are stress-free.
+struct TaitEquationOfState {
+  double density = 1000.0;       //!< rho_0 [kg/m^3]
+  double speed_of_sound = 20.0;  //!< c [m/s]; about 10x the fastest flow keeps |rho / rho_0 - 1| near 1 %
+  double exponent = 7.0;         //!< gamma [-]
+  double pressure(double J) const;
+};
+
+//! The name of the volume ratio channel (double, 1 at rest; written to frames, checkpointed).
+inline constexpr const char* kVolumeRatio = "volume_ratio";
+
+namespace stages {
+
+//! Grid forces of the pressure: f_i = - sum_p V_p^0 tau_p grad w_ip with the Kirchhoff stress
+//! tau_p = -p(J_p) J_p I (mpm::stress_to_grid_forces). Precondition: particles sorted.
+template <int dim>
+class EquationOfStateForces final : public mpm::Stage<mpm::MpmState<dim>> {
+public:
+  explicit EquationOfStateForces(TaitEquationOfState eos) : eos_(eos) {}
+  std::string name() const override { return "pressure_forces"; }
+  std::vector<std::string> reads() const override {
+    return {"particle.order", "grid.blocks", "particle.x", "particle.volume0", "particle.volume_ratio"};
+  }
+  std::vector<std::string> writes() const override { return {"grid.force"}; }
+  void run(mpm::MpmState<dim>& s) override;
+
+private:
+  TaitEquationOfState eos_;
+  std::vector<mpm::Mat<dim>> weighted_stress_;
+};
+
+//! J_p <- det(I + dt grad v_p) J_p with grad v_p = sum_i v_i (grad w_ip)^T from the final grid
+//! velocities (the determinant of the deformation update of a solid). NumericalError when a
+//! particle is compressed through zero volume (a step far above the acoustic limit).
+template <int dim>
+class VolumeRatioUpdate final : public mpm::Stage<mpm::MpmState<dim>> {
+public:
+  std::string name() const override { return "volume_ratio"; }
+  std::vector<std::string> reads() const override { return {"grid.velocity", "particle.order", "particle.volume_ratio"}; }
+  std::vector<std::string> writes() const override { return {"particle.volume_ratio"}; }
+  void run(mpm::MpmState<dim>& s) override;
+  //! density_deviation: max_p |1 / J_p - 1| over the compressed particles, the error of the
+  //! weakly compressible model against an incompressible liquid.
+  std::vector<mpm::Diagnostic> diagnostics() const override { return {{"density_deviation", deviation_}}; }
+
+private:
+  std::vector<mpm::Mat<dim>> grad_v_;
+  double deviation_ = 0.0;
+};
+
+}  // namespace stages
+}  // namespace fluid
