@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <variant>
 
@@ -52,9 +53,12 @@ Material<dim> parse_material(const Config& cfg) {
         plastic->number("friction_angle", 30.0, Range::half_open(0.0, 90.0));
     const double cohesion = plastic->number("cohesion", 0.0, Range::non_negative());
     material.plasticity = plasticity::DruckerPrager<dim>(friction_angle, cohesion, material.lame);
-  } else {
+  } else if (model == plasticity::VonMises<dim>::name) {
     const double yield_stress = plastic->number("yield_stress", Range::positive());
     material.plasticity = plasticity::VonMises<dim>(yield_stress, material.lame);
+  } else {
+    // A model added to plasticity_model_names() must be given its keys here, not read as another.
+    throw std::logic_error("parse_material: plasticity model '" + model + "' is accepted but has no parser");
   }
   return material;
 }

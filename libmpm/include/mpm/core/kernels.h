@@ -3,7 +3,7 @@
 //! kernels). Each kernel maps a particle coordinate in cell units, xi = (x_p - origin)/dx, to
 //! the first stencil node `base` and the 1D weights and derivatives dN/dr of its `support`
 //! nodes base, base+1, ... All satisfy partition of unity, non-negativity, linear
-//! reproduction sum_i N_i (i - xi) = 0, and C1 continuity (tests/unit/test_kernels.cpp).
+//! reproduction sum_i N_i (i - xi) = 0, and C1 continuity (tests/unit/mpm/core/test_kernels.cpp).
 #include <cmath>
 #include <string>
 #include <variant>
