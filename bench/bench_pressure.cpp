@@ -13,8 +13,8 @@
 #include <fluid/pressure/model_problems.h>
 #include <fluid/pressure/pressure_solver.h>
 
-#include <CLI/CLI.hpp>
 #include <tbb/global_control.h>
+#include <CLI/CLI.hpp>
 
 #include <algorithm>
 #include <cstdio>
@@ -29,8 +29,8 @@ struct Options {
   std::vector<int> poisson_3d{64, 128}, poisson_2d{256, 1024};
   std::vector<int> dam_break_3d{32, 64}, dam_break_2d{256, 1024};
   std::vector<std::string> solvers = pressure_solver_names();
-  int max_cholmod_cells = 70000;   //!< skip the direct solver above this many fluid cells (3D fill-in)
-  int max_cg_cells = 300000;       //!< skip unpreconditioned CG above this many fluid cells (time)
+  int max_cholmod_cells = 70000;  //!< skip the direct solver above this many fluid cells (3D fill-in)
+  int max_cg_cells = 300000;      //!< skip unpreconditioned CG above this many fluid cells (time)
   double rtol = 1e-8;
   int threads = 1;
 };

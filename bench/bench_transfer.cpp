@@ -26,8 +26,8 @@
 #include <mpm/core/detail/transfer_loops.h>
 #include <mpm/core/transfer.h>
 
-#include <CLI/CLI.hpp>
 #include <tbb/global_control.h>
+#include <CLI/CLI.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -40,8 +40,10 @@ using namespace mpm;
 
 namespace {
 
-template <class T> using V3 = Eigen::Matrix<T, 3, 1>;
-template <class T> using M3 = Eigen::Matrix<T, 3, 3>;
+template <class T>
+using V3 = Eigen::Matrix<T, 3, 1>;
+template <class T>
+using M3 = Eigen::Matrix<T, 3, 3>;
 
 struct Options {
   double spacing = 1.0 / 256;  //!< particle lattice spacing [m]
@@ -129,7 +131,8 @@ template <class T>
 class Reference {
 public:
   explicit Reference(const Options& o)
-      : n_(static_cast<int>(std::lround(1.0 / o.dx)) + 1), dx_(static_cast<T>(o.dx)),
+      : n_(static_cast<int>(std::lround(1.0 / o.dx)) + 1),
+        dx_(static_cast<T>(o.dx)),
         nodes_(static_cast<std::size_t>(n_) * n_ * n_) {}
 
   void load(const Particles<3>& input) { P_.assign(input); }
@@ -214,9 +217,7 @@ private:
 
 // 3. The solver: sort_into_buckets, then the bucketed transfers on the sparse grid.
 using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 template <class Fn>
 double timed(Fn&& fn) {
   const auto t0 = Clock::now();
@@ -271,8 +272,7 @@ public:
   void g2p() {
     std::array<detail::BasicChannelView<float>, 3> velocity;
     for (int a = 0; a < 3; ++a) velocity[a] = detail::component_view<3>(momentum_, a);
-    detail::g2p<3, QuadraticBSpline, false>(P_, buckets_, kernel_, grid_, velocity, 0.0f,
-                                            static_cast<float>(dt));
+    detail::g2p<3, QuadraticBSpline, false>(P_, buckets_, kernel_, grid_, velocity, 0.0f, static_cast<float>(dt));
   }
 
   const SparseGrid<3>& grid() const { return grid_; }
@@ -424,36 +424,40 @@ struct Row {
 const char* verdict(bool met) { return met ? "met" : "MISSED"; }
 
 void report(const char* name, std::size_t n, const Options& o, const std::vector<Row>& rows) {
-  std::printf("\n%s precision, %zu particles, dx = %g, median of %d runs [s]; the reference is "
-              "single-threaded, x = reference / solver\n", name, n, o.dx, o.repeat);
-  std::printf("%-8s %3s | %6s %6s %6s %8s %6s | %7s %7s | %5s %5s\n", "order", "thr", "sort", "P2G",
-              "G2P", "sort+P2G", "step", "ref P2G", "ref G2P", "P2G x", "G2P x");
+  std::printf(
+      "\n%s precision, %zu particles, dx = %g, median of %d runs [s]; the reference is "
+      "single-threaded, x = reference / solver\n",
+      name, n, o.dx, o.repeat);
+  std::printf("%-8s %3s | %6s %6s %6s %8s %6s | %7s %7s | %5s %5s\n", "order", "thr", "sort", "P2G", "G2P", "sort+P2G",
+              "step", "ref P2G", "ref G2P", "P2G x", "G2P x");
   for (const Row& r : rows) {
     const Timings& t = r.solver;
-    std::printf("%-8s %3d | %6.3f %6.3f %6.3f %8.3f %6.3f | %7.3f %7.3f | %5.2f %5.2f\n",
-                r.order.c_str(), r.threads, t.sort, t.p2g, t.g2p, t.sort + t.p2g, t.step(),
-                r.reference.p2g, r.reference.g2p, r.reference.p2g / t.p2g, r.reference.g2p / t.g2p);
+    std::printf("%-8s %3d | %6.3f %6.3f %6.3f %8.3f %6.3f | %7.3f %7.3f | %5.2f %5.2f\n", r.order.c_str(), r.threads,
+                t.sort, t.p2g, t.g2p, t.sort + t.p2g, t.step(), r.reference.p2g, r.reference.g2p,
+                r.reference.p2g / t.p2g, r.reference.g2p / t.g2p);
   }
   // rows: sorted 1, sorted 2, shuffled 1, shuffled 2
   const Timings &s1 = rows[0].solver, &s2 = rows[1].solver, &h1 = rows[2].solver, &h2 = rows[3].solver;
   const double p2g_x = rows[0].reference.p2g / s1.p2g, g2p_x = rows[0].reference.g2p / s1.g2p;
   std::printf("targets (%s):\n", name);
-  std::printf("  1 thread, sorted: P2G %.2fx, G2P %.2fx faster than the reference (>= 2): %s\n",
-              p2g_x, g2p_x, verdict(p2g_x >= 2 && g2p_x >= 2));
+  std::printf("  1 thread, sorted: P2G %.2fx, G2P %.2fx faster than the reference (>= 2): %s\n", p2g_x, g2p_x,
+              verdict(p2g_x >= 2 && g2p_x >= 2));
   for (int i = 0; i < 2; ++i) {
     const Timings &s = i ? s2 : s1, &h = i ? h2 : h1;
     const double step = h.step() / s.step(), p2g = (h.sort + h.p2g) / (s.sort + s.p2g);
-    std::printf("  %d thread%s, shuffled / sorted: step %.2f, sort+P2G %.2f, sort+P2G / P2G %.2f "
-                "(<= 1.3): %s\n", i + 1, i ? "s" : "", step, p2g, (h.sort + h.p2g) / s.p2g,
-                verdict(step <= 1.3 && p2g <= 1.3));
+    std::printf(
+        "  %d thread%s, shuffled / sorted: step %.2f, sort+P2G %.2f, sort+P2G / P2G %.2f "
+        "(<= 1.3): %s\n",
+        i + 1, i ? "s" : "", step, p2g, (h.sort + h.p2g) / s.p2g, verdict(step <= 1.3 && p2g <= 1.3));
   }
   const double sp = s1.p2g / s2.p2g, sg = s1.g2p / s2.g2p, ss = s1.step() / s2.step();
   std::printf("  2 threads vs 1, sorted: P2G %.2fx, G2P %.2fx, step %.2fx (>= 1.7): %s\n", sp, sg, ss,
               verdict(sp >= 1.7 && sg >= 1.7));
   const Timings &f1 = rows[0].solver_fastest, &f2 = rows[1].solver_fastest;
-  std::printf("  the same from the fastest of the %d runs: P2G %.2fx, G2P %.2fx, step %.2fx "
-              "(1 thread P2G %.3f s, G2P %.3f s; 2 threads %.3f s, %.3f s)\n", o.repeat,
-              f1.p2g / f2.p2g, f1.g2p / f2.g2p, f1.step() / f2.step(), f1.p2g, f1.g2p, f2.p2g, f2.g2p);
+  std::printf(
+      "  the same from the fastest of the %d runs: P2G %.2fx, G2P %.2fx, step %.2fx "
+      "(1 thread P2G %.3f s, G2P %.3f s; 2 threads %.3f s, %.3f s)\n",
+      o.repeat, f1.p2g / f2.p2g, f1.g2p / f2.g2p, f1.step() / f2.step(), f1.p2g, f1.g2p, f2.p2g, f2.g2p);
 }
 
 // The target's case, shuffled input with the solver's ordering included, over a simulation:
@@ -471,9 +475,11 @@ void report_steps(const Options& o, const char* name, const Particles<3>& sorted
       ratio.push_back(shuffled.back() / sorted.back());
     }
     const auto [lo, hi] = std::minmax_element(ratio.begin(), ratio.end());
-    std::printf("  %d steps (%s), %d thread%s: sorted %.3f s, shuffled %.3f s, shuffled / sorted "
-                "%.2f (runs %.2f to %.2f) (<= 1.3): %s\n", o.steps, name, threads, threads > 1 ? "s" : "",
-                median(sorted), median(shuffled), median(ratio), *lo, *hi, verdict(median(ratio) <= 1.3));
+    std::printf(
+        "  %d steps (%s), %d thread%s: sorted %.3f s, shuffled %.3f s, shuffled / sorted "
+        "%.2f (runs %.2f to %.2f) (<= 1.3): %s\n",
+        o.steps, name, threads, threads > 1 ? "s" : "", median(sorted), median(shuffled), median(ratio), *lo, *hi,
+        verdict(median(ratio) <= 1.3));
   }
 }
 
@@ -486,10 +492,11 @@ bool run_precision(const Options& o, const char* name, const Particles<3>& sorte
   bool ok = true;
   for (const auto* input : {&sorted_input, &shuffled_input}) {
     const Deviation d = compare(*input, solver, ref);
-    std::printf("%s, %s input: max relative difference solver vs reference: node mass %.1e, "
-                "momentum %.1e, particle v %.1e, C %.1e (tolerance %.0e) %s\n", name,
-                input == &sorted_input ? "sorted" : "shuffled", d.mass, d.momentum, d.v, d.C,
-                tolerance, d.max() < tolerance ? "ok" : "FAILED");
+    std::printf(
+        "%s, %s input: max relative difference solver vs reference: node mass %.1e, "
+        "momentum %.1e, particle v %.1e, C %.1e (tolerance %.0e) %s\n",
+        name, input == &sorted_input ? "sorted" : "shuffled", d.mass, d.momentum, d.v, d.C, tolerance,
+        d.max() < tolerance ? "ok" : "FAILED");
     ok = ok && d.max() < tolerance;
   }
   if (!ok) return false;

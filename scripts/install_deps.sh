@@ -6,6 +6,7 @@ set -euo pipefail
 packages=(
   build-essential cmake ninja-build pkg-config
   python3              # regression test drivers
+  clang-format         # the layout check of CI (.clang-format)
   gnuplot-nox          # error-vs-run-time plots of the study program
   libeigen3-dev        # small fixed-size linear algebra
   libyaml-cpp-dev      # scene files

@@ -57,7 +57,9 @@ int run(const CommandLine& cl, const Config& scene) {
   for (std::size_t k = 0; k <= last; ++k)
     balance = std::max(balance, std::abs(stored[0] + emitted[k] - out[k] - stored[k]) / (stored[0] + emitted[k]));
   const double ratio = q_out / q_in;
-  runner.write_summary({{"inflow_discharge", q_in}, {"outflow_discharge", q_out}, {"discharge_ratio", ratio},
+  runner.write_summary({{"inflow_discharge", q_in},
+                        {"outflow_discharge", q_out},
+                        {"discharge_ratio", ratio},
                         {"mass_balance_error", balance}});
   if (cl.check) {
     const bool steady = check_value("discharge_ratio", ratio, 1.0, tolerance);
@@ -70,6 +72,6 @@ int run(const CommandLine& cl, const Config& scene) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  return run_scene_app(argc, argv, "channel", "An open channel with inflow and a free overfall (LANS fluid)",
-                       run<2>, run<3>);
+  return run_scene_app(argc, argv, "channel", "An open channel with inflow and a free overfall (LANS fluid)", run<2>,
+                       run<3>);
 }

@@ -52,8 +52,8 @@ int run(const CommandLine& cl, const Config& scene) {
   const double a = column.number("aspect_ratio", Range{0.0, 100.0, true, false});
   const double H0 = a * L0;
   const double dx = L0 / column.integer("cells_per_width", 20, 2, 4096);
-  const double length = column.number("domain_length", L0 * (1.0 + 1.5 * lube_runout_law(a)) + 4 * dx,
-                                      Range{L0, 1e308, true, false});
+  const double length =
+      column.number("domain_length", L0 * (1.0 + 1.5 * lube_runout_law(a)) + 4 * dx, Range{L0, 1e308, true, false});
   const double depth = dim == 3 ? column.number("depth", L0, Range::positive()) : 0.0;
   const double layer = wall_layer(parse_kernel(scene), dx);  // walls at x = 0, y = 0, z = 0
   DerivedDomain<dim> domain{Vec<dim>::Constant(-layer), Vec<dim>::Zero(), dx};
@@ -72,7 +72,7 @@ int run(const CommandLine& cl, const Config& scene) {
   hi[1] = H0;
   if constexpr (dim == 3) hi[2] = depth;
   solid::add_particles<dim>(solid, geometry::seed_box<dim>(Vec<dim>::Zero(), hi, dx, ppc, 0.0, 1),
-                       geometry::particle_volume<dim>(dx, ppc), std::uint16_t{0}, Vec<dim>::Zero(), "column");
+                            geometry::particle_volume<dim>(dx, ppc), std::uint16_t{0}, Vec<dim>::Zero(), "column");
   scene.reject_unknown_keys();
 
   // 3. Run.
@@ -96,8 +96,11 @@ int run(const CommandLine& cl, const Config& scene) {
   double height = 0.0;
   for (const Vec<dim>& x : solid.state.particles.x) height = std::max(height, x[1]);
   const double normalized = (runout - L0) / L0;
-  runner.write_summary({{"runout", runout}, {"final_height", height}, {"normalized_runout", normalized},
-                        {"duration", duration}, {"at_rest", at_rest ? 1.0 : 0.0},
+  runner.write_summary({{"runout", runout},
+                        {"final_height", height},
+                        {"normalized_runout", normalized},
+                        {"duration", duration},
+                        {"at_rest", at_rest ? 1.0 : 0.0},
                         {"runout_law_lube2005", lube_runout_law(a)},
                         {"runout_law_error", std::fabs(normalized - lube_runout_law(a)) / lube_runout_law(a)}});
   if (cl.check) {

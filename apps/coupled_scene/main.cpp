@@ -23,7 +23,7 @@ int run(const CommandLine& cl, const Config& scene) {
   coupling::CoupledRunner<dim> runner("coupled_scene", cl, scene, cs.settings);
   runner.run(cs.state, pipeline);
   runner.write_summary({{"mass_fluid", cs.state.fluid.particles.total_mass()},
-                         {"mass_sediment", cs.state.sediment.particles.total_mass()}});
+                        {"mass_sediment", cs.state.sediment.particles.total_mass()}});
   return 0;
 }
 

@@ -21,8 +21,8 @@
 
 #include <algorithm>
 #include <array>
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
 #include <utility>
 
 using namespace mpm;
@@ -89,9 +89,9 @@ int run(const CommandLine& cl, const Config& scene) {
   SceneSettings<dim> settings = parse_scene_settings<dim>(scene, domain);
   auto colliders = geometry::parse_colliders<dim>(scene, domain.lo, domain.hi, layer);
   const Config liquid = scene.child("fluid");
-  fluid::FluidScene<dim> water = fluid::make_fluid_scene(settings, fluid::parse_fluid_material(liquid),
-                                                         fluid::parse_pressure_settings(scene), colliders,
-                                                         fluid::parse_fluid_solver(liquid));
+  fluid::FluidScene<dim> water =
+      fluid::make_fluid_scene(settings, fluid::parse_fluid_material(liquid), fluid::parse_pressure_settings(scene),
+                              colliders, fluid::parse_fluid_solver(liquid));
   Vec<dim> hi = Vec<dim>::Zero();
   hi[0] = a;
   hi[1] = H;

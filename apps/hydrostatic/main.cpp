@@ -43,9 +43,9 @@ int run(const CommandLine& cl, const Config& scene) {
   SceneSettings<dim> settings = parse_scene_settings<dim>(scene, domain);
   auto colliders = geometry::parse_colliders<dim>(scene, domain.lo, domain.hi, layer);
   const Config water = scene.child("fluid");
-  fluid::FluidScene<dim> liquid = fluid::make_fluid_scene(settings, fluid::parse_fluid_material(water),
-                                                          fluid::parse_pressure_settings(scene), colliders,
-                                                          fluid::parse_fluid_solver(water));
+  fluid::FluidScene<dim> liquid =
+      fluid::make_fluid_scene(settings, fluid::parse_fluid_material(water), fluid::parse_pressure_settings(scene),
+                              colliders, fluid::parse_fluid_solver(water));
   Vec<dim> hi = Vec<dim>::Constant(W);
   hi[1] = h;
   fluid::add_fluid_particles<dim>(liquid, geometry::seed_box<dim>(Vec<dim>::Zero(), hi, dx, ppc, 0.0, 1),
@@ -77,8 +77,8 @@ int run(const CommandLine& cl, const Config& scene) {
   }
   const double relative_error = error / (rho * g * h);
   const double speed_ratio = speed / std::sqrt(g * h);
-  runner.write_summary({{"max_spurious_speed", speed}, {"spurious_speed_ratio", speed_ratio},
-                        {"pressure_error", relative_error}});
+  runner.write_summary(
+      {{"max_spurious_speed", speed}, {"spurious_speed_ratio", speed_ratio}, {"pressure_error", relative_error}});
   if (cl.check) {
     const bool ok_speed = check_value("spurious_speed_ratio", speed_ratio, 0.0, 0.016 / cells);
     const bool ok_pressure = check_value("pressure_error", relative_error, 0.0, 1.0 / cells);

@@ -125,16 +125,18 @@ int run2(const CommandLine& cl, const Config& scene) {
   runner.run(fluid.state, pipeline);
 
   // 3. Centre lines, extremes, steadiness, Ghia et al.
-  const std::vector<double> u = write_centerline(runner.out_dir() / "centerline_u.csv", fluid.state.grid, 1, 0, L, U, "y,u");
-  const std::vector<double> v = write_centerline(runner.out_dir() / "centerline_v.csv", fluid.state.grid, 0, 1, L, U, "x,v");
+  const std::vector<double> u =
+      write_centerline(runner.out_dir() / "centerline_u.csv", fluid.state.grid, 1, 0, L, U, "y,u");
+  const std::vector<double> v =
+      write_centerline(runner.out_dir() / "centerline_v.csv", fluid.state.grid, 0, 1, L, U, "x,v");
   const auto [u_min, u_max] = std::minmax_element(u.begin(), u.end());
   const auto [v_min, v_max] = std::minmax_element(v.begin(), v.end());
   const std::vector<double> kinetic = runner.history("kinetic_energy");
   const std::size_t last = kinetic.size() - 1, before = last - std::max<std::size_t>(1, last / 10);
   const double steadiness = kinetic[last] > 0.0 ? std::abs(kinetic[last] - kinetic[before]) / kinetic[last] : 0.0;
   std::vector<std::pair<std::string, double>> results = {
-      {"reynolds", Re}, {"u_min", *u_min}, {"u_max", *u_max}, {"v_min", *v_min}, {"v_max", *v_max},
-      {"kinetic_energy_change_last_10_percent", steadiness}};
+      {"reynolds", Re},  {"u_min", *u_min}, {"u_max", *u_max},
+      {"v_min", *v_min}, {"v_max", *v_max}, {"kinetic_energy_change_last_10_percent", steadiness}};
   const auto table = std::find_if(ghia.begin(), ghia.end(), [&](const GhiaColumns& t) { return t.reynolds == Re; });
   if (table == ghia.end()) {
     runner.write_summary(results);
@@ -160,9 +162,7 @@ int run2(const CommandLine& cl, const Config& scene) {
   return a && b && c ? 0 : 1;
 }
 
-int run3(const CommandLine&, const Config& scene) {
-  scene.fail("dim", "lid_driven_cavity is a 2D scene (dim: 2)");
-}
+int run3(const CommandLine&, const Config& scene) { scene.fail("dim", "lid_driven_cavity is a 2D scene (dim: 2)"); }
 
 }  // namespace
 

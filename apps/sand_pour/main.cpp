@@ -54,8 +54,8 @@ int run(const CommandLine& cl, const Config& scene) {
   coupling::CoupledScene<dim> tank = coupling::load_coupled_scene<dim>(scene);
   verify<InputError>(tank.fluid && tank.sediment && !tank.sediment_sources.empty(),
                      scene.file() + ": sand_pour needs a `fluid`, a `sediment` and an emitter of sediment");
-  const coupling::BedProfile<dim> bed(
-      tank.settings, scene.child("pile").number("packing_fraction", Range::open(0.0, 1.0)));
+  const coupling::BedProfile<dim> bed(tank.settings,
+                                      scene.child("pile").number("packing_fraction", Range::open(0.0, 1.0)));
   scene.reject_unknown_keys();
 
   auto pipeline = coupling::make_coupled_pipeline(tank);
@@ -94,6 +94,6 @@ int run(const CommandLine& cl, const Config& scene) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  return run_scene_app(argc, argv, "sand_pour", "Sand poured into a tank of water (coupled step, emitter)",
-                       run<2>, run<3>);
+  return run_scene_app(argc, argv, "sand_pour", "Sand poured into a tank of water (coupled step, emitter)", run<2>,
+                       run<3>);
 }

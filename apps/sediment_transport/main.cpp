@@ -52,7 +52,7 @@ int run(const CommandLine& cl, const Config& scene) {
 
   coupling::CoupledState<dim>& s = flume.state;
   const coupling::BedProfile<dim> bed(flume.settings,
-                            scene.child("sediment").number("packing_fraction", Range::open(0.0, 1.0)));
+                                      scene.child("sediment").number("packing_fraction", Range::open(0.0, 1.0)));
   const std::vector<double> h0 = bed.heights(s.sediment.particles);
   const double fluid0 = s.fluid.particles.total_mass(), grains0 = s.sediment.particles.total_mass();
 
@@ -66,9 +66,8 @@ int run(const CommandLine& cl, const Config& scene) {
   runner.add_column("continuum", [](const coupling::CoupledState<dim>& st) {
     return double(coupling::count_sediment(st).continuum);
   });
-  runner.add_column("discrete", [](const coupling::CoupledState<dim>& st) {
-    return double(coupling::count_sediment(st).discrete);
-  });
+  runner.add_column(
+      "discrete", [](const coupling::CoupledState<dim>& st) { return double(coupling::count_sediment(st).discrete); });
   runner.run(s, pipeline);
 
   // The bed profile at the end, and the balances from the diagnostics.

@@ -36,8 +36,8 @@ int run(const CommandLine& cl, const Config& scene) {
   coupling::SettlingScene<dim> col = coupling::load_settling_column<dim>(scene);
   const std::optional<Config> measure = scene.optional_child("measure");
   const SceneSettings<dim>& settings = col.scene.settings;
-  const double start = measure ? measure->number("start", 0.25 * settings.end_time, Range::non_negative())
-                               : 0.25 * settings.end_time;
+  const double start =
+      measure ? measure->number("start", 0.25 * settings.end_time, Range::non_negative()) : 0.25 * settings.end_time;
   const double dx = settings.dx;
   const double min_top = measure ? measure->number("min_top", 4.0 * dx, Range::non_negative()) : 4.0 * dx;
   scene.reject_unknown_keys();
@@ -88,6 +88,6 @@ int run(const CommandLine& cl, const Config& scene) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  return run_scene_app(argc, argv, "settling",
-                       "Settling of a uniform suspension in a closed column (coupled step)", run<2>, run<3>);
+  return run_scene_app(argc, argv, "settling", "Settling of a uniform suspension in a closed column (coupled step)",
+                       run<2>, run<3>);
 }

@@ -156,8 +156,8 @@ int run(const CommandLine& cl) {
   std::ofstream csv(out / "study.csv");
   csv << "method," << key << ",wall_seconds,steps,particles,grid_nodes,error\n";
   for (const Case& c : cases)
-    csv << c.method << "," << c.value << "," << c.seconds << "," << c.steps << "," << c.particles << ","
-        << c.nodes << "," << c.error << "\n";
+    csv << c.method << "," << c.value << "," << c.seconds << "," << c.steps << "," << c.particles << "," << c.nodes
+        << "," << c.error << "\n";
 
   std::ostringstream md;
   md << "### " << title << "\n\n`study " << cl.scene_file << "`; reference: `" << sweep.text("reference")
@@ -184,7 +184,8 @@ int run(const CommandLine& cl) {
        << " |\n";
   }
   if (!notes.empty()) md << "\n" << notes << "\n";
-  md << "\n![" << title << "](" << "study.png)\n";
+  md << "\n![" << title << "]("
+     << "study.png)\n";
   std::ofstream(out / "study.md") << md.str();
   plot(out, title, methods, cases);
   std::cout << md.str();

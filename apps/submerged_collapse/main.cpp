@@ -92,9 +92,8 @@ int run(const CommandLine& cl, const Config& scene) {
   runner.add_column("continuum", [](const coupling::CoupledState<dim>& st) {
     return double(coupling::count_sediment(st).continuum);
   });
-  runner.add_column("discrete", [](const coupling::CoupledState<dim>& st) {
-    return double(coupling::count_sediment(st).discrete);
-  });
+  runner.add_column(
+      "discrete", [](const coupling::CoupledState<dim>& st) { return double(coupling::count_sediment(st).discrete); });
   runner.run(s, pipeline);
 
   const std::vector<double> time = runner.history("time"), energy = runner.history("sediment_kinetic_energy");
@@ -129,6 +128,6 @@ int run(const CommandLine& cl, const Config& scene) {
 
 int main(int argc, char** argv) {
   return run_scene_app(argc, argv, "submerged_collapse",
-                       "Collapse of a granular column under water (coupled step, continuum/discrete grains)",
-                       run<2>, run<3>);
+                       "Collapse of a granular column under water (coupled step, continuum/discrete grains)", run<2>,
+                       run<3>);
 }

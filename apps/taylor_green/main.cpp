@@ -67,7 +67,8 @@ int run_2d(const CommandLine& cl, const Config& scene) {
   const int cells = keys.integer("resolution", 32, 4, 4096);
   const int ppc = geometry::particles_per_cell<2>(keys);
   const double side = 2.0 * std::numbers::pi * L, dx = side / cells;
-  SceneSettings<2> settings = parse_scene_settings<2>(scene, DerivedDomain<2>{Vec<2>::Zero(), Vec<2>::Constant(side), dx});
+  SceneSettings<2> settings =
+      parse_scene_settings<2>(scene, DerivedDomain<2>{Vec<2>::Zero(), Vec<2>::Constant(side), dx});
   if (!settings.periodic[0] || !settings.periodic[1]) scene.fail("periodic", "the vortex needs periodic: [true, true]");
   const fluid::FluidMaterial material = fluid::parse_fluid_material(scene.child("fluid"));
   const Vortex vortex{keys.number("U", 1.0, Range::positive()), 1.0 / L, material.viscosity / material.density};
@@ -75,8 +76,8 @@ int run_2d(const CommandLine& cl, const Config& scene) {
   // projection removes the divergence that an advection step creates one step later, so the
   // final velocity lacks the pressure impulse of the last step, an error ~ that step's size,
   // which a last step clipped to the end time would make erratic.
-  settings.max_dt = std::min(settings.max_dt, settings.end_time / std::ceil(settings.end_time * vortex.U /
-                                                                              (settings.cfl * dx)));
+  settings.max_dt =
+      std::min(settings.max_dt, settings.end_time / std::ceil(settings.end_time * vortex.U / (settings.cfl * dx)));
 
   // 2. Particles with the exact velocity and its gradient as C.
   fluid::FluidScene<2> water = fluid::make_fluid_scene(settings, material, fluid::parse_pressure_settings(scene), {});
@@ -100,8 +101,10 @@ int run_2d(const CommandLine& cl, const Config& scene) {
   const double error = l2_velocity_error(water.state, vortex);
   const double T = water.state.time;
   const double decay_error = std::abs(kinetic_energy(water.state) / energy0 / std::pow(vortex.decay(T), 2) - 1.0);
-  runner.write_summary({{"l2_velocity_error", error}, {"kinetic_energy_decay_error", decay_error},
-                        {"final_time", T}, {"exact_energy_ratio", std::pow(vortex.decay(T), 2)}});
+  runner.write_summary({{"l2_velocity_error", error},
+                        {"kinetic_energy_decay_error", decay_error},
+                        {"final_time", T},
+                        {"exact_energy_ratio", std::pow(vortex.decay(T), 2)}});
   if (cl.check) return check_value("l2_velocity_error", error, 0.0, 2.0 / cells) ? 0 : 1;
   return 0;
 }

@@ -42,8 +42,8 @@ time: {end: 0.02}
   const coupling::drag::DragLaw law = coupling::drag::make_drag_law("stokes", {5e-4, 1e-3, 1000.0});
   auto walls = mpm::geometry::parse_colliders<2>(cfg, settings.domain_lo, settings.domain_hi,
                                                  mpm::wall_layer(settings.kernel, settings.dx));
-  coupling::CoupledScene<2> scene = coupling::make_coupled_scene<2>(
-      settings, walls, fluid::FluidMaterial{1000.0, 1e-3}, fluid::stages::PressureSettings{}, sand, law);
+  coupling::CoupledScene<2> scene = coupling::make_coupled_scene<2>(settings, walls, fluid::FluidMaterial{1000.0, 1e-3},
+                                                                    fluid::stages::PressureSettings{}, sand, law);
   const double Vp = mpm::geometry::particle_volume<2>(settings.dx, 4), phi = 0.1;
   for (const mpm::Vec<2>& x :
        mpm::geometry::seed_box<2>(mpm::Vec<2>(0.03, 0.03), mpm::Vec<2>(0.17, 0.15), settings.dx, 4, 0.0, 1)) {

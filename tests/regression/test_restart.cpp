@@ -67,12 +67,11 @@ const RestartCase kSettling{SETTLING_APP,
 
 //! Runs the case's app; its stderr goes to <out>.log. Returns the exit status.
 int run_app(const RestartCase& c, const fs::path& out, const std::string& extra) {
-  const std::string command = "'" + c.app + "' '" + SEDIMENT_DATA_DIR + "/scenes/" + c.scene + "' --quiet " +
-                              c.sets + " --set time.frame_dt=" + std::to_string(c.frame_dt) +
-                              " --set time.end=" + std::to_string(kFrames * c.frame_dt) +
-                              " --set output.png=false" +
-                              " --set output.checkpoint_every=" + std::to_string(kCheckpointEvery) +
-                              " --out '" + out.string() + "' " + extra + " 2> '" + out.string() + ".log'";
+  const std::string command = "'" + c.app + "' '" + SEDIMENT_DATA_DIR + "/scenes/" + c.scene + "' --quiet " + c.sets +
+                              " --set time.frame_dt=" + std::to_string(c.frame_dt) +
+                              " --set time.end=" + std::to_string(kFrames * c.frame_dt) + " --set output.png=false" +
+                              " --set output.checkpoint_every=" + std::to_string(kCheckpointEvery) + " --out '" +
+                              out.string() + "' " + extra + " 2> '" + out.string() + ".log'";
   const int status = std::system(command.c_str());
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
@@ -146,8 +145,7 @@ std::vector<unsigned char> dataset_bytes(hid_t file, const std::string& name) {
   REQUIRE_MESSAGE(set >= 0, "cannot open dataset " << name);
   const hid_t space = H5Dget_space(set), stored = H5Dget_type(set);
   const hid_t native = H5Tget_native_type(stored, H5T_DIR_ASCEND);
-  std::vector<unsigned char> bytes(static_cast<std::size_t>(H5Sget_simple_extent_npoints(space)) *
-                                   H5Tget_size(native));
+  std::vector<unsigned char> bytes(static_cast<std::size_t>(H5Sget_simple_extent_npoints(space)) * H5Tget_size(native));
   if (!bytes.empty()) CHECK(H5Dread(set, native, H5S_ALL, H5S_ALL, H5P_DEFAULT, bytes.data()) >= 0);
   H5Tclose(native);
   H5Tclose(stored);

@@ -33,18 +33,16 @@ inline double observed_order(const std::vector<Level>& levels) {
 
 //! Markdown table of the levels and the fitted order, on stdout.
 inline void print_table(const std::string& title, const std::vector<Level>& levels) {
-  std::printf("\n%s\n| cells | dx [m] | error | ratio | run time [s] |\n|---:|---:|---:|---:|---:|\n",
-              title.c_str());
+  std::printf("\n%s\n| cells | dx [m] | error | ratio | run time [s] |\n|---:|---:|---:|---:|---:|\n", title.c_str());
   for (std::size_t i = 0; i < levels.size(); ++i) {
     const Level& l = levels[i];
     if (i == 0)
       std::printf("| %d | %.5g | %.4e | | %.2f |\n", l.cells, l.dx, l.error, l.seconds);
     else
-      std::printf("| %d | %.5g | %.4e | %.2f | %.2f |\n", l.cells, l.dx, l.error,
-                  levels[i - 1].error / l.error, l.seconds);
+      std::printf("| %d | %.5g | %.4e | %.2f | %.2f |\n", l.cells, l.dx, l.error, levels[i - 1].error / l.error,
+                  l.seconds);
   }
-  std::printf("observed order (least squares over %zu levels): %.3f\n", levels.size(),
-              observed_order(levels));
+  std::printf("observed order (least squares over %zu levels): %.3f\n", levels.size(), observed_order(levels));
 }
 
 }  // namespace mpm::verification

@@ -77,10 +77,10 @@ constexpr double kWaveNumber = 2.0 * kPi;  // k [1/m]
 
 //! The manufactured field and its body force (header comment).
 struct AxisAligned {
-  double amplitude;  // A [m]
-  double density;    // rho0 [kg/m^3]
-  double mu, lambda; // [Pa]
-  double c;          // sqrt(E / rho0) [m/s]
+  double amplitude;   // A [m]
+  double density;     // rho0 [kg/m^3]
+  double mu, lambda;  // [Pa]
+  double c;           // sqrt(E / rho0) [m/s]
 
   double time_factor(double t) const { return std::sin(c * kPi * t); }
   // Sign of axis a's time factor: u_y carries sin(c pi t + pi) = -sin(c pi t).
@@ -139,8 +139,8 @@ public:
     solid::add_solid_channels(next);
     std::vector<Mat<2>>& next_F = solid::elastic_F(next);
     std::vector<Vec<2>> X;
-    auto append = [&](const Particles<2>& from, const std::vector<Mat<2>>& F_from,
-                      const std::vector<Vec<2>>& X_from, std::size_t p, const Vec<2>& shift) {
+    auto append = [&](const Particles<2>& from, const std::vector<Mat<2>>& F_from, const std::vector<Vec<2>>& X_from,
+                      std::size_t p, const Vec<2>& shift) {
       next.push_back(from.x[p] + shift, from.v[p], from.mass[p], from.volume0[p], from.material[p]);
       next.C.back() = from.C[p];
       next_F.back() = F_from[p];
@@ -168,8 +168,8 @@ public:
 
 private:
   static std::vector<std::string> channels() {
-    return {"particle.x", "particle.v", "particle.C", "particle.mass", "particle.volume0", "particle.material",
-            "particle.F"};
+    return {"particle.x",       "particle.v",        "particle.C", "particle.mass",
+            "particle.volume0", "particle.material", "particle.F"};
   }
   ReferencePositions& ref_;
   double band_;
@@ -185,21 +185,23 @@ public:
   void run(MpmState<2>& s) override {
     const Particles<2>& P = s.particles;
     const CellMap<2> map(s.grid);
-    std::visit([&](const auto& kernel) {
-      constexpr int S = std::decay_t<decltype(kernel)>::support;
-      for (std::size_t p = 0; p < P.size(); ++p) {
-        const Vec<2> f = P.mass[p] * field_.body_force(ref_.X[p], s.time);
-        const Vec<2> xi = map(P.x[p]);
-        int base[2];
-        double w[2][S], dw[2][S];
-        for (int a = 0; a < 2; ++a) kernel(xi[a], base[a], w[a], dw[a]);
-        for (int j = 0; j < S; ++j)
-          for (int i = 0; i < S; ++i) {
-            const Index k = s.grid.node_index(IVec<2>(base[0] + i, base[1] + j));
-            s.grid.force[static_cast<std::size_t>(k)] += w[0][i] * w[1][j] * f;
+    std::visit(
+        [&](const auto& kernel) {
+          constexpr int S = std::decay_t<decltype(kernel)>::support;
+          for (std::size_t p = 0; p < P.size(); ++p) {
+            const Vec<2> f = P.mass[p] * field_.body_force(ref_.X[p], s.time);
+            const Vec<2> xi = map(P.x[p]);
+            int base[2];
+            double w[2][S], dw[2][S];
+            for (int a = 0; a < 2; ++a) kernel(xi[a], base[a], w[a], dw[a]);
+            for (int j = 0; j < S; ++j)
+              for (int i = 0; i < S; ++i) {
+                const Index k = s.grid.node_index(IVec<2>(base[0] + i, base[1] + j));
+                s.grid.force[static_cast<std::size_t>(k)] += w[0][i] * w[1][j] * f;
+              }
           }
-      }
-    }, s.kernel);
+        },
+        s.kernel);
   }
 
 private:
@@ -340,7 +342,7 @@ TEST_CASE("axis-aligned MMS, the paper's amplitude (A = 0.05 m): bounded error")
   const MmsSettings settings;
   const Sweep cubic = sweep(CubicBSpline{}, settings);
   CHECK(verification::observed_order(cubic.final_rms) > 1.5);  // measured 1.97
-  CHECK(cubic.space_time_max.back().error < 8e-3);              // measured 5.24e-3
+  CHECK(cubic.space_time_max.back().error < 8e-3);             // measured 5.24e-3
   const Sweep quadratic = sweep(QuadraticBSpline{}, settings);
   CHECK(quadratic.space_time_max.back().error < 4.5e-2);  // measured 3.22e-2
   const Sweep ugimp = sweep(UGimp{0.25}, settings);

@@ -10,11 +10,11 @@
 #include <coupling/stages/coupled_time_step.h>
 #include <coupling/stages/exchange_stage.h>
 #include <coupling/stages/mixture_projection.h>
-#include <coupling/stages/volume_fraction_stage.h>
 #include <coupling/stages/on_phase.h>
+#include <coupling/stages/volume_fraction_stage.h>
+#include <doctest/doctest.h>
 #include <fluid/stages/equation_of_state.h>
 #include <mpm/core/advance.h>
-#include <doctest/doctest.h>
 #include <mpm/core/stages/grid_velocity_update.h>
 #include <mpm/core/stages/particles_to_grid.h>
 #include <mpm/core/stages/sort_particles.h>
@@ -66,8 +66,7 @@ gravity: [0, 0]
   pressure.solver = "cg";
   pressure.control.relative_tolerance = 1e-12;
   pressure.control.max_iterations = 10000;
-  CoupledScene<2> scene =
-      make_coupled_scene<2>(settings, {}, fluid::FluidMaterial{rho_w, 0.0}, pressure, sand, law);
+  CoupledScene<2> scene = make_coupled_scene<2>(settings, {}, fluid::FluidMaterial{rho_w, 0.0}, pressure, sand, law);
   const double dx = settings.dx, Vp = mpm::geometry::particle_volume<2>(dx, 4);
   auto blob = mpm::geometry::seed_box<2>(Vec<2>(0.3, 0.3), Vec<2>(0.7, 0.7), dx, 4, 0.0, 1);
   for (const Vec<2>& x : blob) {
@@ -110,8 +109,7 @@ gravity: [0, 0]
 
   // The projection conserves the mixture momentum sum V (n_w rho_w v_w + n_s rho_s v_s).
   std::vector<double> n_w_fluid(gw.node_storage(), 1.0);
-  for_each_shared_node(gw, gs,
-                       [&](std::size_t kw, std::size_t ks) { n_w_fluid[kw] = s.fractions.fluid[ks]; });
+  for_each_shared_node(gw, gs, [&](std::size_t kw, std::size_t ks) { n_w_fluid[kw] = s.fractions.fluid[ks]; });
   const auto vw0 = gw.velocity, vs0 = gs.velocity;
   stages::MixtureProjection<2> projection(rho_w, rho_s, law, {}, pressure);
   projection.run(s);
@@ -185,15 +183,16 @@ TEST_CASE("dilute Stokes suspension settles at the velocity of the drag law") {
 TEST_CASE("the settling column is closed: a periodic axis is refused with its key") {
   const std::vector<std::string> open_sides = {"walls.x_min=open", "walls.x_max=open", "periodic=[true, false]"};
   CHECK_THROWS_WITH_AS(load_settling_column<2>(settling_scene(open_sides)),
-                       doctest::Contains("key 'periodic' = [true, false]: the settling column is closed"), mpm::InputError);
+                       doctest::Contains("key 'periodic' = [true, false]: the settling column is closed"),
+                       mpm::InputError);
 }
 
 TEST_CASE("stiff drag: 10 um grains at the fluid's time step stay bounded and hindered") {
   // d = 10 um: relaxation time 15 us, a thousandth of the fluid's step. phi = 0.2 with
   // Schiller-Naumann (Stokes limit at Re = 1e-6): v = n_w^2 v_St = 0.64 v_St.
   SettlingScene<2> col = load_settling_column<2>(
-      settling_scene({"drag.grain_diameter=1.0e-5", "sediment.volume_fraction=0.2",
-                      "drag.law=schiller_naumann", "column.width=0.008", "column.cells_per_width=8"}));
+      settling_scene({"drag.grain_diameter=1.0e-5", "sediment.volume_fraction=0.2", "drag.law=schiller_naumann",
+                      "column.width=0.008", "column.cells_per_width=8"}));
   auto pipeline = make_coupled_pipeline(col.scene);
   CoupledState<2>& s = col.scene.state;
   const double dx = s.fluid.grid.dx(), v_st = col.column.stokes_velocity();
@@ -253,8 +252,7 @@ gravity: [0, -9.81]
   sand.density = 2650.0;
   sand.solver = "explicit";
   sand.materials = solid.materials;
-  CoupledScene<2> dry =
-      make_coupled_scene<2>(solid.settings, solid.colliders, std::nullopt, {}, sand, std::nullopt);
+  CoupledScene<2> dry = make_coupled_scene<2>(solid.settings, solid.colliders, std::nullopt, {}, sand, std::nullopt);
   dry.state.sediment.particles = solid.state.particles;
   auto pipeline = make_coupled_pipeline(dry);
   for (const std::string& name : pipeline.stage_names())
@@ -288,10 +286,10 @@ TEST_CASE("one coupled scene, two sediment solvers x two pressure solvers: the s
     for (const std::string pressure_solver : {"mgpcg", "cg"}) {
       CAPTURE(solid);
       CAPTURE(pressure_solver);
-      const std::string material =
-          solid == "explicit" ? ", youngs_modulus: 1.0e5, poisson_ratio: 0.3, elasticity: hencky_stvk, "
-                                "plasticity: {model: drucker_prager, friction_angle: 30}"
-                              : "";
+      const std::string material = solid == "explicit"
+                                       ? ", youngs_modulus: 1.0e5, poisson_ratio: 0.3, elasticity: hencky_stvk, "
+                                         "plasticity: {model: drucker_prager, friction_angle: 30}"
+                                       : "";
       const mpm::Config cfg = mpm::Config::parse(R"(
 dim: 2
 domain: {lo: [0, 0], hi: [1, 1]}
@@ -299,7 +297,8 @@ grid: {dx: 0.0625}
 time: {end: 1, cfl: 0.4, max_dt: 0.005}
 gravity: [0, 0]
 pressure: {solver: )" + pressure_solver + R"(, tolerance: 1.0e-10, max_iterations: 10000}
-sediment: {solver: )" + solid + ", density: 2650" + material + "}\n");
+sediment: {solver: )" + solid + ", density: 2650" +
+                                                 material + "}\n");
       const mpm::SceneSettings<2> settings = mpm::parse_scene_settings<2>(cfg);
       const SedimentPhase<2> sand = parse_sediment_phase<2>(cfg.child("sediment"));
       const drag::DragLaw law = drag::make_drag_law("schiller_naumann", {1e-3, 1e-3, 1000.0});
@@ -344,8 +343,9 @@ sediment: {solver: )" + solid + ", density: 2650" + material + "}\n");
   }
 }
 
-TEST_CASE("a clear-fluid coupled scene runs either fluid solver with the same bookkeeping; a sediment needs "
-          "an incompressible one") {
+TEST_CASE(
+    "a clear-fluid coupled scene runs either fluid solver with the same bookkeeping; a sediment needs "
+    "an incompressible one") {
   // A square blob of water squeezed towards its centre while it falls, far from every wall: the
   // pressure forces are internal, so the mass holds exactly and the momentum grows by M g t.
   for (const std::string solver : {"projection", "weakly_compressible"}) {
@@ -356,12 +356,12 @@ domain: {lo: [0, 0], hi: [1, 1]}
 grid: {dx: 0.03125}
 time: {end: 1, cfl: 0.4}
 gravity: [0, -9.81]
-fluid: {density: 1000, viscosity: 0, solver: )" + solver + "}\n");
+fluid: {density: 1000, viscosity: 0, solver: )" +
+                                               solver + "}\n");
     const mpm::SceneSettings<2> settings = mpm::parse_scene_settings<2>(cfg);
-    CoupledScene<2> scene =
-        make_coupled_scene<2>(settings, {}, fluid::parse_fluid_material(cfg.child("fluid")),
-                              fluid::parse_pressure_settings(cfg), std::nullopt, std::nullopt,
-                              fluid::parse_fluid_solver(cfg.child("fluid")));
+    CoupledScene<2> scene = make_coupled_scene<2>(settings, {}, fluid::parse_fluid_material(cfg.child("fluid")),
+                                                  fluid::parse_pressure_settings(cfg), std::nullopt, std::nullopt,
+                                                  fluid::parse_fluid_solver(cfg.child("fluid")));
     REQUIRE(scene.fluid_solver->name() == solver);
     const Vec<2> centre(0.5, 0.6);
     const double dx = settings.dx, Vp = mpm::geometry::particle_volume<2>(dx, 4);

@@ -58,7 +58,7 @@ constexpr double kDensity = 1000.0;  // rho [kg/m^3]
 constexpr double kYoungs = 1e7;      // E [Pa]
 constexpr double kV0 = 1e-3;         // mode amplitude [m/s]: strain amplitude v0 / c = 1e-5
 constexpr double kWaveCfl = 0.5;
-constexpr int kHeightCells = 2;      // bar height in cells (the problem is 1D)
+constexpr int kHeightCells = 2;  // bar height in cells (the problem is 1D)
 constexpr int kParticlesPerCell = 4;
 
 enum class FixedEnd { wall, images };
@@ -152,8 +152,7 @@ Sweep sweep(const Kernel& kernel, FixedEnd fixed_end) {
     s.max_vy = std::max(s.max_vy, run.max_vy);
   }
   const std::string name = std::string("vibrating bar, ") +
-                           (fixed_end == FixedEnd::wall ? "sticky wall" : "odd images") + ", " +
-                           kernel_name(kernel);
+                           (fixed_end == FixedEnd::wall ? "sticky wall" : "odd images") + ", " + kernel_name(kernel);
   verification::print_table(name + ", e = max_n |v_com - v_com(t - dt/2)| / v0", s.half_step);
   verification::print_table(name + ", e = max_n |v_com - v_com(t)| / v0", s.node_time);
   return s;

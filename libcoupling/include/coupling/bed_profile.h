@@ -30,8 +30,8 @@ public:
 
   //! (largest drop h0 - h, largest rise h - h0), both >= 0 [m], over the columns whose centres
   //! lie in [lo, hi] (y ignored).
-  std::pair<double, double> change(const std::vector<double>& h0, const std::vector<double>& h,
-                                   const mpm::Vec<dim>& lo, const mpm::Vec<dim>& hi) const;
+  std::pair<double, double> change(const std::vector<double>& h0, const std::vector<double>& h, const mpm::Vec<dim>& lo,
+                                   const mpm::Vec<dim>& hi) const;
 
 private:
   mpm::Vec<dim> lo_;

@@ -17,8 +17,8 @@
 #include <fluid/scene/fluid_scene.h>
 #include <mpm/core/pipeline.h>
 #include <mpm/core/scene_settings.h>
-#include <mpm/geometry/collider.h>
 #include <mpm/core/stages/particle_source.h>
+#include <mpm/geometry/collider.h>
 #include <mpm/geometry/flow_boundary_config.h>
 #include <mpm/solid/material.h>
 #include <mpm/solid/solid_solver.h>
@@ -72,12 +72,10 @@ struct CoupledScene {
 //! not match its materials (explicit needs them, grains has none), or it switches without a
 //! continuum material, or a sediment meets a fluid solver that is not incompressible.
 template <int dim>
-CoupledScene<dim> make_coupled_scene(mpm::SceneSettings<dim> settings,
-                                     mpm::geometry::ColliderSet<dim> colliders,
+CoupledScene<dim> make_coupled_scene(mpm::SceneSettings<dim> settings, mpm::geometry::ColliderSet<dim> colliders,
                                      std::optional<fluid::FluidMaterial> fluid,
                                      fluid::stages::PressureSettings pressure,
-                                     std::optional<SedimentPhase<dim>> sediment,
-                                     std::optional<drag::DragLaw> drag,
+                                     std::optional<SedimentPhase<dim>> sediment, std::optional<drag::DragLaw> drag,
                                      const fluid::FluidSolverSettings& fluid_solver = {});
 
 //! Fluid particles of volume `volume` [m^dim] each, in a region of fluid fraction n_w (the
@@ -91,8 +89,8 @@ void add_fluid_particles(CoupledScene<dim>& scene, const std::vector<mpm::Vec<di
 //! the scene's first sediment material when it has materials, discrete grains (material
 //! index discrete_grain) otherwise.
 template <int dim>
-void add_sediment_particles(CoupledScene<dim>& scene, const std::vector<mpm::Vec<dim>>& positions,
-                            double grain_volume, const mpm::Vec<dim>& velocity, const std::string& where);
+void add_sediment_particles(CoupledScene<dim>& scene, const std::vector<mpm::Vec<dim>>& positions, double grain_volume,
+                            const mpm::Vec<dim>& velocity, const std::string& where);
 
 //! The coupled pipeline of the header comment for the phases `scene` holds.
 template <int dim>

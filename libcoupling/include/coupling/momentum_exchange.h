@@ -34,15 +34,14 @@ inline void exchange_node(double m_w, double m_s, double K, mpm::Vec<dim>& v_w, 
 
 //! exchange_node for every node k of the arrays (entry k of all five is the same node).
 template <int dim>
-void exchange_momentum(const std::vector<double>& m_w, std::vector<mpm::Vec<dim>>& v_w,
-                       const std::vector<double>& m_s, std::vector<mpm::Vec<dim>>& v_s,
-                       const std::vector<double>& K);
+void exchange_momentum(const std::vector<double>& m_w, std::vector<mpm::Vec<dim>>& v_w, const std::vector<double>& m_s,
+                       std::vector<mpm::Vec<dim>>& v_s, const std::vector<double>& K);
 
 //! The exchange as a coupled stage calls it: on the fluid and sediment grids after
 //! momentum_to_velocity (grid.velocity holds velocities), K_i = beta(n_w,i, |v_s - v_w|_i) dx^dim dt.
 template <int dim>
 class MomentumExchange {
- public:
+public:
   explicit MomentumExchange(drag::DragLaw law) : law_(law) {}
 
   const drag::DragLaw& law() const { return law_; }
@@ -50,10 +49,10 @@ class MomentumExchange {
   //! Updates grid.velocity of both grids at every node allocated in both. `fluid_fraction`
   //! n_w per storage node of `sediment` (VolumeFractions::fluid); dt [s] >= 0. InputError
   //! when the grids do not share their lattice or the fractions do not match the grid.
-  void apply(mpm::SparseGrid<dim>& fluid, mpm::SparseGrid<dim>& sediment,
-             const std::vector<double>& fluid_fraction, double dt) const;
+  void apply(mpm::SparseGrid<dim>& fluid, mpm::SparseGrid<dim>& sediment, const std::vector<double>& fluid_fraction,
+             double dt) const;
 
- private:
+private:
   drag::DragLaw law_;
 };
 

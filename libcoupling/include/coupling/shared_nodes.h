@@ -14,12 +14,10 @@ namespace coupling {
 
 //! InputError naming `stage` unless `a` and `b` have the same origin, spacing and extent.
 template <int dim>
-void require_same_lattice(const mpm::SparseGrid<dim>& a, const mpm::SparseGrid<dim>& b,
-                          const std::string& stage) {
-  mpm::verify<mpm::InputError>(
-      a.dx() == b.dx() && a.origin() == b.origin() && a.node_counts() == b.node_counts(),
-      stage + ": the two phase grids must share origin, dx and extent (dx " + std::to_string(a.dx()) +
-          " vs " + std::to_string(b.dx()) + ")");
+void require_same_lattice(const mpm::SparseGrid<dim>& a, const mpm::SparseGrid<dim>& b, const std::string& stage) {
+  mpm::verify<mpm::InputError>(a.dx() == b.dx() && a.origin() == b.origin() && a.node_counts() == b.node_counts(),
+                               stage + ": the two phase grids must share origin, dx and extent (dx " +
+                                   std::to_string(a.dx()) + " vs " + std::to_string(b.dx()) + ")");
 }
 
 //! Calls fn(index in a, index in b) for every node allocated in both grids, blocks in
@@ -31,8 +29,7 @@ void for_each_shared_node(const mpm::SparseGrid<dim>& a, const mpm::SparseGrid<d
     for (int sa = r.begin(); sa != r.end(); ++sa) {
       const int sb = b.slot(a.active_block_id(sa));
       if (sb < 0) continue;
-      const std::size_t first_a = static_cast<std::size_t>(sa) * n,
-                        first_b = static_cast<std::size_t>(sb) * n;
+      const std::size_t first_a = static_cast<std::size_t>(sa) * n, first_b = static_cast<std::size_t>(sb) * n;
       for (int l = 0; l < n; ++l) fn(first_a + l, first_b + l);
     }
   });

@@ -37,8 +37,7 @@ void sediment_fraction(const mpm::Particles<dim>& sediment, const mpm::ParticleB
                        std::vector<double>& phi);
 
 //! n_s and n_w from phi with the floor `min_fluid` = n_min in (0, 1].
-VolumeFractions clamp_fractions(const std::vector<double>& phi,
-                                double min_fluid = default_min_fluid_fraction);
+VolumeFractions clamp_fractions(const std::vector<double>& phi, double min_fluid = default_min_fluid_fraction);
 
 //! Cell value of a node field: the mean of the 2^dim corners of the cell whose lower corner is
 //! node `cell`, which is the exact cell average of the multilinear interpolant (the cell

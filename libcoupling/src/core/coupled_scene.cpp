@@ -2,8 +2,8 @@
 #include <coupling/stages/coupled_time_step.h>
 #include <coupling/stages/exchange_stage.h>
 #include <coupling/stages/mixture_projection.h>
-#include <coupling/stages/volume_fraction_stage.h>
 #include <coupling/stages/on_phase.h>
+#include <coupling/stages/volume_fraction_stage.h>
 #include <mpm/core/error.h>
 #include <mpm/core/stages/grid_boundary.h>
 #include <mpm/core/stages/grid_to_particles.h>
@@ -21,12 +21,11 @@
 namespace coupling {
 
 template <int dim>
-CoupledScene<dim> make_coupled_scene(mpm::SceneSettings<dim> settings,
-                                     mpm::geometry::ColliderSet<dim> colliders,
+CoupledScene<dim> make_coupled_scene(mpm::SceneSettings<dim> settings, mpm::geometry::ColliderSet<dim> colliders,
                                      std::optional<fluid::FluidMaterial> fluid,
                                      fluid::stages::PressureSettings pressure,
-                                     std::optional<SedimentPhase<dim>> sediment,
-                                     std::optional<drag::DragLaw> drag, const fluid::FluidSolverSettings& fluid_solver) {
+                                     std::optional<SedimentPhase<dim>> sediment, std::optional<drag::DragLaw> drag,
+                                     const fluid::FluidSolverSettings& fluid_solver) {
   mpm::verify<mpm::InputError>(fluid || sediment, "coupled scene: neither a fluid nor a sediment phase");
   mpm::verify<mpm::InputError>(!(fluid && sediment) || drag.has_value(),
                                "coupled scene: a fluid and a sediment phase need a drag law");
@@ -57,27 +56,35 @@ CoupledScene<dim> make_coupled_scene(mpm::SceneSettings<dim> settings,
     solid->add_channels(state.sediment.particles);
   }
   if (!(fluid && sediment)) drag.reset();
-  return {std::move(settings), std::move(colliders), fluid, std::move(pressure), std::move(sediment), drag,
-          std::move(solid), std::move(liquid), std::move(state), {}, {}, {}};
+  return {std::move(settings),
+          std::move(colliders),
+          fluid,
+          std::move(pressure),
+          std::move(sediment),
+          drag,
+          std::move(solid),
+          std::move(liquid),
+          std::move(state),
+          {},
+          {},
+          {}};
 }
 
 template <int dim>
 void add_fluid_particles(CoupledScene<dim>& scene, const std::vector<mpm::Vec<dim>>& positions, double volume,
                          double fluid_fraction, const mpm::Vec<dim>& velocity, const std::string& where) {
   mpm::verify<mpm::InputError>(scene.fluid.has_value(), where + ": the scene has no fluid phase");
-  mpm::verify<mpm::InputError>(
-      fluid_fraction > 0.0 && fluid_fraction <= 1.0,
-      where + ": fluid fraction " + std::to_string(fluid_fraction) + " outside (0, 1]");
+  mpm::verify<mpm::InputError>(fluid_fraction > 0.0 && fluid_fraction <= 1.0,
+                               where + ": fluid fraction " + std::to_string(fluid_fraction) + " outside (0, 1]");
   if (const std::string why = mpm::first_outside_domain(scene.settings, positions).why; !why.empty())
     throw mpm::InputError(where + ": " + why);
   const double mass = fluid_fraction * scene.fluid->density * volume;
-  for (const mpm::Vec<dim>& x : positions)
-    scene.state.fluid.particles.push_back(x, velocity, mass, volume, 0);
+  for (const mpm::Vec<dim>& x : positions) scene.state.fluid.particles.push_back(x, velocity, mass, volume, 0);
 }
 
 template <int dim>
-void add_sediment_particles(CoupledScene<dim>& scene, const std::vector<mpm::Vec<dim>>& positions,
-                            double grain_volume, const mpm::Vec<dim>& velocity, const std::string& where) {
+void add_sediment_particles(CoupledScene<dim>& scene, const std::vector<mpm::Vec<dim>>& positions, double grain_volume,
+                            const mpm::Vec<dim>& velocity, const std::string& where) {
   mpm::verify<mpm::InputError>(scene.sediment.has_value(), where + ": the scene has no sediment phase");
   if (const std::string why = mpm::first_outside_domain(scene.settings, positions).why; !why.empty())
     throw mpm::InputError(where + ": " + why);
@@ -134,8 +141,8 @@ mpm::Pipeline<CoupledState<dim>> make_coupled_pipeline(const CoupledScene<dim>& 
   if (wet && sandy) p.add(std::make_unique<stages::ExchangeStage<dim>>(*scene.drag));
   both([&] { return std::make_unique<ms::GridBoundary<dim>>(scene.colliders); });
   if (wet && sandy) {
-    p.add(std::make_unique<stages::MixtureProjection<dim>>(scene.fluid->density, scene.sediment->density,
-                                                           *scene.drag, scene.colliders, scene.pressure));
+    p.add(std::make_unique<stages::MixtureProjection<dim>>(scene.fluid->density, scene.sediment->density, *scene.drag,
+                                                           scene.colliders, scene.pressure));
     // The sediment correction reaches nodes next to walls that the fluid's prescribed
     // nodes do not shield: impose the sediment's wall conditions again.
     on(Phase::sediment, std::make_unique<ms::GridBoundary<dim>>(scene.colliders));
@@ -148,20 +155,20 @@ mpm::Pipeline<CoupledState<dim>> make_coupled_pipeline(const CoupledScene<dim>& 
     for (auto& stage : scene.solid_solver->particle_update()) on(Phase::sediment, std::move(stage));
   both([] { return std::make_unique<ms::GridToParticles<dim>>(); });
   if (switching)
-    p.add(std::make_unique<stages::ReclassifySediment<dim>>(*scene.sediment->switching, scene.sediment->density,
-                                                            0, wet));
+    p.add(
+        std::make_unique<stages::ReclassifySediment<dim>>(*scene.sediment->switching, scene.sediment->density, 0, wet));
   return p;
 }
 
-#define COUPLED_SCENE(dim)                                                                                 \
-  template CoupledScene<dim> make_coupled_scene(                                                           \
-      mpm::SceneSettings<dim>, mpm::geometry::ColliderSet<dim>, std::optional<fluid::FluidMaterial>,       \
-      fluid::stages::PressureSettings, std::optional<SedimentPhase<dim>>, std::optional<drag::DragLaw>,    \
-      const fluid::FluidSolverSettings&);                                                                 \
-  template void add_fluid_particles(CoupledScene<dim>&, const std::vector<mpm::Vec<dim>>&, double, double, \
-                                    const mpm::Vec<dim>&, const std::string&);                             \
-  template void add_sediment_particles(CoupledScene<dim>&, const std::vector<mpm::Vec<dim>>&, double,      \
-                                       const mpm::Vec<dim>&, const std::string&);                          \
+#define COUPLED_SCENE(dim)                                                                                            \
+  template CoupledScene<dim> make_coupled_scene(mpm::SceneSettings<dim>, mpm::geometry::ColliderSet<dim>,             \
+                                                std::optional<fluid::FluidMaterial>, fluid::stages::PressureSettings, \
+                                                std::optional<SedimentPhase<dim>>, std::optional<drag::DragLaw>,      \
+                                                const fluid::FluidSolverSettings&);                                   \
+  template void add_fluid_particles(CoupledScene<dim>&, const std::vector<mpm::Vec<dim>>&, double, double,            \
+                                    const mpm::Vec<dim>&, const std::string&);                                        \
+  template void add_sediment_particles(CoupledScene<dim>&, const std::vector<mpm::Vec<dim>>&, double,                 \
+                                       const mpm::Vec<dim>&, const std::string&);                                     \
   template mpm::Pipeline<CoupledState<dim>> make_coupled_pipeline(const CoupledScene<dim>&);
 COUPLED_SCENE(2)
 COUPLED_SCENE(3)

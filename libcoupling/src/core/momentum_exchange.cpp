@@ -9,17 +9,14 @@
 namespace coupling {
 
 template <int dim>
-void exchange_momentum(const std::vector<double>& m_w, std::vector<mpm::Vec<dim>>& v_w,
-                       const std::vector<double>& m_s, std::vector<mpm::Vec<dim>>& v_s,
-                       const std::vector<double>& K) {
+void exchange_momentum(const std::vector<double>& m_w, std::vector<mpm::Vec<dim>>& v_w, const std::vector<double>& m_s,
+                       std::vector<mpm::Vec<dim>>& v_s, const std::vector<double>& K) {
   const std::size_t n = m_w.size();
   mpm::verify<mpm::InputError>(v_w.size() == n && m_s.size() == n && v_s.size() == n && K.size() == n,
                                "momentum exchange: node arrays of different sizes");
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096),
-                    [&](const tbb::blocked_range<std::size_t>& r) {
-                      for (std::size_t k = r.begin(); k != r.end(); ++k)
-                        exchange_node<dim>(m_w[k], m_s[k], K[k], v_w[k], v_s[k]);
-                    });
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t k = r.begin(); k != r.end(); ++k) exchange_node<dim>(m_w[k], m_s[k], K[k], v_w[k], v_s[k]);
+  });
 }
 
 template <int dim>
@@ -27,9 +24,8 @@ void MomentumExchange<dim>::apply(mpm::SparseGrid<dim>& fluid, mpm::SparseGrid<d
                                   const std::vector<double>& fluid_fraction, double dt) const {
   require_same_lattice(fluid, sediment, "momentum exchange");
   mpm::verify<mpm::InputError>(fluid_fraction.size() == sediment.node_storage(),
-                               "momentum exchange: " + std::to_string(fluid_fraction.size()) +
-                                   " fluid fractions for " + std::to_string(sediment.node_storage()) +
-                                   " sediment grid nodes");
+                               "momentum exchange: " + std::to_string(fluid_fraction.size()) + " fluid fractions for " +
+                                   std::to_string(sediment.node_storage()) + " sediment grid nodes");
   const double volume_dt = std::pow(sediment.dx(), dim) * dt;  // V_i dt [m^3 s]
   std::visit(
       [&](const auto& law) {
@@ -43,12 +39,10 @@ void MomentumExchange<dim>::apply(mpm::SparseGrid<dim>& fluid, mpm::SparseGrid<d
       law_);
 }
 
-template void exchange_momentum<2>(const std::vector<double>&, std::vector<mpm::Vec<2>>&,
-                                   const std::vector<double>&, std::vector<mpm::Vec<2>>&,
-                                   const std::vector<double>&);
-template void exchange_momentum<3>(const std::vector<double>&, std::vector<mpm::Vec<3>>&,
-                                   const std::vector<double>&, std::vector<mpm::Vec<3>>&,
-                                   const std::vector<double>&);
+template void exchange_momentum<2>(const std::vector<double>&, std::vector<mpm::Vec<2>>&, const std::vector<double>&,
+                                   std::vector<mpm::Vec<2>>&, const std::vector<double>&);
+template void exchange_momentum<3>(const std::vector<double>&, std::vector<mpm::Vec<3>>&, const std::vector<double>&,
+                                   std::vector<mpm::Vec<3>>&, const std::vector<double>&);
 template class MomentumExchange<2>;
 template class MomentumExchange<3>;
 

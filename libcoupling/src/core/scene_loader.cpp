@@ -21,7 +21,7 @@ namespace {
 //! a point lies in the body (to the lattice's resolution) when its sub-cell is listed.
 template <int dim>
 class Pores {
- public:
+public:
   Pores(const std::vector<mpm::Vec<dim>>& grains, double spacing, double packing)
       : spacing_(spacing), packing_(packing) {
     for (const mpm::Vec<dim>& x : grains) cells_.insert(key(x));
@@ -29,7 +29,7 @@ class Pores {
   bool contain(const mpm::Vec<dim>& x) const { return cells_.count(key(x)) > 0; }
   double packing() const { return packing_; }
 
- private:
+private:
   // 21 bits per axis, offset so that negative sub-cells pack too (2^20 sub-cells each way).
   std::uint64_t key(const mpm::Vec<dim>& x) const {
     std::uint64_t k = 0;
@@ -56,12 +56,12 @@ SedimentPhase<dim> parse_sediment_phase(const mpm::Config& sediment) {
   } else {
     s.density = sediment.number("density", Range::positive());
   }
-  s.min_fluid_fraction =
-      sediment.number("min_fluid_fraction", default_min_fluid_fraction, Range::open(0.0, 1.0));
+  s.min_fluid_fraction = sediment.number("min_fluid_fraction", default_min_fluid_fraction, Range::open(0.0, 1.0));
   if (const std::optional<mpm::Config> keys = sediment.optional_child("switching")) {
     if (s.materials.empty())
-      sediment.fail("switching", "switching needs a continuum sediment (youngs_modulus and the other keys of a "
-                                 "material)");
+      sediment.fail("switching",
+                    "switching needs a continuum sediment (youngs_modulus and the other keys of a "
+                    "material)");
     SedimentSwitching t;
     t.dilute_below = keys->number("dilute_below", t.dilute_below, Range::open(0.0, 1.0));
     t.dense_above = keys->number("dense_above", t.dense_above, Range::open(t.dilute_below, 1.0));
@@ -79,7 +79,7 @@ CoupledScene<dim> load_coupled_scene(const mpm::Config& scene) {
   for (int a = 0; a < dim; ++a)
     if (settings.periodic[a]) scene.fail("periodic", "coupled scenes have no periodic axes (the fluid alone has)");
   auto colliders = mpm::geometry::parse_colliders<dim>(scene, settings.domain_lo, settings.domain_hi,
-                                                        mpm::wall_layer(settings.kernel, settings.dx));
+                                                       mpm::wall_layer(settings.kernel, settings.dx));
   mpm::geometry::FlowBoundaries<dim> flow = mpm::geometry::parse_flow_boundaries<dim>(scene, settings);
   mpm::geometry::add_flow_boundaries(flow, colliders);
   std::optional<fluid::FluidMaterial> water;
@@ -161,7 +161,8 @@ CoupledScene<dim> load_coupled_scene(const mpm::Config& scene) {
     source.particles_per_cell = mpm::geometry::particles_per_cell<dim>(emitter);
     const double volume = mpm::geometry::particle_volume<dim>(out.settings.dx, source.particles_per_cell);
     source.start = emitter.number("start", 0.0, Range::non_negative());
-    source.stop = emitter.number("stop", std::numeric_limits<double>::infinity(), Range{source.start, 1e308, true, true});
+    source.stop =
+        emitter.number("stop", std::numeric_limits<double>::infinity(), Range{source.start, 1e308, true, true});
     if (emits == "fluid") {
       source.particle_volume = volume;
       source.particle_mass = water->density * volume;

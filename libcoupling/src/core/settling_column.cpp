@@ -53,17 +53,15 @@ SettlingScene<dim> load_settling_column(const mpm::Config& scene) {
   col.volume_fraction = s.number("volume_fraction", Range::open(0.0, 1.0 - sand.min_fluid_fraction));
 
   const double layer = mpm::wall_layer(mpm::parse_kernel(scene), dx);
-  mpm::DerivedDomain<dim> domain{mpm::Vec<dim>::Constant(-layer), mpm::Vec<dim>::Constant(col.width + layer),
-                                 dx};
+  mpm::DerivedDomain<dim> domain{mpm::Vec<dim>::Constant(-layer), mpm::Vec<dim>::Constant(col.width + layer), dx};
   domain.hi[1] = col.height + layer;
   mpm::SceneSettings<dim> settings = mpm::parse_scene_settings<dim>(scene, domain);
   for (int a = 0; a < dim; ++a)
     if (settings.periodic[a]) scene.fail("periodic", "the settling column is closed; it has no periodic axes");
   col.gravity = settings.gravity.norm();
   auto colliders = mpm::geometry::parse_colliders<dim>(scene, domain.lo, domain.hi, layer);
-  mpm::verify<mpm::InputError>(
-      colliders.walls().has_value(),
-      scene.path() + ": the settling column needs `walls` (contact: sticky) to be closed");
+  mpm::verify<mpm::InputError>(colliders.walls().has_value(),
+                               scene.path() + ": the settling column needs `walls` (contact: sticky) to be closed");
 
   SettlingScene<dim> out{col, make_coupled_scene<dim>(settings, std::move(colliders), water,
                                                       fluid::parse_pressure_settings(scene), sand, col.drag)};
@@ -78,8 +76,8 @@ SettlingScene<dim> load_settling_column(const mpm::Config& scene) {
   mpm::Vec<dim> above = mpm::Vec<dim>::Zero();
   above[1] = col.suspension_height;
   if (col.suspension_height < col.height)
-    add_fluid_particles(out.scene, mpm::geometry::seed_box<dim>(above, top, dx, ppc, 0.0, 1), volume, 1.0,
-                        rest, "column");
+    add_fluid_particles(out.scene, mpm::geometry::seed_box<dim>(above, top, dx, ppc, 0.0, 1), volume, 1.0, rest,
+                        "column");
   return out;
 }
 

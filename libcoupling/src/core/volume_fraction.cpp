@@ -12,9 +12,8 @@ template <int dim>
 void sediment_fraction(const mpm::Particles<dim>& sediment, const mpm::ParticleBuckets<dim>& buckets,
                        const mpm::Kernel& kernel, const mpm::SparseGrid<dim>& grid, double sediment_density,
                        std::vector<double>& phi) {
-  mpm::verify<mpm::InputError>(
-      sediment_density > 0.0,
-      "sediment volume fraction: sediment density " + std::to_string(sediment_density) + ": expected > 0");
+  mpm::verify<mpm::InputError>(sediment_density > 0.0, "sediment volume fraction: sediment density " +
+                                                           std::to_string(sediment_density) + ": expected > 0");
   // phi_i = sum_p w_ip V_p / V_i: scatter V_p / V_i = m_p / (rho_s dx^dim) with the P2G weights.
   const double scale = 1.0 / (sediment_density * std::pow(grid.dx(), dim));
   std::vector<double> share(sediment.size());
@@ -23,9 +22,9 @@ void sediment_fraction(const mpm::Particles<dim>& sediment, const mpm::ParticleB
 }
 
 VolumeFractions clamp_fractions(const std::vector<double>& phi, double min_fluid) {
-  mpm::verify<mpm::InputError>(min_fluid > 0.0 && min_fluid <= 1.0,
-                               "volume fractions: minimum fluid fraction " + std::to_string(min_fluid) +
-                                   ": expected a value in (0, 1]");
+  mpm::verify<mpm::InputError>(
+      min_fluid > 0.0 && min_fluid <= 1.0,
+      "volume fractions: minimum fluid fraction " + std::to_string(min_fluid) + ": expected a value in (0, 1]");
   VolumeFractions n;
   n.sediment.resize(phi.size());
   n.fluid.resize(phi.size());
@@ -50,12 +49,10 @@ double cell_average(const mpm::SparseGrid<dim>& grid, const std::vector<double>&
   return sum / (1 << dim);
 }
 
-#define COUPLING_INSTANTIATE(dim)                                                               \
-  template void sediment_fraction(const mpm::Particles<dim>&, const mpm::ParticleBuckets<dim>&, \
-                                  const mpm::Kernel&, const mpm::SparseGrid<dim>&, double,      \
-                                  std::vector<double>&);                                        \
-  template double cell_average(const mpm::SparseGrid<dim>&, const std::vector<double>&,         \
-                               const mpm::IVec<dim>&);
+#define COUPLING_INSTANTIATE(dim)                                                                                   \
+  template void sediment_fraction(const mpm::Particles<dim>&, const mpm::ParticleBuckets<dim>&, const mpm::Kernel&, \
+                                  const mpm::SparseGrid<dim>&, double, std::vector<double>&);                       \
+  template double cell_average(const mpm::SparseGrid<dim>&, const std::vector<double>&, const mpm::IVec<dim>&);
 COUPLING_INSTANTIATE(2)
 COUPLING_INSTANTIATE(3)
 

@@ -15,10 +15,10 @@ std::vector<std::string> names(std::index_sequence<I...>) {
 template <std::size_t... I>
 DragLaw make(const std::string& name, const DragParameters& p, std::index_sequence<I...>) {
   DragLaw law;
-  const bool found = ((name == std::variant_alternative_t<I, DragLaw>::name
-                           ? (law = std::variant_alternative_t<I, DragLaw>{p}, true)
-                           : false) ||
-                      ...);
+  const bool found =
+      ((name == std::variant_alternative_t<I, DragLaw>::name ? (law = std::variant_alternative_t<I, DragLaw>{p}, true)
+                                                             : false) ||
+       ...);
   if (!found) throw mpm::InputError("unknown drag law '" + name + "'");
   return law;
 }
@@ -29,9 +29,7 @@ constexpr auto alternatives = std::make_index_sequence<std::variant_size_v<DragL
 
 std::vector<std::string> drag_law_names() { return names(alternatives); }
 
-DragLaw make_drag_law(const std::string& name, const DragParameters& p) {
-  return make(name, p, alternatives);
-}
+DragLaw make_drag_law(const std::string& name, const DragParameters& p) { return make(name, p, alternatives); }
 
 DragLaw parse_drag_law(const mpm::Config& scene) {
   const mpm::Config drag = scene.child("drag");

@@ -35,8 +35,7 @@ ReclassifySediment<dim>::ReclassifySediment(SedimentSwitching thresholds, double
                                             std::uint16_t continuum, bool wet)
     : thresholds_(thresholds), rho_s_(sediment_density), continuum_(continuum), wet_(wet) {
   mpm::verify<mpm::InputError>(
-      thresholds.dilute_below > 0.0 && thresholds.dilute_below < thresholds.dense_above &&
-          thresholds.dense_above < 1.0,
+      thresholds.dilute_below > 0.0 && thresholds.dilute_below < thresholds.dense_above && thresholds.dense_above < 1.0,
       "sediment switching: expected 0 < dilute_below < dense_above < 1 (got " +
           std::to_string(thresholds.dilute_below) + ", " + std::to_string(thresholds.dense_above) + ")");
   mpm::verify<mpm::InputError>(continuum != discrete_grain, "sediment switching: no continuum material");

@@ -41,7 +41,9 @@ void for_each_cell(const IVec<dim>& cells, Fn&& fn) {
 }  // namespace
 
 template <int dim>
-std::int64_t CellOperator<dim>::cell_count() const { return cells.template cast<std::int64_t>().prod(); }
+std::int64_t CellOperator<dim>::cell_count() const {
+  return cells.template cast<std::int64_t>().prod();
+}
 
 template <int dim>
 bool CellOperator<dim>::is_periodic() const {

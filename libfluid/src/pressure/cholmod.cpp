@@ -87,8 +87,8 @@ SolveResult CholmodSolver<dim>::solve(const CellOperator<dim>& op, const std::ve
   result.setup_seconds = std::chrono::duration<double>(clock::now() - start).count();
   if (!factored) {
     cholmod_free_factor(&L, &common.c);
-    throw mpm::NumericalError("cholmod: factorisation of A + eps I failed (status " +
-                              std::to_string(common.c.status) + ", matrix not positive semi-definite?)");
+    throw mpm::NumericalError("cholmod: factorisation of A + eps I failed (status " + std::to_string(common.c.status) +
+                              ", matrix not positive semi-definite?)");
   }
 
   const auto solve_start = clock::now();

@@ -23,8 +23,8 @@ SolveResult solve_with(const CellOperator<dim>& op, const std::vector<double>& r
 }  // namespace
 
 template <int dim>
-SolveResult MgpcgSolver<dim>::solve(const CellOperator<dim>& op, const std::vector<double>& b,
-                                    std::vector<double>& p, const SolveControl& control) {
+SolveResult MgpcgSolver<dim>::solve(const CellOperator<dim>& op, const std::vector<double>& b, std::vector<double>& p,
+                                    const SolveControl& control) {
   const auto start = std::chrono::steady_clock::now();
   std::vector<double> rhs;
   SolveResult result;

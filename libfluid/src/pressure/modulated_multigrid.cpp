@@ -182,14 +182,16 @@ void ModulatedMultigrid<dim>::build(int index) {
   // P0: the coarse cells that own a cell of this space, and the interpolation weights.
   const Space& s = spaces_[index];
   const IVec<dim> coarse_extent = (s.extent.array() + 1) / 2;
-  std::vector<std::int64_t> coarse_index(static_cast<std::size_t>(coarse_extent.template cast<std::int64_t>().prod()), -1);
+  std::vector<std::int64_t> coarse_index(static_cast<std::size_t>(coarse_extent.template cast<std::int64_t>().prod()),
+                                         -1);
   std::vector<IVec<dim>> coarse_cell;
   // A cell without off-diagonal entries (a droplet: no neighbour shares a movable node) is
   // solved exactly by the smoother; in a coarse space it would only add its energy to the
   // coarse functions of the liquid beside it. It gets no interpolation.
   std::vector<char> coupled(s.cell.size(), 0);
   for (Eigen::Index i = 0; i < s.A.outerSize(); ++i)
-    for (Matrix::InnerIterator a(s.A, i); a; ++a) coupled[static_cast<std::size_t>(i)] |= a.col() != i && a.value() != 0.0;
+    for (Matrix::InnerIterator a(s.A, i); a; ++a)
+      coupled[static_cast<std::size_t>(i)] |= a.col() != i && a.value() != 0.0;
   for (std::size_t i = 0; i < s.cell.size(); ++i) {
     if (!coupled[i]) continue;
     const IVec<dim>& q = s.cell[i];
@@ -237,8 +239,8 @@ void ModulatedMultigrid<dim>::build(int index) {
       for (int a = 0; a < dim; ++a) parity += (pattern >> a & 1) * s.cell[i][a];
       sign[static_cast<Eigen::Index>(i)] = parity % 2 == 0 ? 1.0 : -1.0;
     }
-    if (pattern != 0 && !(median_energy_ratio(s.A, diagonal, sign.cwiseProduct(interpolated_one)) <
-                          options_.near_null_ratio))
+    if (pattern != 0 &&
+        !(median_energy_ratio(s.A, diagonal, sign.cwiseProduct(interpolated_one)) < options_.near_null_ratio))
       continue;
     Child child;
     child.pattern = pattern;

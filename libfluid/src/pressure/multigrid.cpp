@@ -99,13 +99,14 @@ bool Multigrid<dim>::supports(const CellOperator<dim>& op) {
 template <int dim>
 Multigrid<dim>::Multigrid(const CellOperator<dim>& fine, const Options& options) : fine_(fine), options_(options) {
   mpm::verify<mpm::InputError>(options.smoothing_sweeps >= 1, "Multigrid: smoothing_sweeps must be >= 1");
-  mpm::verify<mpm::InputError>(supports(fine), "Multigrid: no Gauss-Seidel smoother for this operator (3D NodeCell, "
-                                               "or 2D NodeCell with an odd periodic x count): use ModulatedMultigrid");
+  mpm::verify<mpm::InputError>(supports(fine),
+                               "Multigrid: no Gauss-Seidel smoother for this operator (3D NodeCell, "
+                               "or 2D NodeCell with an odd periodic x count): use ModulatedMultigrid");
   for (int a = 0; a < dim; ++a)
-    mpm::verify<mpm::InputError>(!fine.periodic[a] || fine.kind == CellOperator<dim>::Kind::node_cell ||
-                                     fine.cells[a] % 2 == 0,
-                                 "Multigrid: the red-black smoother of a periodic Poisson operator needs an even "
-                                 "cell count on every periodic axis");
+    mpm::verify<mpm::InputError>(
+        !fine.periodic[a] || fine.kind == CellOperator<dim>::Kind::node_cell || fine.cells[a] % 2 == 0,
+        "Multigrid: the red-black smoother of a periodic Poisson operator needs an even "
+        "cell count on every periodic axis");
   levels_.emplace_back();
   auto fluid_cells = [](const CellOperator<dim>& o) {
     return std::count(o.type.begin(), o.type.end(), CellType::fluid);
@@ -242,8 +243,8 @@ void Multigrid<dim>::rotated_gauss_seidel(int l, int parity) {
             const IVec<dim> corner = c + IVec<dim>(k & 1, k >> 1);
             const double w = beta[o.node_index(corner)];
             weight += w;
-            const std::int64_t cj = detail::shifted_index<dim>(2 * corner - c - IVec<dim>::Ones(),
-                                                               IVec<dim>::Zero(), o.cells, o.periodic);
+            const std::int64_t cj =
+                detail::shifted_index<dim>(2 * corner - c - IVec<dim>::Ones(), IVec<dim>::Zero(), o.cells, o.periodic);
             if (cj >= 0) sum += w * x[cj];
           }
           if (weight > 0.0) x[ci] = sum / weight;
@@ -341,10 +342,12 @@ void Multigrid<dim>::vcycle(int l) {
   Level& level = levels_[l];
   if (l == level_count() - 1) {
     Eigen::VectorXd rhs(static_cast<Eigen::Index>(bottom_cells_.size()));
-    for (std::size_t i = 0; i < bottom_cells_.size(); ++i) rhs[static_cast<Eigen::Index>(i)] = level.b[bottom_cells_[i]];
+    for (std::size_t i = 0; i < bottom_cells_.size(); ++i)
+      rhs[static_cast<Eigen::Index>(i)] = level.b[bottom_cells_[i]];
     const Eigen::VectorXd solution = bottom_pinv_ * rhs;
     std::fill(level.x.begin(), level.x.end(), 0.0);
-    for (std::size_t i = 0; i < bottom_cells_.size(); ++i) level.x[bottom_cells_[i]] = solution[static_cast<Eigen::Index>(i)];
+    for (std::size_t i = 0; i < bottom_cells_.size(); ++i)
+      level.x[bottom_cells_[i]] = solution[static_cast<Eigen::Index>(i)];
     return;
   }
   smooth(l, true);

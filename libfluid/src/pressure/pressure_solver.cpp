@@ -31,7 +31,8 @@ std::unique_ptr<PressureSolver<dim>> make_pressure_solver(const std::string& nam
   if (name == "hypre_boomeramg") return std::make_unique<HypreBoomerAmgSolver<dim>>();
 #else
   if (name == "hypre_pfmg" || name == "hypre_boomeramg")
-    throw mpm::InputError("pressure solver '" + name + "' is not in this build (configured with SEDIMENT_WITH_HYPRE=OFF)");
+    throw mpm::InputError("pressure solver '" + name +
+                          "' is not in this build (configured with SEDIMENT_WITH_HYPRE=OFF)");
 #endif
   std::string accepted;
   for (const std::string& n : pressure_solver_names()) accepted += (accepted.empty() ? "" : ", ") + n;

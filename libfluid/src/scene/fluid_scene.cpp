@@ -49,8 +49,8 @@ stages::PressureSettings parse_pressure_settings(const Config& scene) {
   if (const std::string fallback = p->choice("fallback", "none", fallbacks); fallback != "none") s.fallback = fallback;
   s.control.relative_tolerance = p->number("tolerance", s.control.relative_tolerance, Range::open(0.0, 1.0));
   s.control.max_iterations = p->integer("max_iterations", s.control.max_iterations, 1, 1000000);
-  s.on_failure = p->choice("on_failure", "stop", {"stop", "warn"}) == "stop" ? stages::OnFailure::stop
-                                                                              : stages::OnFailure::warn;
+  s.on_failure =
+      p->choice("on_failure", "stop", {"stop", "warn"}) == "stop" ? stages::OnFailure::stop : stages::OnFailure::warn;
   return s;
 }
 
@@ -63,7 +63,6 @@ FluidScene<dim> make_fluid_scene(mpm::SceneSettings<dim> settings, FluidMaterial
   s->add_channels(state.particles);
   return {std::move(settings), fluid, std::move(pressure), std::move(colliders), std::move(s), std::move(state), {}};
 }
-
 
 template <int dim>
 void add_fluid_particles(FluidScene<dim>& scene, const std::vector<Vec<dim>>& positions, double volume,
@@ -86,7 +85,7 @@ template <int dim>
 FluidScene<dim> load_fluid_scene(const Config& scene) {
   mpm::SceneSettings<dim> settings = mpm::parse_scene_settings<dim>(scene);
   auto colliders = mpm::geometry::parse_colliders<dim>(scene, settings.domain_lo, settings.domain_hi,
-                                                        mpm::wall_layer(settings.kernel, settings.dx));
+                                                       mpm::wall_layer(settings.kernel, settings.dx));
   mpm::geometry::FlowBoundaries<dim> flow = mpm::geometry::parse_flow_boundaries<dim>(scene, settings);
   mpm::geometry::add_flow_boundaries(flow, colliders);
   const Config fluid = scene.child("fluid");
@@ -122,13 +121,13 @@ mpm::Pipeline<mpm::MpmState<dim>> make_fluid_pipeline(const FluidScene<dim>& sce
   return p;
 }
 
-#define FLUID_SCENE(dim)                                                                                   \
+#define FLUID_SCENE(dim)                                                                                      \
   template FluidScene<dim> make_fluid_scene(mpm::SceneSettings<dim>, FluidMaterial, stages::PressureSettings, \
-                                            mpm::geometry::ColliderSet<dim>, const FluidSolverSettings&); \
-  template void add_fluid_particles(FluidScene<dim>&, const std::vector<Vec<dim>>&, double, const Vec<dim>&, \
-                                    const std::string&);                                                   \
-  template void seed_fluid_bodies(FluidScene<dim>&, const Config&);                                        \
-  template FluidScene<dim> load_fluid_scene<dim>(const Config&);                                           \
+                                            mpm::geometry::ColliderSet<dim>, const FluidSolverSettings&);     \
+  template void add_fluid_particles(FluidScene<dim>&, const std::vector<Vec<dim>>&, double, const Vec<dim>&,  \
+                                    const std::string&);                                                      \
+  template void seed_fluid_bodies(FluidScene<dim>&, const Config&);                                           \
+  template FluidScene<dim> load_fluid_scene<dim>(const Config&);                                              \
   template mpm::Pipeline<mpm::MpmState<dim>> make_fluid_pipeline(const FluidScene<dim>&);
 FLUID_SCENE(2)
 FLUID_SCENE(3)

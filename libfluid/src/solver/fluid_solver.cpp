@@ -42,18 +42,19 @@ void append_viscosity(typename FluidSolver<dim>::Stages& stages, const FluidMate
 }
 
 template <int dim>
-double free_surface_wave_speed(const mpm::SceneSettings<dim>& settings, const mpm::geometry::ColliderSet<dim>& colliders) {
+double free_surface_wave_speed(const mpm::SceneSettings<dim>& settings,
+                               const mpm::geometry::ColliderSet<dim>& colliders) {
   double speed = std::sqrt(settings.gravity.norm() * settings.dx);
   for (const auto& c : colliders.colliders()) speed = std::max(speed, c.velocity().norm());
   return speed;
 }
 
-#define FLUID_SOLVER(dim)                                                                                          \
-  template std::shared_ptr<const FluidSolver<dim>> make_fluid_solver(                                              \
-      const FluidSolverSettings&, const FluidMaterial&, const stages::PressureSettings&,                                   \
-      const mpm::geometry::ColliderSet<dim>&, const mpm::SceneSettings<dim>&);                                     \
-  template void append_viscosity<dim>(FluidSolver<dim>::Stages&, const FluidMaterial&,                              \
-                                      const mpm::geometry::ColliderSet<dim>&);                                      \
+#define FLUID_SOLVER(dim)                                                                \
+  template std::shared_ptr<const FluidSolver<dim>> make_fluid_solver(                    \
+      const FluidSolverSettings&, const FluidMaterial&, const stages::PressureSettings&, \
+      const mpm::geometry::ColliderSet<dim>&, const mpm::SceneSettings<dim>&);           \
+  template void append_viscosity<dim>(FluidSolver<dim>::Stages&, const FluidMaterial&,   \
+                                      const mpm::geometry::ColliderSet<dim>&);           \
   template double free_surface_wave_speed(const mpm::SceneSettings<dim>&, const mpm::geometry::ColliderSet<dim>&);
 FLUID_SOLVER(2)
 FLUID_SOLVER(3)

@@ -1,6 +1,5 @@
 #include <fluid/solver/weakly_compressible_solver.h>
 
-
 #include <mpm/core/stages/grid_velocity_update.h>
 
 namespace fluid {

@@ -8,9 +8,9 @@
 #include <mpm/core/finite_guard.h>
 #include <mpm/core/transfer.h>
 
-#include <Eigen/LU>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <Eigen/LU>
 
 #include <algorithm>
 #include <cmath>
@@ -49,8 +49,8 @@ void VolumeRatioUpdate<dim>::run(mpm::MpmState<dim>& s) {
   deviation_ = 0.0;
   for (std::size_t p = 0; p < J.size(); ++p) {
     if (!(J[p] > 0.0))
-      throw mpm::NumericalError("stage '" + name() + "': particle " + std::to_string(p) + " was compressed to J = " +
-                                std::to_string(J[p]) + " at t = " + std::to_string(s.time) +
+      throw mpm::NumericalError("stage '" + name() + "': particle " + std::to_string(p) +
+                                " was compressed to J = " + std::to_string(J[p]) + " at t = " + std::to_string(s.time) +
                                 " s: the step exceeds the acoustic limit (lower time.wave_cfl)");
     if (J[p] < 1.0) deviation_ = std::max(deviation_, 1.0 / J[p] - 1.0);
   }

@@ -83,8 +83,7 @@ void ImplicitViscosity<dim>::run(mpm::MpmState<dim>& s) {
   };
 
   // Jacobi-preconditioned CG from v^*.
-  result_ = mpm::solve::conjugate_gradient(apply, mpm::solve::JacobiPreconditioner(diagonal), b, x,
-                                           control_);
+  result_ = mpm::solve::conjugate_gradient(apply, mpm::solve::JacobiPreconditioner(diagonal), b, x, control_);
   if (!result_.converged) {
     std::ostringstream why;
     why << "stage '" << name() << "': viscous CG did not converge in " << result_.iterations

@@ -116,8 +116,7 @@ void PressureProjection<dim>::run(mpm::MpmState<dim>& s) {
     if (k < 0) return;
     u_[i] = mixture_ ? mixture_->fluid_fraction[k] * g.velocity[k] + mixture_->solid_flux[k] : g.velocity[k];
     if (g.mass[k] <= 0.0 || fixed[k]) return;
-    op_.beta[i] = mixture_ ? s.dt * (mixture_->fluid_fraction[k] / density_ + mixture_->solid_mobility[k])
-                           : fluid_beta;
+    op_.beta[i] = mixture_ ? s.dt * (mixture_->fluid_fraction[k] / density_ + mixture_->solid_mobility[k]) : fluid_beta;
   });
 
   // A fluid cell whose corners are all prescribed (a particle inside a wall) has no pressure

@@ -39,8 +39,8 @@ int run_scene_app(int argc, char** argv, const std::string& app_name, const std:
 
 bool check_value(const std::string& name, double value, double expected, double tolerance) {
   const bool ok = std::fabs(value - expected) <= tolerance;
-  std::fprintf(stderr, "check %s: %.6g (expected %.6g, tolerance %.3g) %s\n", name.c_str(), value,
-               expected, tolerance, ok ? "ok" : "FAILED");
+  std::fprintf(stderr, "check %s: %.6g (expected %.6g, tolerance %.3g) %s\n", name.c_str(), value, expected, tolerance,
+               ok ? "ok" : "FAILED");
   return ok;
 }
 

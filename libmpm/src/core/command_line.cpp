@@ -7,15 +7,15 @@
 
 namespace mpm {
 
-CommandLine parse_command_line(int argc, char** argv, const std::string& app_name,
-                               const std::string& description) {
+CommandLine parse_command_line(int argc, char** argv, const std::string& app_name, const std::string& description) {
   CommandLine cl;
   cl.out_dir = "out/" + app_name;
   std::string restart;
 
   CLI::App app(description, app_name);
   app.add_option("scene", cl.scene_file, "Scene file (YAML)")->required()->check(CLI::ExistingFile);
-  app.add_option("--set", cl.overrides, "Override a scene key, e.g. --set time.end=2 or --set materials.0.density=1000 (repeatable)")
+  app.add_option("--set", cl.overrides,
+                 "Override a scene key, e.g. --set time.end=2 or --set materials.0.density=1000 (repeatable)")
       ->type_name("KEY.PATH=VALUE")
       ->allow_extra_args(false);
   app.add_option("--out", cl.out_dir, "Output directory")->capture_default_str();

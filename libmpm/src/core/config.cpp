@@ -26,9 +26,7 @@ std::string format_number(double value) {
   return std::string(buffer, result.ptr);
 }
 
-std::string join(const std::string& path, const std::string& key) {
-  return path.empty() ? key : path + "." + key;
-}
+std::string join(const std::string& path, const std::string& key) { return path.empty() ? key : path + "." + key; }
 
 std::string yaml_text(const YAML::Node& node) {
   if (node.IsScalar()) return node.Scalar();
@@ -84,9 +82,8 @@ YAML::Node lookup(const YAML::Node& map, const std::string& key) {
 
 //! Stores a finite number within `range` in `out`, or returns why the value is not one.
 std::optional<std::string> number_problem(const YAML::Node& value, Range range, double& out) {
-  const std::string expected = range.lo <= -kUnbounded && range.hi >= kUnbounded
-                                   ? "expected a number"
-                                   : "expected a number " + range.describe();
+  const std::string expected =
+      range.lo <= -kUnbounded && range.hi >= kUnbounded ? "expected a number" : "expected a number " + range.describe();
   const std::optional<double> number = to_number(value);
   if (!number) return expected + got(value);
   if (!std::isfinite(*number)) return "expected a finite number";
@@ -149,8 +146,7 @@ struct Config::Shared {
 void Config::Shared::apply_override(const std::string& assignment) {
   const std::size_t equals = assignment.find('=');
   const std::string origin = "command line --set " + assignment;
-  if (equals == std::string::npos || equals == 0)
-    throw InputError(origin + ": expected key.path=value");
+  if (equals == std::string::npos || equals == 0) throw InputError(origin + ": expected key.path=value");
   YAML::Node value;
   try {
     value = YAML::Load(assignment.substr(equals + 1));
@@ -208,7 +204,8 @@ void Config::Shared::reject_unknown(const YAML::Node& node, const std::string& p
     if (asked_here != asked.end())
       for (const std::string& candidate : asked_here->second) {
         const std::size_t distance = edit_distance(key, candidate);
-        if (candidate != key && distance < best_distance && distance < key.size()) best = candidate, best_distance = distance;
+        if (candidate != key && distance < best_distance && distance < key.size())
+          best = candidate, best_distance = distance;
       }
     if (!best.empty()) message += " (did you mean '" + best + "'?)";
     throw InputError(message);
@@ -358,8 +355,8 @@ Vec<dim> Config::vector(const std::string& key, const Vec<dim>& fallback, Range 
       const YAML::Node entry = node[i];
       if (const auto problem = number_problem(entry, range, value[i])) {
         const std::string entry_path = full + "[" + std::to_string(i) + "]";
-        throw InputError(shared_->position(entry_path, entry) + ": key '" + entry_path + "' = " +
-                         yaml_text(entry) + ": " + *problem);
+        throw InputError(shared_->position(entry_path, entry) + ": key '" + entry_path + "' = " + yaml_text(entry) +
+                         ": " + *problem);
       }
     }
   }
@@ -384,8 +381,8 @@ std::vector<double> Config::numbers(const std::string& key, Range range) const {
   for (std::size_t i = 0; i < node.size(); ++i) {
     if (const auto problem = number_problem(node[i], range, values[i])) {
       const std::string entry_path = full + "[" + std::to_string(i) + "]";
-      throw InputError(shared_->position(entry_path, node[i]) + ": key '" + entry_path + "' = " +
-                       yaml_text(node[i]) + ": " + *problem);
+      throw InputError(shared_->position(entry_path, node[i]) + ": key '" + entry_path + "' = " + yaml_text(node[i]) +
+                       ": " + *problem);
     }
     text += (i ? ", " : "") + format_number(values[i]);
   }
@@ -429,8 +426,8 @@ std::vector<Config> Config::list(const std::string& key) const {
   for (std::size_t i = 0; i < node.size(); ++i) {
     const std::string entry_path = full + "[" + std::to_string(i) + "]";
     if (!node[i].IsMap())
-      throw InputError(shared_->position(entry_path, node[i]) + ": key '" + entry_path + "' = " +
-                       yaml_text(node[i]) + ": expected a map of keys" + got(node[i]));
+      throw InputError(shared_->position(entry_path, node[i]) + ": key '" + entry_path + "' = " + yaml_text(node[i]) +
+                       ": expected a map of keys" + got(node[i]));
     entries.push_back(Config(shared_, std::make_unique<YAML::Node>(node[i]), entry_path));
   }
   return entries;

@@ -25,8 +25,8 @@ std::string describe(const Eigen::Matrix<T, dim, 1>& x) {
 // First stencil node of a particle at cell coordinate xi; false when xi is not finite or the
 // stencil leaves the grid (then `axis` is the offending axis, -1 for a non-finite position).
 template <int dim, class T, class K>
-bool stencil_base_in_grid(const K& kernel, const Eigen::Matrix<T, dim, 1>& xi,
-                          const IVec<dim>& node_counts, IVec<dim>& base, int& axis) {
+bool stencil_base_in_grid(const K& kernel, const Eigen::Matrix<T, dim, 1>& xi, const IVec<dim>& node_counts,
+                          IVec<dim>& base, int& axis) {
   axis = -1;
   if (!xi.allFinite()) return false;
   for (int a = 0; a < dim; ++a) {
@@ -44,9 +44,8 @@ bool stencil_base_in_grid(const K& kernel, const Eigen::Matrix<T, dim, 1>& xi,
 // when the keys are already in storage order; the return value says which). Fills
 // everything of `buckets` but the index and allocates the grid blocks.
 template <int dim, class T>
-bool order_by_block(const std::vector<Eigen::Matrix<T, dim, 1>>& x, const Kernel& kernel,
-                    SparseGrid<dim>& grid, ParticleBuckets<dim>& buckets, const std::string& stage,
-                    std::vector<std::uint32_t>& order) {
+bool order_by_block(const std::vector<Eigen::Matrix<T, dim, 1>>& x, const Kernel& kernel, SparseGrid<dim>& grid,
+                    ParticleBuckets<dim>& buckets, const std::string& stage, std::vector<std::uint32_t>& order) {
   const std::size_t n = x.size();
   const CellMap<dim> map(grid);
 
@@ -54,32 +53,35 @@ bool order_by_block(const std::vector<Eigen::Matrix<T, dim, 1>>& x, const Kernel
   // lowest index so that the message does not depend on the thread count.
   std::vector<int> key(n);
   std::atomic<std::size_t> first_bad{n};
-  std::visit([&](const auto& k) {
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1 << 14), [&](const auto& r) {
-      for (std::size_t p = r.begin(); p != r.end(); ++p) {
-        IVec<dim> base;
-        int axis;
-        if (stencil_base_in_grid<dim, T>(k, map(x[p]), grid.node_counts(), base, axis)) {
-          key[p] = grid.block_id(base);
-        } else {
-          std::size_t seen = first_bad.load();
-          while (p < seen && !first_bad.compare_exchange_weak(seen, p)) {}
-          key[p] = 0;
+  std::visit(
+      [&](const auto& k) {
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1 << 14), [&](const auto& r) {
+          for (std::size_t p = r.begin(); p != r.end(); ++p) {
+            IVec<dim> base;
+            int axis;
+            if (stencil_base_in_grid<dim, T>(k, map(x[p]), grid.node_counts(), base, axis)) {
+              key[p] = grid.block_id(base);
+            } else {
+              std::size_t seen = first_bad.load();
+              while (p < seen && !first_bad.compare_exchange_weak(seen, p)) {
+              }
+              key[p] = 0;
+            }
+          }
+        });
+        if (const std::size_t p = first_bad.load(); p < n) {
+          IVec<dim> base;
+          int axis;
+          stencil_base_in_grid<dim, T>(k, map(x[p]), grid.node_counts(), base, axis);
+          if (axis < 0)
+            throw NumericalError("stage '" + stage + "': particle " + std::to_string(p) +
+                                 " has a non-finite position " + describe<dim, T>(x[p]));
+          throw NumericalError("stage '" + stage + "': particle " + std::to_string(p) + " at " +
+                               describe<dim, T>(x[p]) + " left the grid domain (axis " + std::to_string(axis) +
+                               "); keep particles inside the walls");
         }
-      }
-    });
-    if (const std::size_t p = first_bad.load(); p < n) {
-      IVec<dim> base;
-      int axis;
-      stencil_base_in_grid<dim, T>(k, map(x[p]), grid.node_counts(), base, axis);
-      if (axis < 0)
-        throw NumericalError("stage '" + stage + "': particle " + std::to_string(p) +
-                             " has a non-finite position " + describe<dim, T>(x[p]));
-      throw NumericalError("stage '" + stage + "': particle " + std::to_string(p) + " at " +
-                           describe<dim, T>(x[p]) + " left the grid domain (axis " +
-                           std::to_string(axis) + "); keep particles inside the walls");
-    }
-  }, kernel);
+      },
+      kernel);
 
   // Counting sort by block id: O(n + table size), stable. The sorted keys are written in the
   // same pass as the order (same target position, so no extra random access).
@@ -157,9 +159,8 @@ IVec<dim> stencil_base(const SparseGrid<dim>& grid, const Kernel& kernel, const 
 }
 
 template <int dim, class T>
-bool sort_into_buckets(const std::vector<Eigen::Matrix<T, dim, 1>>& x, const Kernel& kernel,
-                       SparseGrid<dim>& grid, ParticleBuckets<dim>& buckets, const MoveParticles& move,
-                       const std::string& stage) {
+bool sort_into_buckets(const std::vector<Eigen::Matrix<T, dim, 1>>& x, const Kernel& kernel, SparseGrid<dim>& grid,
+                       ParticleBuckets<dim>& buckets, const MoveParticles& move, const std::string& stage) {
   if (order_by_block(x, kernel, grid, buckets, stage, buckets.particle)) {
     identity(buckets.particle, x.size());
     return false;
@@ -174,32 +175,30 @@ template <int dim>
 bool sort_into_buckets(Particles<dim>& particles, const Kernel& kernel, SparseGrid<dim>& grid,
                        ParticleBuckets<dim>& buckets, const std::string& stage) {
   return sort_into_buckets<dim, double>(
-      particles.x, kernel, grid, buckets,
-      [&](const std::vector<std::uint32_t>& order) { particles.permute(order); }, stage);
+      particles.x, kernel, grid, buckets, [&](const std::vector<std::uint32_t>& order) { particles.permute(order); },
+      stage);
 }
 
 template <int dim, class T>
-std::vector<std::uint32_t> bucket_order(const std::vector<Eigen::Matrix<T, dim, 1>>& x,
-                                        const Kernel& kernel, SparseGrid<dim>& grid,
-                                        ParticleBuckets<dim>& buckets, const std::string& stage) {
+std::vector<std::uint32_t> bucket_order(const std::vector<Eigen::Matrix<T, dim, 1>>& x, const Kernel& kernel,
+                                        SparseGrid<dim>& grid, ParticleBuckets<dim>& buckets,
+                                        const std::string& stage) {
   std::vector<std::uint32_t> order;
   order_by_block(x, kernel, grid, buckets, stage, order);
   identity(buckets.particle, x.size());
   return order;
 }
 
-#define MPM_INSTANTIATE_SCALAR(dim, T)                                                            \
-  template bool sort_into_buckets(const std::vector<Eigen::Matrix<T, dim, 1>>&, const Kernel&,    \
-                                  SparseGrid<dim>&, ParticleBuckets<dim>&, const MoveParticles&,  \
-                                  const std::string&);                                            \
-  template std::vector<std::uint32_t> bucket_order(const std::vector<Eigen::Matrix<T, dim, 1>>&,  \
-                                                   const Kernel&, SparseGrid<dim>&,               \
-                                                   ParticleBuckets<dim>&, const std::string&);
-#define MPM_INSTANTIATE(dim)                                                                      \
-  template IVec<dim> stencil_base(const SparseGrid<dim>&, const Kernel&, const Vec<dim>&);        \
-  template bool sort_into_buckets(Particles<dim>&, const Kernel&, SparseGrid<dim>&,               \
-                                  ParticleBuckets<dim>&, const std::string&);                     \
-  MPM_INSTANTIATE_SCALAR(dim, double)                                                             \
+#define MPM_INSTANTIATE_SCALAR(dim, T)                                                                           \
+  template bool sort_into_buckets(const std::vector<Eigen::Matrix<T, dim, 1>>&, const Kernel&, SparseGrid<dim>&, \
+                                  ParticleBuckets<dim>&, const MoveParticles&, const std::string&);              \
+  template std::vector<std::uint32_t> bucket_order(const std::vector<Eigen::Matrix<T, dim, 1>>&, const Kernel&,  \
+                                                   SparseGrid<dim>&, ParticleBuckets<dim>&, const std::string&);
+#define MPM_INSTANTIATE(dim)                                                                               \
+  template IVec<dim> stencil_base(const SparseGrid<dim>&, const Kernel&, const Vec<dim>&);                 \
+  template bool sort_into_buckets(Particles<dim>&, const Kernel&, SparseGrid<dim>&, ParticleBuckets<dim>&, \
+                                  const std::string&);                                                     \
+  MPM_INSTANTIATE_SCALAR(dim, double)                                                                      \
   MPM_INSTANTIATE_SCALAR(dim, float)
 MPM_INSTANTIATE(2)
 MPM_INSTANTIATE(3)

@@ -15,8 +15,8 @@ std::string StageTimes::table() const {
   std::snprintf(line, sizeof line, "%-*s %12s %7s\n", static_cast<int>(width), "stage", "seconds", "share");
   out += line;
   for (std::size_t s = 0; s < names.size(); ++s) {
-    std::snprintf(line, sizeof line, "%-*s %12.3f %6.1f%%\n", static_cast<int>(width), names[s].c_str(),
-                  seconds[s], total > 0 ? 100.0 * seconds[s] / total : 0.0);
+    std::snprintf(line, sizeof line, "%-*s %12.3f %6.1f%%\n", static_cast<int>(width), names[s].c_str(), seconds[s],
+                  total > 0 ? 100.0 * seconds[s] / total : 0.0);
     out += line;
   }
   std::snprintf(line, sizeof line, "%-*s %12.3f\n", static_cast<int>(width), "total", total);

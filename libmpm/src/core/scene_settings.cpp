@@ -52,7 +52,8 @@ std::array<bool, dim> parse_periodic(const Config& scene, const SceneSettings<di
   const std::vector<std::string> flags = scene.texts("periodic");
   if (flags.empty()) return periodic;
   if (flags.size() != static_cast<std::size_t>(dim))
-    scene.fail("periodic", "needs one flag per axis (" + std::to_string(dim) + "), got " + std::to_string(flags.size()));
+    scene.fail("periodic",
+               "needs one flag per axis (" + std::to_string(dim) + "), got " + std::to_string(flags.size()));
   const std::optional<Config> walls = scene.optional_child("walls");
   for (int a = 0; a < dim; ++a) {
     if (flags[a] != "true" && flags[a] != "false")
@@ -61,7 +62,8 @@ std::array<bool, dim> parse_periodic(const Config& scene, const SceneSettings<di
     if (!periodic[a]) continue;
     const double cells = (s.domain_hi[a] - s.domain_lo[a]) / s.dx;
     if (std::abs(cells - std::round(cells)) > 1e-9 * cells || std::round(cells) < 4)
-      scene.fail("periodic", std::string("axis ") + "xyz"[a] + " is periodic, so hi - lo must be a whole number (>= 4) of cells dx; it is " +
+      scene.fail("periodic", std::string("axis ") + "xyz"[a] +
+                                 " is periodic, so hi - lo must be a whole number (>= 4) of cells dx; it is " +
                                  std::to_string(cells) + " cells");
     if (!walls) continue;
     const std::string contact = walls->text("contact", "separate");  // parse_contact's default

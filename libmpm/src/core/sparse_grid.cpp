@@ -18,9 +18,9 @@ SparseGrid<dim>::SparseGrid(const Vec<dim>& lo, const Vec<dim>& hi, double dx, c
     if (periodic[a]) {
       const double cells = (hi[a] - lo[a]) / dx;
       period_[a] = static_cast<int>(std::lround(cells));
-      verify<InputError>(period_[a] >= 2 && std::abs(cells - period_[a]) <= 1e-9 * cells,
-                         "a periodic axis needs a whole number (>= 2) of cells: (hi - lo) / dx = " +
-                             std::to_string(cells));
+      verify<InputError>(
+          period_[a] >= 2 && std::abs(cells - period_[a]) <= 1e-9 * cells,
+          "a periodic axis needs a whole number (>= 2) of cells: (hi - lo) / dx = " + std::to_string(cells));
       origin_[a] -= periodic_margin * dx;
       node_counts_[a] = period_[a] + 1 + 2 * periodic_margin;
     }

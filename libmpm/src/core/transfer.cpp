@@ -17,20 +17,22 @@ std::array<ChannelView, dim> vector_views(const std::vector<Vec<dim>>& v) {
 }
 
 template <int dim>
-void particles_to_grid(const Particles<dim>& particles, const ParticleBuckets<dim>& buckets,
-                       const Kernel& kernel, const TransferScheme& scheme, SparseGrid<dim>& grid) {
+void particles_to_grid(const Particles<dim>& particles, const ParticleBuckets<dim>& buckets, const Kernel& kernel,
+                       const TransferScheme& scheme, SparseGrid<dim>& grid) {
   std::fill(grid.mass.begin(), grid.mass.end(), 0.0);
   std::fill(grid.velocity.begin(), grid.velocity.end(), Vec<dim>::Zero());
   std::array<ChannelView, dim + 1> channels;
   channels[0] = scalar_view(grid.mass);
   for (int a = 0; a < dim; ++a) channels[a + 1] = component_view<dim>(grid.velocity, a);
-  std::visit([&](const auto& k) {
-    using K = std::decay_t<decltype(k)>;
-    if (scheme.type == TransferScheme::Type::apic)
-      detail::p2g<dim, K, true>(particles, buckets, k, grid, channels);
-    else
-      detail::p2g<dim, K, false>(particles, buckets, k, grid, channels);
-  }, kernel);
+  std::visit(
+      [&](const auto& k) {
+        using K = std::decay_t<decltype(k)>;
+        if (scheme.type == TransferScheme::Type::apic)
+          detail::p2g<dim, K, true>(particles, buckets, k, grid, channels);
+        else
+          detail::p2g<dim, K, false>(particles, buckets, k, grid, channels);
+      },
+      kernel);
 }
 
 template <int dim>
@@ -40,47 +42,52 @@ void momentum_to_velocity(SparseGrid<dim>& grid, const TransferScheme& scheme) {
     for (std::size_t k = r.begin(); k != r.end(); ++k)
       grid.velocity[k] = grid.mass[k] > 0.0 ? Vec<dim>(grid.velocity[k] / grid.mass[k]) : Vec<dim>::Zero();
   });
-  if (scheme.uses_old_velocity()) grid.velocity_old = grid.velocity;
-  else grid.velocity_old.clear();
+  if (scheme.uses_old_velocity())
+    grid.velocity_old = grid.velocity;
+  else
+    grid.velocity_old.clear();
 }
 
 template <int dim>
-void grid_to_particles(Particles<dim>& particles, const ParticleBuckets<dim>& buckets,
-                       const Kernel& kernel, const TransferScheme& scheme,
-                       const SparseGrid<dim>& grid, double dt) {
+void grid_to_particles(Particles<dim>& particles, const ParticleBuckets<dim>& buckets, const Kernel& kernel,
+                       const TransferScheme& scheme, const SparseGrid<dim>& grid, double dt) {
   const std::array<ChannelView, dim> velocity = vector_views<dim>(grid.velocity);
-  std::visit([&](const auto& k) {
-    using K = std::decay_t<decltype(k)>;
-    if (scheme.type == TransferScheme::Type::apic) {
-      detail::g2p<dim, K, false>(particles, buckets, k, grid, velocity, 0.0, dt);
-    } else {
-      std::array<ChannelView, 2 * dim> both;
-      const std::array<ChannelView, dim> old = vector_views<dim>(grid.velocity_old);
-      std::copy(velocity.begin(), velocity.end(), both.begin());
-      std::copy(old.begin(), old.end(), both.begin() + dim);
-      detail::g2p<dim, K, true>(particles, buckets, k, grid, both, scheme.flip_ratio, dt);
-    }
-  }, kernel);
+  std::visit(
+      [&](const auto& k) {
+        using K = std::decay_t<decltype(k)>;
+        if (scheme.type == TransferScheme::Type::apic) {
+          detail::g2p<dim, K, false>(particles, buckets, k, grid, velocity, 0.0, dt);
+        } else {
+          std::array<ChannelView, 2 * dim> both;
+          const std::array<ChannelView, dim> old = vector_views<dim>(grid.velocity_old);
+          std::copy(velocity.begin(), velocity.end(), both.begin());
+          std::copy(old.begin(), old.end(), both.begin() + dim);
+          detail::g2p<dim, K, true>(particles, buckets, k, grid, both, scheme.flip_ratio, dt);
+        }
+      },
+      kernel);
 }
 
 template <int dim>
-void velocity_gradient(const Particles<dim>& P, const ParticleBuckets<dim>& buckets,
-                       const Kernel& kernel, const SparseGrid<dim>& grid, std::vector<Mat<dim>>& grad_v) {
+void velocity_gradient(const Particles<dim>& P, const ParticleBuckets<dim>& buckets, const Kernel& kernel,
+                       const SparseGrid<dim>& grid, std::vector<Mat<dim>>& grad_v) {
   grad_v.resize(P.size());
   const double inv_dx = 1.0 / grid.dx();
-  std::visit([&](const auto& k) {
-    using K = std::decay_t<decltype(k)>;
-    detail::gather<dim, dim>(grid, buckets, vector_views<dim>(grid.velocity),
-                             [&](std::uint32_t p, const PatchFrame<dim>& f, const double* patch) {
-      Stencil<dim, K::support> st;
-      st.compute(k, f.cells(P.x[p]), f.origin);
-      Mat<dim> g = Mat<dim>::Zero();
-      st.for_each_node([&](int node, double, const Vec<dim>& grad, const Vec<dim>&) {
-        g.noalias() += Eigen::Map<const Vec<dim>>(patch + node * dim) * grad.transpose();
-      });
-      grad_v[p] = g * inv_dx;
-    });
-  }, kernel);
+  std::visit(
+      [&](const auto& k) {
+        using K = std::decay_t<decltype(k)>;
+        detail::gather<dim, dim>(grid, buckets, vector_views<dim>(grid.velocity),
+                                 [&](std::uint32_t p, const PatchFrame<dim>& f, const double* patch) {
+                                   Stencil<dim, K::support> st;
+                                   st.compute(k, f.cells(P.x[p]), f.origin);
+                                   Mat<dim> g = Mat<dim>::Zero();
+                                   st.for_each_node([&](int node, double, const Vec<dim>& grad, const Vec<dim>&) {
+                                     g.noalias() += Eigen::Map<const Vec<dim>>(patch + node * dim) * grad.transpose();
+                                   });
+                                   grad_v[p] = g * inv_dx;
+                                 });
+      },
+      kernel);
 }
 
 template <int dim>
@@ -89,17 +96,19 @@ void scalar_to_grid(const std::vector<double>& values, const Particles<dim>& P, 
   out.assign(grid.node_storage(), 0.0);
   using Node = Eigen::Matrix<double, 1, 1>;
   const std::array<detail::ChannelView, 1> channels{detail::scalar_view(out)};
-  std::visit([&](const auto& k) {
-    using K = std::decay_t<decltype(k)>;
-    detail::scatter<dim, 1>(grid, buckets, channels, [&](std::uint32_t p, const PatchFrame<dim>& f, double* patch) {
-      Stencil<dim, K::support> st;
-      st.template compute<false>(k, f.cells(P.x[p]), f.origin);
-      Node c[dim + 1];
-      for (Node& ci : c) ci.setZero();
-      c[0](0) = values[p];
-      detail::spread<false>(st, c, patch);
-    });
-  }, kernel);
+  std::visit(
+      [&](const auto& k) {
+        using K = std::decay_t<decltype(k)>;
+        detail::scatter<dim, 1>(grid, buckets, channels, [&](std::uint32_t p, const PatchFrame<dim>& f, double* patch) {
+          Stencil<dim, K::support> st;
+          st.template compute<false>(k, f.cells(P.x[p]), f.origin);
+          Node c[dim + 1];
+          for (Node& ci : c) ci.setZero();
+          c[0](0) = values[p];
+          detail::spread<false>(st, c, patch);
+        });
+      },
+      kernel);
 }
 
 template <int dim>
@@ -109,33 +118,34 @@ void stress_to_grid_forces(const std::vector<Mat<dim>>& weighted_stress, const P
   std::array<ChannelView, dim> channels;
   for (int a = 0; a < dim; ++a) channels[a] = component_view<dim>(g.force, a);
   const double inv_dx = 1.0 / g.dx();
-  std::visit([&](const auto& k) {
-    using K = std::decay_t<decltype(k)>;
-    detail::scatter<dim, dim>(g, buckets, channels, [&](std::uint32_t p, const PatchFrame<dim>& f, double* patch) {
-      Stencil<dim, K::support> st;
-      st.compute(k, f.cells(P.x[p]), f.origin);
-      const Mat<dim> A = -inv_dx * weighted_stress[p];
-      st.for_each_node([&](int node, double, const Vec<dim>& grad, const Vec<dim>&) {
-        const Vec<dim> fi = A * grad;
-        for (int a = 0; a < dim; ++a) patch[node * dim + a] += fi[a];
-      });
-    });
-  }, kernel);
+  std::visit(
+      [&](const auto& k) {
+        using K = std::decay_t<decltype(k)>;
+        detail::scatter<dim, dim>(g, buckets, channels, [&](std::uint32_t p, const PatchFrame<dim>& f, double* patch) {
+          Stencil<dim, K::support> st;
+          st.compute(k, f.cells(P.x[p]), f.origin);
+          const Mat<dim> A = -inv_dx * weighted_stress[p];
+          st.for_each_node([&](int node, double, const Vec<dim>& grad, const Vec<dim>&) {
+            const Vec<dim> fi = A * grad;
+            for (int a = 0; a < dim; ++a) patch[node * dim + a] += fi[a];
+          });
+        });
+      },
+      kernel);
 }
 
-#define MPM_INSTANTIATE(dim)                                                                      \
-  template void particles_to_grid(const Particles<dim>&, const ParticleBuckets<dim>&,            \
-                                  const Kernel&, const TransferScheme&, SparseGrid<dim>&);         \
-  template void momentum_to_velocity(SparseGrid<dim>&, const TransferScheme&);                    \
-  template void grid_to_particles(Particles<dim>&, const ParticleBuckets<dim>&, const Kernel&,    \
-                                  const TransferScheme&, const SparseGrid<dim>&, double);          \
-  template void scalar_to_grid(const std::vector<double>&, const Particles<dim>&,                 \
-                               const ParticleBuckets<dim>&, const Kernel&, const SparseGrid<dim>&,  \
-                               std::vector<double>&);                                               \
-  template void stress_to_grid_forces(const std::vector<Mat<dim>>&, const Particles<dim>&,        \
-                                      const ParticleBuckets<dim>&, const Kernel&, SparseGrid<dim>&);   \
-  template void velocity_gradient(const Particles<dim>&, const ParticleBuckets<dim>&,             \
-                                  const Kernel&, const SparseGrid<dim>&, std::vector<Mat<dim>>&);
+#define MPM_INSTANTIATE(dim)                                                                                          \
+  template void particles_to_grid(const Particles<dim>&, const ParticleBuckets<dim>&, const Kernel&,                  \
+                                  const TransferScheme&, SparseGrid<dim>&);                                           \
+  template void momentum_to_velocity(SparseGrid<dim>&, const TransferScheme&);                                        \
+  template void grid_to_particles(Particles<dim>&, const ParticleBuckets<dim>&, const Kernel&, const TransferScheme&, \
+                                  const SparseGrid<dim>&, double);                                                    \
+  template void scalar_to_grid(const std::vector<double>&, const Particles<dim>&, const ParticleBuckets<dim>&,        \
+                               const Kernel&, const SparseGrid<dim>&, std::vector<double>&);                          \
+  template void stress_to_grid_forces(const std::vector<Mat<dim>>&, const Particles<dim>&,                            \
+                                      const ParticleBuckets<dim>&, const Kernel&, SparseGrid<dim>&);                  \
+  template void velocity_gradient(const Particles<dim>&, const ParticleBuckets<dim>&, const Kernel&,                  \
+                                  const SparseGrid<dim>&, std::vector<Mat<dim>>&);
 MPM_INSTANTIATE(2)
 MPM_INSTANTIATE(3)
 

@@ -28,14 +28,15 @@ BodyParticles<dim> seed_body_shape(const Config& body, const SceneSettings<dim>&
   if (shape == "box")
     b.x = seed_box<dim>(body.vector<dim>("lo"), body.vector<dim>("hi"), dx, ppc, jitter, seed);
   else if (shape == "sphere")
-    b.x = seed_sphere<dim>(body.vector<dim>("center"), body.number("radius", Range::positive()), dx, ppc, jitter,
-                           seed);
+    b.x = seed_sphere<dim>(body.vector<dim>("center"), body.number("radius", Range::positive()), dx, ppc, jitter, seed);
   else
     b.x = seed_level_set<dim>(parse_level_set<dim>(body), dx, ppc, jitter, seed);
   if (b.x.empty()) body.fail("shape", "the body contains no particle at this resolution");
   // Blame the key that placed the body, so the message carries its file position and value.
   if (const OutsideDomain outside = first_outside_domain(settings, b.x); !outside.why.empty())
-    body.fail(shape == "box" ? (outside.below ? "lo" : "hi") : shape == "sphere" ? "center" : "file",
+    body.fail(shape == "box"      ? (outside.below ? "lo" : "hi")
+              : shape == "sphere" ? "center"
+                                  : "file",
               "expected the body inside the domain, but " + outside.why);
   return b;
 }

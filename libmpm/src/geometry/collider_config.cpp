@@ -83,8 +83,7 @@ LevelSetShape<dim> parse_level_set(const Config& entry) {
   }
 
   const bool is_mesh = is_triangle_mesh_file(file);
-  if (!is_mesh && path.extension() != ".vdb")
-    entry.fail("file", "unknown extension: expected .vdb, .obj or .stl");
+  if (!is_mesh && path.extension() != ".vdb") entry.fail("file", "unknown extension: expected .vdb, .obj or .stl");
   for (const char* key : {"voxel_size", "half_width"})
     if (!is_mesh && entry.has(key)) entry.fail(key, "applies to mesh files only; a .vdb file has its own voxels");
   if (is_mesh && entry.has("grid_name")) entry.fail("grid_name", "applies to .vdb files only");
@@ -101,7 +100,6 @@ LevelSetShape<dim> parse_level_set(const Config& entry) {
     entry.fail("file", e.what());
   }
 }
-
 
 template <int dim>
 Collider<dim> parse_collider(const Config& entry) {
@@ -121,8 +119,7 @@ DomainWalls<dim> parse_walls(const Config& walls, const Vec<dim>& domain_lo, con
   for (int axis = 0; axis < dim; ++axis) {
     for (const Side side : {Side::lower, Side::upper}) {
       const std::string key = std::string(1, "xyz"[axis]) + (side == Side::lower ? "_min" : "_max");
-      const std::string choice =
-          walls.choice(key, contact_name(contact.type), {"sticky", "slip", "separate", "open"});
+      const std::string choice = walls.choice(key, contact_name(contact.type), {"sticky", "slip", "separate", "open"});
       if (choice == "open")
         result.set_wall(axis, side, std::nullopt);
       else

@@ -54,7 +54,8 @@ template <int dim>
 FlowBoundaries<dim> parse_flow_boundaries(const Config& scene, const SceneSettings<dim>& settings) {
   FlowBoundaries<dim> flow;
   const double layer = wall_layer(settings.kernel, settings.dx);
-  if (const std::optional<Config> out = scene.optional_child("outflow")) flow.outflow = parse_face<dim>(*out, scene, settings);
+  if (const std::optional<Config> out = scene.optional_child("outflow"))
+    flow.outflow = parse_face<dim>(*out, scene, settings);
   const std::optional<Config> in = scene.optional_child("inflow");
   if (!in) return flow;
 
@@ -133,14 +134,15 @@ std::vector<stages::SinkRegion<dim>> flow_sink_regions(const FlowBoundaries<dim>
                                                        const SceneSettings<dim>& settings) {
   const double layer = wall_layer(settings.kernel, settings.dx);
   std::vector<stages::SinkRegion<dim>> regions;
-  for (const std::optional<Face>& f : {flow.outflow, flow.inflow ? std::optional<Face>(flow.inflow->face)
-                                                                 : std::optional<Face>()})
+  for (const std::optional<Face>& f :
+       {flow.outflow, flow.inflow ? std::optional<Face>(flow.inflow->face) : std::optional<Face>()})
     if (f) regions.push_back(stages::face_region<dim>(settings.domain_lo, settings.domain_hi, f->axis, f->side, layer));
   return regions;
 }
 
 template <int dim>
-void require_inside_domain(const Config& at, const Vec<dim>& lo, const Vec<dim>& hi, const SceneSettings<dim>& settings) {
+void require_inside_domain(const Config& at, const Vec<dim>& lo, const Vec<dim>& hi,
+                           const SceneSettings<dim>& settings) {
   const auto box = [&] {
     std::string text = "must lie inside the domain, from";
     for (const Vec<dim>* corner : {&settings.domain_lo, &settings.domain_hi}) {
@@ -153,13 +155,12 @@ void require_inside_domain(const Config& at, const Vec<dim>& lo, const Vec<dim>&
   if ((hi.array() > settings.domain_hi.array()).any()) at.fail("hi", box());
 }
 
-#define MPM_FLOW_BOUNDARIES(dim)                                                                              \
-  template void require_inside_domain(const Config&, const Vec<dim>&, const Vec<dim>&, const SceneSettings<dim>&); \
-  template FlowBoundaries<dim> parse_flow_boundaries(const Config&, const SceneSettings<dim>&);               \
-  template void add_flow_boundaries(const FlowBoundaries<dim>&, ColliderSet<dim>&);                           \
-  template stages::ParticleSource<dim>::Settings inflow_source(const Inflow<dim>&, const SceneSettings<dim>&, \
-                                                               double);                                       \
-  template std::vector<stages::SinkRegion<dim>> flow_sink_regions(const FlowBoundaries<dim>&,                 \
+#define MPM_FLOW_BOUNDARIES(dim)                                                                                       \
+  template void require_inside_domain(const Config&, const Vec<dim>&, const Vec<dim>&, const SceneSettings<dim>&);     \
+  template FlowBoundaries<dim> parse_flow_boundaries(const Config&, const SceneSettings<dim>&);                        \
+  template void add_flow_boundaries(const FlowBoundaries<dim>&, ColliderSet<dim>&);                                    \
+  template stages::ParticleSource<dim>::Settings inflow_source(const Inflow<dim>&, const SceneSettings<dim>&, double); \
+  template std::vector<stages::SinkRegion<dim>> flow_sink_regions(const FlowBoundaries<dim>&,                          \
                                                                   const SceneSettings<dim>&);
 MPM_FLOW_BOUNDARIES(2)
 MPM_FLOW_BOUNDARIES(3)

@@ -9,8 +9,7 @@ LevelSet::LevelSet(std::shared_ptr<const detail::LevelSetGrid> grid) : grid_(std
 double LevelSet::phi(const Vec<3>& x) const { return grid_->phi(x); }
 
 Vec<3> LevelSet::normal(const Vec<3>& x) const {
-  return detail::normal_by_central_differences<3>([this](const Vec<3>& y) { return phi(y); }, x,
-                                                  grid_->voxel_size());
+  return detail::normal_by_central_differences<3>([this](const Vec<3>& y) { return phi(y); }, x, grid_->voxel_size());
 }
 
 const BoundingBox& LevelSet::bounding_box() const { return grid_->bounding_box(); }

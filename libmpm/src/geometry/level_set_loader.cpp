@@ -43,8 +43,7 @@ LoadedPlugin load_plugin() {
   Dl_info core{};
   if (dladdr(reinterpret_cast<void*>(&load_plugin), &core) == 0 || core.dli_fname == nullptr)
     return {nullptr, "dladdr cannot tell where libmpm_core is"};
-  const std::string path =
-      std::filesystem::absolute(core.dli_fname).replace_filename(MPM_OPENVDB_PLUGIN).string();
+  const std::string path = std::filesystem::absolute(core.dli_fname).replace_filename(MPM_OPENVDB_PLUGIN).string();
   void* handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
   if (handle == nullptr) return {nullptr, dl_failure(path)};
   using EntryPoint = const detail::OpenVdbPlugin* (*)();
@@ -68,9 +67,9 @@ LoadedPlugin load_plugin() {
 const detail::OpenVdbPlugin& openvdb(const std::string& file) {
   static const LoadedPlugin loaded = load_plugin();  // once per process; thread-safe initialisation
   if (loaded.plugin == nullptr)
-    throw InputError(file + ": a level-set obstacle needs the OpenVDB plugin, which did not load: " +
-                     loaded.failure + " (a build configured with -DSEDIMENT_WITH_OPENVDB=ON builds " +
-                     MPM_OPENVDB_PLUGIN + " and installs it beside libmpm_core)");
+    throw InputError(file + ": a level-set obstacle needs the OpenVDB plugin, which did not load: " + loaded.failure +
+                     " (a build configured with -DSEDIMENT_WITH_OPENVDB=ON builds " + MPM_OPENVDB_PLUGIN +
+                     " and installs it beside libmpm_core)");
   return *loaded.plugin;
 }
 

@@ -9,8 +9,9 @@ namespace mpm::geometry {
 namespace {
 
 [[noreturn]] void no_openvdb(const std::string& file) {
-  throw InputError(file + ": a level-set obstacle needs OpenVDB, and this build has no OpenVDB "
-                          "(configure with -DSEDIMENT_WITH_OPENVDB=ON)");
+  throw InputError(file +
+                   ": a level-set obstacle needs OpenVDB, and this build has no OpenVDB "
+                   "(configure with -DSEDIMENT_WITH_OPENVDB=ON)");
 }
 
 }  // namespace

@@ -145,8 +145,7 @@ std::shared_ptr<const detail::LevelSetGrid> grid_from_mesh(const std::string& fi
 }  // namespace mpm::geometry
 
 extern "C" const mpm::geometry::detail::OpenVdbPlugin* mpm_openvdb_plugin() {
-  static const mpm::geometry::detail::OpenVdbPlugin plugin{mpm::geometry::detail::kOpenVdbPluginVersion,
-                                                           &mpm::geometry::grid_from_vdb,
-                                                           &mpm::geometry::grid_from_mesh};
+  static const mpm::geometry::detail::OpenVdbPlugin plugin{
+      mpm::geometry::detail::kOpenVdbPluginVersion, &mpm::geometry::grid_from_vdb, &mpm::geometry::grid_from_mesh};
   return &plugin;
 }

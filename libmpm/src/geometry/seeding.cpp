@@ -85,8 +85,8 @@ std::vector<Vec<dim>> seed_lattice(const Vec<dim>& lo, const Vec<dim>& hi, doubl
 }
 
 template <int dim>
-std::vector<Vec<dim>> seed_box(const Vec<dim>& lo, const Vec<dim>& hi, double dx, int particles_per_cell,
-                               double jitter, std::uint64_t seed) {
+std::vector<Vec<dim>> seed_box(const Vec<dim>& lo, const Vec<dim>& hi, double dx, int particles_per_cell, double jitter,
+                               std::uint64_t seed) {
   return seed_lattice<dim>(lo, hi, dx, particles_per_cell, jitter, seed, [](const Vec<dim>&) { return true; });
 }
 
@@ -100,23 +100,21 @@ std::vector<Vec<dim>> seed_sphere(const Vec<dim>& center, double radius, double 
 }
 
 template <int dim>
-std::vector<Vec<dim>> seed_level_set(const LevelSetShape<dim>& shape, double dx, int particles_per_cell,
-                                     double jitter, std::uint64_t seed) {
+std::vector<Vec<dim>> seed_level_set(const LevelSetShape<dim>& shape, double dx, int particles_per_cell, double jitter,
+                                     std::uint64_t seed) {
   const BoundingBox& box = shape.level_set().bounding_box();
   return seed_lattice<dim>(box.lo.template head<dim>(), box.hi.template head<dim>(), dx, particles_per_cell, jitter,
                            seed, [&](const Vec<dim>& x) { return shape.inside(x); });
 }
 
-#define MPM_INSTANTIATE_SEEDING(dim)                                                                           \
-  template int lattice_points_per_axis<dim>(int);                                                              \
-  template double particle_volume<dim>(double, int);                                                           \
-  template std::vector<Vec<dim>> seed_lattice<dim>(const Vec<dim>&, const Vec<dim>&, double, int, double,      \
-                                                   std::uint64_t, const std::function<bool(const Vec<dim>&)>&); \
-  template std::vector<Vec<dim>> seed_box<dim>(const Vec<dim>&, const Vec<dim>&, double, int, double,          \
-                                               std::uint64_t);                                                 \
-  template std::vector<Vec<dim>> seed_sphere<dim>(const Vec<dim>&, double, double, int, double, std::uint64_t); \
-  template std::vector<Vec<dim>> seed_level_set<dim>(const LevelSetShape<dim>&, double, int, double,           \
-                                                     std::uint64_t);
+#define MPM_INSTANTIATE_SEEDING(dim)                                                                                  \
+  template int lattice_points_per_axis<dim>(int);                                                                     \
+  template double particle_volume<dim>(double, int);                                                                  \
+  template std::vector<Vec<dim>> seed_lattice<dim>(const Vec<dim>&, const Vec<dim>&, double, int, double,             \
+                                                   std::uint64_t, const std::function<bool(const Vec<dim>&)>&);       \
+  template std::vector<Vec<dim>> seed_box<dim>(const Vec<dim>&, const Vec<dim>&, double, int, double, std::uint64_t); \
+  template std::vector<Vec<dim>> seed_sphere<dim>(const Vec<dim>&, double, double, int, double, std::uint64_t);       \
+  template std::vector<Vec<dim>> seed_level_set<dim>(const LevelSetShape<dim>&, double, int, double, std::uint64_t);
 MPM_INSTANTIATE_SEEDING(2)
 MPM_INSTANTIATE_SEEDING(3)
 #undef MPM_INSTANTIATE_SEEDING

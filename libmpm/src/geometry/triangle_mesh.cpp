@@ -145,8 +145,8 @@ bool is_triangle_mesh_file(const std::string& file) {
 
 TriangleMesh read_triangle_mesh(const std::string& file) {
   if (!is_triangle_mesh_file(file))
-    fail(file, "unknown mesh extension '" + std::filesystem::path(file).extension().string() +
-                   "' (expected .obj or .stl)");
+    fail(file,
+         "unknown mesh extension '" + std::filesystem::path(file).extension().string() + "' (expected .obj or .stl)");
   std::ifstream in(file, std::ios::binary);
   if (!in) fail(file, "cannot open the mesh file");
   TriangleMesh mesh = lowercase_extension(file) == ".obj" ? read_obj(file, in) : read_stl(file, in);

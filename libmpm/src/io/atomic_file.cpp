@@ -33,8 +33,8 @@ void AtomicFile::commit() {
 void write_file_atomically(const std::filesystem::path& path, std::string_view content) {
   AtomicFile file(path);
   const auto fail = [&](const char* what) {
-    throw IoError("cannot write '" + path.string() + "': " + what + " '" +
-                  file.temp_path().string() + "': " + std::strerror(errno));
+    throw IoError("cannot write '" + path.string() + "': " + what + " '" + file.temp_path().string() +
+                  "': " + std::strerror(errno));
   };
   // POSIX I/O rather than a stream: errno gives the reason (ENOSPC, EACCES, ...).
   const int fd = ::open(file.temp_path().c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);

@@ -14,9 +14,8 @@ void verify_channel_sizes(const Particles<dim>& p, const std::filesystem::path& 
   const std::size_t n = p.size();
   p.for_each_channel([&](const ChannelInfo& info, const auto& values) {
     if (values.size() != n)
-      throw Error("cannot write '" + file.string() + "': the particle channels differ in length (" +
-                  std::to_string(n) + " positions, " + std::to_string(values.size()) + " values of '" + info.name +
-                  "')");
+      throw Error("cannot write '" + file.string() + "': the particle channels differ in length (" + std::to_string(n) +
+                  " positions, " + std::to_string(values.size()) + " values of '" + info.name + "')");
   });
 }
 

@@ -43,9 +43,12 @@ auto* scalars(Channel& values) {
 //! The dataset shape of n values of T: N x dim for a vector, N x dim*dim for a matrix, else N.
 template <int dim, class T>
 detail::Shape shape_of(hsize_t n) {
-  if constexpr (std::is_same_v<T, Vec<dim>>) return {n, hsize_t(dim)};
-  else if constexpr (std::is_same_v<T, Mat<dim>>) return {n, hsize_t(dim * dim)};
-  else return {n};
+  if constexpr (std::is_same_v<T, Vec<dim>>)
+    return {n, hsize_t(dim)};
+  else if constexpr (std::is_same_v<T, Mat<dim>>)
+    return {n, hsize_t(dim * dim)};
+  else
+    return {n};
 }
 
 std::string describe(const detail::Shape& shape) {
@@ -131,8 +134,8 @@ void load_checkpoint(const std::filesystem::path& path, CheckpointHeader& header
                      "; this program reads version " + std::to_string(kVersion));
   const auto stored_dim = file.read_attribute<std::int32_t>("dim");
   if (stored_dim != dim)
-    throw InputError("checkpoint " + name + " holds a " + std::to_string(stored_dim) +
-                     "D scene; this program is " + std::to_string(dim) + "D");
+    throw InputError("checkpoint " + name + " holds a " + std::to_string(stored_dim) + "D scene; this program is " +
+                     std::to_string(dim) + "D");
 
   // Filled locally so that a corrupt file leaves the caller's header untouched.
   CheckpointHeader loaded;
@@ -180,15 +183,15 @@ void load_checkpoint(const std::filesystem::path& path, CheckpointHeader& header
                        "): it was written by another scene");
     const detail::Shape expected = shape_of<dim, T>(n), shape = file.shape(set);
     if (shape != expected)
-      throw InputError(where + ": particle channel '" + info.name + "' has shape " + describe(shape) +
-                       ", expected " + describe(expected) + " (" + Particles<dim>::template type_name<T>() + ")");
+      throw InputError(where + ": particle channel '" + info.name + "' has shape " + describe(shape) + ", expected " +
+                       describe(expected) + " (" + Particles<dim>::template type_name<T>() + ")");
   });
 
   // Read into buffers first, so that `into` stays whole if a read fails; then swapped into
   // place, so that references to its channels stay valid. Particles seeded before the restart
   // are dropped, and channels that checkpoints do not keep start from their initial value.
-  using Buffer = std::variant<std::vector<double>, std::vector<Vec<dim>>, std::vector<Mat<dim>>,
-                              std::vector<std::uint16_t>>;
+  using Buffer =
+      std::variant<std::vector<double>, std::vector<Vec<dim>>, std::vector<Mat<dim>>, std::vector<std::uint16_t>>;
   std::vector<Buffer> buffers;
   into.for_each_channel([&](const ChannelInfo& info, const auto& values) {
     if (!info.use.checkpoint) return;

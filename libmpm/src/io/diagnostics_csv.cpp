@@ -54,16 +54,15 @@ void DiagnosticsCsv::open(const std::filesystem::path& path, std::vector<std::st
     throw IoError("cannot write '" + path_.string() + "': " + std::strerror(errno));
 }
 
-void DiagnosticsCsv::open_for_restart(const std::filesystem::path& path,
-                                      std::vector<std::string> columns, int last_frame_kept) {
+void DiagnosticsCsv::open_for_restart(const std::filesystem::path& path, std::vector<std::string> columns,
+                                      int last_frame_kept) {
   verify_columns(columns, path);
   const auto frame_column = std::find(columns.begin(), columns.end(), "frame") - columns.begin();
   verify<InputError>(frame_column < std::ssize(columns),
                      "diagnostics '" + path.string() + "': restart needs a 'frame' column");
 
   std::ifstream in(path, std::ios::binary);
-  if (!in)
-    throw IoError("cannot reopen '" + path.string() + "' for a restart: " + std::strerror(errno));
+  if (!in) throw IoError("cannot reopen '" + path.string() + "' for a restart: " + std::strerror(errno));
   const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
   const std::string header = header_line(columns);
 
@@ -71,13 +70,11 @@ void DiagnosticsCsv::open_for_restart(const std::filesystem::path& path,
   std::string kept;
   std::vector<std::vector<double>> rows;
   std::size_t line_number = 0;
-  for (std::size_t start = 0, end; (end = text.find('\n', start)) != std::string::npos;
-       start = end + 1) {
+  for (std::size_t start = 0, end; (end = text.find('\n', start)) != std::string::npos; start = end + 1) {
     const std::string_view line(text.data() + start, end - start);
     const std::string where = path.string() + ":" + std::to_string(++line_number);
     if (line_number == 1) {
-      if (line != header)
-        throw IoError(where + ": header '" + std::string(line) + "' differs from '" + header + "'");
+      if (line != header) throw IoError(where + ": header '" + std::string(line) + "' differs from '" + header + "'");
       continue;
     }
     const std::vector<std::string_view> fields = split(line);
@@ -108,9 +105,8 @@ void DiagnosticsCsv::open_for_restart(const std::filesystem::path& path,
 void DiagnosticsCsv::append(const std::vector<double>& row) {
   verify<IoError>(is_open(), "diagnostics: append before open");
   if (row.size() != columns_.size())
-    throw IoError("cannot append to '" + path_.string() + "': the row has " +
-                  std::to_string(row.size()) + " values, the header " +
-                  std::to_string(columns_.size()) + " columns");
+    throw IoError("cannot append to '" + path_.string() + "': the row has " + std::to_string(row.size()) +
+                  " values, the header " + std::to_string(columns_.size()) + " columns");
   std::string line;
   for (std::size_t i = 0; i < row.size(); ++i) line += (i ? "," : "") + detail::to_text(row[i]);
   line += '\n';

@@ -45,8 +45,7 @@ std::string describe(const Shape& shape) {
 
 }  // namespace
 
-Hdf5File::Hdf5File(const std::filesystem::path& file, Mode mode,
-                   const std::filesystem::path& reported)
+Hdf5File::Hdf5File(const std::filesystem::path& file, Mode mode, const std::filesystem::path& reported)
     : reported_(reported) {
   H5Eget_auto2(H5E_DEFAULT, &saved_printer_, &saved_printer_data_);
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
@@ -56,8 +55,8 @@ Hdf5File::Hdf5File(const std::filesystem::path& file, Mode mode,
     // The destructor does not run for a throwing constructor: restore the printer here.
     const std::string reason = take_reason();
     H5Eset_auto2(H5E_DEFAULT, saved_printer_, saved_printer_data_);
-    throw IoError("HDF5 file '" + reported_.string() + "': cannot " +
-                  (mode == Mode::create ? "create" : "open") + " it: " + reason);
+    throw IoError("HDF5 file '" + reported_.string() + "': cannot " + (mode == Mode::create ? "create" : "open") +
+                  " it: " + reason);
   }
 }
 
@@ -77,27 +76,22 @@ void Hdf5File::fail(const std::string& what) const {
   throw IoError("HDF5 file '" + reported_.string() + "': " + what + ": " + take_reason());
 }
 
-void Hdf5File::write_raw(const std::string& dataset, hid_t file_type, hid_t memory_type,
-                         const void* data, const Shape& shape) {
-  const Handle space(H5Screate_simple(static_cast<int>(shape.size()), shape.data(), nullptr),
-                     H5Sclose);
+void Hdf5File::write_raw(const std::string& dataset, hid_t file_type, hid_t memory_type, const void* data,
+                         const Shape& shape) {
+  const Handle space(H5Screate_simple(static_cast<int>(shape.size()), shape.data(), nullptr), H5Sclose);
   if (!space.valid()) fail("cannot describe dataset '" + dataset + "' of shape " + describe(shape));
   // "fluid/x" creates the group "fluid" on the way (checkpoints of several phases).
   const Handle links(H5Pcreate(H5P_LINK_CREATE), H5Pclose);
   if (!links.valid() || H5Pset_create_intermediate_group(links, 1) < 0)
     fail("cannot set up the creation of dataset '" + dataset + "'");
-  const Handle set(
-      H5Dcreate2(file_, dataset.c_str(), file_type, space, links, H5P_DEFAULT, H5P_DEFAULT),
-      H5Dclose);
+  const Handle set(H5Dcreate2(file_, dataset.c_str(), file_type, space, links, H5P_DEFAULT, H5P_DEFAULT), H5Dclose);
   if (!set.valid()) fail("cannot create dataset '" + dataset + "'");
   const bool empty = std::find(shape.begin(), shape.end(), hsize_t{0}) != shape.end();
   if (!empty && H5Dwrite(set, memory_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0)
     fail("cannot write dataset '" + dataset + "'");
 }
 
-bool Hdf5File::has(const std::string& dataset) const {
-  return H5Lexists(file_, dataset.c_str(), H5P_DEFAULT) > 0;
-}
+bool Hdf5File::has(const std::string& dataset) const { return H5Lexists(file_, dataset.c_str(), H5P_DEFAULT) > 0; }
 
 Shape Hdf5File::shape(const std::string& dataset) const {
   const Handle set(H5Dopen2(file_, dataset.c_str(), H5P_DEFAULT), H5Dclose);
@@ -118,25 +112,21 @@ bool Hdf5File::holds_integers(const std::string& dataset) const {
   return H5Tget_class(type) == H5T_INTEGER;
 }
 
-void Hdf5File::read_raw(const std::string& dataset, hid_t memory_type, void* data,
-                        const Shape& expected) const {
+void Hdf5File::read_raw(const std::string& dataset, hid_t memory_type, void* data, const Shape& expected) const {
   const Shape stored = shape(dataset);
   if (stored != expected)
-    throw IoError("HDF5 file '" + reported_.string() + "': dataset '" + dataset + "' has shape " +
-                  describe(stored) + ", expected " + describe(expected));
+    throw IoError("HDF5 file '" + reported_.string() + "': dataset '" + dataset + "' has shape " + describe(stored) +
+                  ", expected " + describe(expected));
   if (std::find(stored.begin(), stored.end(), hsize_t{0}) != stored.end()) return;
   const Handle set(H5Dopen2(file_, dataset.c_str(), H5P_DEFAULT), H5Dclose);
   if (!set.valid() || H5Dread(set, memory_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0)
     fail("cannot read dataset '" + dataset + "'");
 }
 
-void Hdf5File::write_attribute_raw(const std::string& name, hid_t file_type, hid_t memory_type,
-                                   const void* value) {
+void Hdf5File::write_attribute_raw(const std::string& name, hid_t file_type, hid_t memory_type, const void* value) {
   const Handle space(H5Screate(H5S_SCALAR), H5Sclose);
-  const Handle attribute(
-      H5Acreate2(file_, name.c_str(), file_type, space, H5P_DEFAULT, H5P_DEFAULT), H5Aclose);
-  if (!attribute.valid() || H5Awrite(attribute, memory_type, value) < 0)
-    fail("cannot write attribute '" + name + "'");
+  const Handle attribute(H5Acreate2(file_, name.c_str(), file_type, space, H5P_DEFAULT, H5P_DEFAULT), H5Aclose);
+  if (!attribute.valid() || H5Awrite(attribute, memory_type, value) < 0) fail("cannot write attribute '" + name + "'");
 }
 
 void Hdf5File::write_attribute(const std::string& name, const std::string& value) {
@@ -154,22 +144,18 @@ void Hdf5File::read_attribute_raw(const std::string& name, hid_t memory_type, vo
   if (!attribute.valid()) fail("cannot open attribute '" + name + "'");
   const Handle space(H5Aget_space(attribute), H5Sclose);
   if (H5Sget_simple_extent_npoints(space) != 1)
-    throw IoError("HDF5 file '" + reported_.string() + "': attribute '" + name +
-                  "' is not a scalar");
+    throw IoError("HDF5 file '" + reported_.string() + "': attribute '" + name + "' is not a scalar");
   if (H5Aread(attribute, memory_type, value) < 0) fail("cannot read attribute '" + name + "'");
 }
 
-bool Hdf5File::has_attribute(const std::string& name) const {
-  return H5Aexists(file_, name.c_str()) > 0;
-}
+bool Hdf5File::has_attribute(const std::string& name) const { return H5Aexists(file_, name.c_str()) > 0; }
 
 std::string Hdf5File::read_string_attribute(const std::string& name) const {
   const Handle attribute(H5Aopen(file_, name.c_str(), H5P_DEFAULT), H5Aclose);
   if (!attribute.valid()) fail("cannot open attribute '" + name + "'");
   const Handle type(H5Aget_type(attribute), H5Tclose);
   if (H5Tget_class(type) != H5T_STRING || H5Tis_variable_str(type) != 0)
-    throw IoError("HDF5 file '" + reported_.string() + "': attribute '" + name +
-                  "' is not a fixed-length string");
+    throw IoError("HDF5 file '" + reported_.string() + "': attribute '" + name + "' is not a fixed-length string");
   std::string value(H5Tget_size(type), '\0');
   if (H5Aread(attribute, type, value.data()) < 0) fail("cannot read attribute '" + name + "'");
   value.erase(std::find(value.begin(), value.end(), '\0'), value.end());

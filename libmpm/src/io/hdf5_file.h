@@ -86,12 +86,9 @@ public:
 private:
   //! Throws IoError "HDF5 file '<reported>': <what>: <HDF5's innermost reason>".
   [[noreturn]] void fail(const std::string& what) const;
-  void write_raw(const std::string& dataset, hid_t file_type, hid_t memory_type, const void* data,
-                 const Shape& shape);
-  void read_raw(const std::string& dataset, hid_t memory_type, void* data,
-                const Shape& shape) const;
-  void write_attribute_raw(const std::string& name, hid_t file_type, hid_t memory_type,
-                           const void* value);
+  void write_raw(const std::string& dataset, hid_t file_type, hid_t memory_type, const void* data, const Shape& shape);
+  void read_raw(const std::string& dataset, hid_t memory_type, void* data, const Shape& shape) const;
+  void write_attribute_raw(const std::string& name, hid_t file_type, hid_t memory_type, const void* value);
   void read_attribute_raw(const std::string& name, hid_t memory_type, void* value) const;
 
   std::filesystem::path reported_;

@@ -9,8 +9,7 @@ namespace mpm::io::detail {
 //! come out as "nan", "inf", "-inf", which strtod reads back.
 inline std::string to_text(double value) {
   char buffer[32];
-  const auto end =
-      std::to_chars(buffer, buffer + sizeof buffer, value, std::chars_format::general, 17).ptr;
+  const auto end = std::to_chars(buffer, buffer + sizeof buffer, value, std::chars_format::general, 17).ptr;
   return {buffer, end};
 }
 

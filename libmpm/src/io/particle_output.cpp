@@ -58,20 +58,20 @@ std::string escape_xml(const std::string& text) {
 
 //! The Uniform grid of one frame: n particles stored in the HDF5 file `h5_name` (relative to
 //! the XDMF file), with the datasets `attributes` besides the geometry.
-std::string frame_grid(const std::string& h5_name, hsize_t n, const std::vector<Attribute>& attributes,
-                       double time, const std::string& indent) {
+std::string frame_grid(const std::string& h5_name, hsize_t n, const std::vector<Attribute>& attributes, double time,
+                       const std::string& indent) {
   const std::string file = escape_xml(h5_name);
   const auto data_item = [&](const std::string& dataset, bool is_vector, bool is_integer) {
-    return indent + "    <DataItem Dimensions=\"" + std::to_string(n) + (is_vector ? " 3" : "") +
-           "\" NumberType=\"" + (is_integer ? "Int\" Precision=\"4" : "Float\" Precision=\"8") +
-           "\" Format=\"HDF\">" + file + ":/" + dataset + "</DataItem>\n";
+    return indent + "    <DataItem Dimensions=\"" + std::to_string(n) + (is_vector ? " 3" : "") + "\" NumberType=\"" +
+           (is_integer ? "Int\" Precision=\"4" : "Float\" Precision=\"8") + "\" Format=\"HDF\">" + file + ":/" +
+           dataset + "</DataItem>\n";
   };
   std::string xml = indent + "<Grid Name=\"particles\" GridType=\"Uniform\">\n";
   xml += indent + "  <Time Value=\"" + detail::to_text(time) + "\"/>\n";
-  xml += indent + "  <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" +
-         std::to_string(n) + "\" NodesPerElement=\"1\"/>\n";
-  xml += indent + "  <Geometry GeometryType=\"XYZ\">\n" + data_item(kGeometry, true, false) +
-         indent + "  </Geometry>\n";
+  xml += indent + "  <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" + std::to_string(n) +
+         "\" NodesPerElement=\"1\"/>\n";
+  xml +=
+      indent + "  <Geometry GeometryType=\"XYZ\">\n" + data_item(kGeometry, true, false) + indent + "  </Geometry>\n";
   for (const Attribute& c : attributes) {
     xml += indent + "  <Attribute Name=\"" + escape_xml(c.name) + "\" AttributeType=\"" +
            (c.is_vector ? "Vector" : "Scalar") + "\" Center=\"Node\">\n" +
@@ -125,8 +125,7 @@ std::string particle_file_name(int frame, const std::string& stem) {
 }
 
 template <int dim>
-void write_particles(const std::filesystem::path& h5_path, const Particles<dim>& p, double time,
-                     int frame) {
+void write_particles(const std::filesystem::path& h5_path, const Particles<dim>& p, double time, int frame) {
   detail::verify_channel_sizes(p, h5_path);
   const auto rows = static_cast<hsize_t>(p.size());
   std::vector<Attribute> attributes;
@@ -155,14 +154,12 @@ void write_particles(const std::filesystem::path& h5_path, const Particles<dim>&
   out.commit();
 
   const std::string grid = frame_grid(h5_path.filename().string(), p.size(), attributes, time, "    ");
-  write_file_atomically(std::filesystem::path(h5_path).replace_extension(".xdmf"),
-                        xdmf_document(grid));
+  write_file_atomically(std::filesystem::path(h5_path).replace_extension(".xdmf"), xdmf_document(grid));
 }
 
-void write_time_series_xdmf(const std::filesystem::path& dir,
-                            const std::vector<std::pair<int, double>>& frames, const std::string& stem) {
-  std::string grids =
-      "    <Grid Name=\"particles\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
+void write_time_series_xdmf(const std::filesystem::path& dir, const std::vector<std::pair<int, double>>& frames,
+                            const std::string& stem) {
+  std::string grids = "    <Grid Name=\"particles\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
   for (const auto& [frame, time] : frames) {
     const std::string name = particle_file_name(frame, stem);
     const std::string path = (dir / name).string();

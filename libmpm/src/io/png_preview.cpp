@@ -5,8 +5,8 @@
 
 #include "channel_sizes.h"
 
-#include <Eigen/LU>  // determinant()
 #include <png.h>
+#include <Eigen/LU>  // determinant()
 
 #include <algorithm>
 #include <cmath>
@@ -19,12 +19,10 @@
 namespace mpm::io {
 namespace {
 
-
 //! viridis (van der Walt & Smith, matplotlib 2015) at 9 equally spaced stops: perceptually
 //! uniform and readable in grey scale and by colour-blind viewers.
-constexpr Rgb kViridis[9] = {{68, 1, 84},    {71, 45, 123},  {59, 82, 139},
-                             {44, 114, 142}, {33, 144, 140}, {39, 173, 129},
-                             {93, 200, 99},  {170, 220, 50}, {253, 231, 37}};
+constexpr Rgb kViridis[9] = {{68, 1, 84},    {71, 45, 123}, {59, 82, 139},  {44, 114, 142}, {33, 144, 140},
+                             {39, 173, 129}, {93, 200, 99}, {170, 220, 50}, {253, 231, 37}};
 constexpr Rgb kMagenta{255, 0, 255};
 constexpr Rgb kFrame{64, 64, 64};
 constexpr int kMaxPixels = 16384;  // per side; guards against a typo allocating gigabytes
@@ -36,8 +34,7 @@ Rgb viridis(double t) {
   const double f = s - i;
   Rgb c;
   for (int k = 0; k < 3; ++k)
-    c[k] =
-        static_cast<std::uint8_t>(std::lround((1.0 - f) * kViridis[i][k] + f * kViridis[i + 1][k]));
+    c[k] = static_cast<std::uint8_t>(std::lround((1.0 - f) * kViridis[i][k] + f * kViridis[i + 1][k]));
   return c;
 }
 
@@ -61,19 +58,20 @@ std::vector<double> attribute(const Particles<dim>& p, const std::string& color_
       if (info.frame_name() != color_by) return;
       found = true;
       for (std::size_t i = 0; i < values.size(); ++i) {
-        if constexpr (std::is_same_v<T, Mat<dim>>) values[i] = channel[i].determinant();
-        else values[i] = static_cast<double>(channel[i]);
+        if constexpr (std::is_same_v<T, Mat<dim>>)
+          values[i] = channel[i].determinant();
+        else
+          values[i] = static_cast<double>(channel[i]);
       }
     }
   });
-  verify<InputError>(found, "png preview: color_by '" + color_by + "' is not a value of these particles (" +
-                                known + ")");
+  verify<InputError>(found,
+                     "png preview: color_by '" + color_by + "' is not a value of these particles (" + known + ")");
   return values;
 }
 
 //! The values mapped to the ends of the colour map.
-std::array<double, 2> color_range(const std::vector<double>& values,
-                                  const PreviewOptions& options) {
+std::array<double, 2> color_range(const std::vector<double>& values, const PreviewOptions& options) {
   if (options.color_range) {
     const auto [lo, hi] = *options.color_range;
     verify<InputError>(std::isfinite(lo) && std::isfinite(hi) && lo < hi,
@@ -91,8 +89,7 @@ std::array<double, 2> color_range(const std::vector<double>& values,
 
 class Image {
 public:
-  Image(int width, int height)
-      : width_(width), height_(height), rgb_(3 * std::size_t(width) * height, 255) {}
+  Image(int width, int height) : width_(width), height_(height), rgb_(3 * std::size_t(width) * height, 255) {}
 
   //! A disc of `radius` pixels centred at (px, py) (pixel units, y down), covering at least
   //! the pixel that holds the centre so that no particle vanishes.
@@ -105,8 +102,7 @@ public:
     for (int j = j0; j <= j1; ++j)
       for (int i = i0; i <= i1; ++i) {
         const double dx = i + 0.5 - px, dy = j + 0.5 - py;
-        const bool holds_centre =
-            i == static_cast<int>(std::floor(px)) && j == static_cast<int>(std::floor(py));
+        const bool holds_centre = i == static_cast<int>(std::floor(px)) && j == static_cast<int>(std::floor(py));
         if (dx * dx + dy * dy <= radius * radius || holds_centre) set(i, j, colour);
       }
   }
@@ -155,16 +151,14 @@ void write_png_preview(const std::filesystem::path& path, const std::vector<Prev
   const auto& lo = options.domain_lo;
   const auto& hi = options.domain_hi;
   const double extent_x = hi[0] - lo[0], extent_y = hi[1] - lo[1];
-  verify<InputError>(
-      std::isfinite(extent_x) && std::isfinite(extent_y) && extent_x > 0 && extent_y > 0,
-      "png preview: the domain must have hi > lo in x and y");
+  verify<InputError>(std::isfinite(extent_x) && std::isfinite(extent_y) && extent_x > 0 && extent_y > 0,
+                     "png preview: the domain must have hi > lo in x and y");
   verify<InputError>(options.width_px >= 1 && options.width_px <= kMaxPixels,
                      "png preview: width_px must be in [1, " + std::to_string(kMaxPixels) + "]");
   const int width = options.width_px;
   const double height_exact = width * extent_y / extent_x;
-  verify<InputError>(height_exact <= kMaxPixels,
-                     "png preview: the domain's aspect ratio gives an image taller than " +
-                         std::to_string(kMaxPixels) + " px");
+  verify<InputError>(height_exact <= kMaxPixels, "png preview: the domain's aspect ratio gives an image taller than " +
+                                                     std::to_string(kMaxPixels) + " px");
   const int height = std::max(1, static_cast<int>(std::lround(height_exact)));
 
   // One colour range over every layer coloured by the attribute, so that equal values look
@@ -192,16 +186,14 @@ void write_png_preview(const std::filesystem::path& path, const std::vector<Prev
     for (std::size_t i = 0; i < p.size(); ++i)
       if (p.x[i].allFinite()) order.push_back(i);
     if constexpr (dim == 3)
-      std::stable_sort(order.begin(), order.end(),
-                       [&](std::size_t a, std::size_t b) { return p.x[a][2] < p.x[b][2]; });
+      std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return p.x[a][2] < p.x[b][2]; });
     for (const std::size_t i : order) {
       Rgb colour = layers[l].colour ? *layers[l].colour : kMagenta;
       if (!layers[l].colour && std::isfinite(values[l][i])) {
         const double t = value_hi > value_lo ? (values[l][i] - value_lo) / (value_hi - value_lo) : 0.5;
         colour = viridis(t);
       }
-      image.splat((p.x[i][0] - lo[0]) * scale_x, (hi[1] - p.x[i][1]) * scale_y, layers[l].point_radius_px,
-                  colour);
+      image.splat((p.x[i][0] - lo[0]) * scale_x, (hi[1] - p.x[i][1]) * scale_y, layers[l].point_radius_px, colour);
     }
   }
   image.frame(kFrame);
@@ -209,15 +201,12 @@ void write_png_preview(const std::filesystem::path& path, const std::vector<Prev
 }
 
 template <int dim>
-void write_png_preview(const std::filesystem::path& path, const Particles<dim>& p,
-                       const PreviewOptions& options) {
+void write_png_preview(const std::filesystem::path& path, const Particles<dim>& p, const PreviewOptions& options) {
   write_png_preview<dim>(path, {{&p, std::nullopt, options.point_radius_px}}, options);
 }
 
-template void write_png_preview<2>(const std::filesystem::path&, const Particles<2>&,
-                                   const PreviewOptions&);
-template void write_png_preview<3>(const std::filesystem::path&, const Particles<3>&,
-                                   const PreviewOptions&);
+template void write_png_preview<2>(const std::filesystem::path&, const Particles<2>&, const PreviewOptions&);
+template void write_png_preview<3>(const std::filesystem::path&, const Particles<3>&, const PreviewOptions&);
 template void write_png_preview<2>(const std::filesystem::path&, const std::vector<PreviewLayer<2>>&,
                                    const PreviewOptions&);
 template void write_png_preview<3>(const std::filesystem::path&, const std::vector<PreviewLayer<3>>&,

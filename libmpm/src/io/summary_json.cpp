@@ -22,8 +22,7 @@ Json parameter_value(const std::string& text) {
   const char* last = first + text.size();
   if (text.size() > 1 && text[0] == '+' && text[1] != '-') ++first;  // from_chars rejects "+5"
   std::int64_t integer = 0;
-  if (const auto [end, error] = std::from_chars(first, last, integer);
-      error == std::errc() && end == last)
+  if (const auto [end, error] = std::from_chars(first, last, integer); error == std::errc() && end == last)
     return integer;
   double number = 0.0;
   if (const auto [end, error] = std::from_chars(first, last, number);
@@ -37,8 +36,8 @@ Json section(const std::vector<std::pair<std::string, Value>>& entries, const ch
              const std::filesystem::path& path, Convert convert) {
   Json object = Json::object();
   for (const auto& [key, value] : entries) {
-    verify<InputError>(!object.contains(key), "summary '" + path.string() + "': key '" + key +
-                                                  "' appears twice in " + name);
+    verify<InputError>(!object.contains(key),
+                       "summary '" + path.string() + "': key '" + key + "' appears twice in " + name);
     object[key] = convert(value);
   }
   return object;
@@ -46,14 +45,12 @@ Json section(const std::vector<std::pair<std::string, Value>>& entries, const ch
 
 }  // namespace
 
-void write_summary(const std::filesystem::path& path,
-                   const std::vector<std::pair<std::string, double>>& results,
+void write_summary(const std::filesystem::path& path, const std::vector<std::pair<std::string, double>>& results,
                    const std::vector<std::pair<std::string, std::string>>& parameters,
                    const std::vector<std::pair<std::string, std::string>>& info) {
   Json summary = Json::object();
-  summary["results"] = section(results, "results", path, [](double value) {
-    return std::isfinite(value) ? Json(value) : Json(nullptr);
-  });
+  summary["results"] = section(results, "results", path,
+                               [](double value) { return std::isfinite(value) ? Json(value) : Json(nullptr); });
   summary["parameters"] = section(parameters, "parameters", path, parameter_value);
   summary["info"] = section(info, "info", path, [](const std::string& text) { return Json(text); });
   // Invalid UTF-8 in a string is replaced (U+FFFD) rather than failing the whole summary.

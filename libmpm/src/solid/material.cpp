@@ -20,8 +20,7 @@ double Material<dim>::energy(const Mat<dim>& F) const {
 
 template <int dim>
 Mat<dim> Material<dim>::kirchhoff(const Mat<dim>& F) const {
-  return std::visit(
-      [&](const auto& model) -> Mat<dim> { return model.first_piola(F) * F.transpose(); }, elastic);
+  return std::visit([&](const auto& model) -> Mat<dim> { return model.first_piola(F) * F.transpose(); }, elastic);
 }
 
 template <int dim>
@@ -32,25 +31,24 @@ Material<dim> parse_material(const Config& cfg) {
   const double E = cfg.number("youngs_modulus", Range::positive());
   const double nu = cfg.number("poisson_ratio", Range::open(-1.0, 0.5));
   material.lame = constitutive::Lame::from_youngs_poisson(E, nu);
-  const std::string elasticity =
-      cfg.choice("elasticity", std::string(constitutive::FixedCorotated<dim>::name),
-                 constitutive::elastic_model_names());
+  const std::string elasticity = cfg.choice("elasticity", std::string(constitutive::FixedCorotated<dim>::name),
+                                            constitutive::elastic_model_names());
   material.elastic = constitutive::make_elastic_model<dim>(elasticity, material.lame);
 
   const std::optional<Config> plastic = cfg.optional_child("plasticity");
   if (!plastic) return material;
-  const std::string model = plastic->choice("model", std::string(plasticity::NoPlasticity::name),
-                                            plasticity::plasticity_model_names());
+  const std::string model =
+      plastic->choice("model", std::string(plasticity::NoPlasticity::name), plasticity::plasticity_model_names());
   if (model == plasticity::NoPlasticity::name) return material;
   if (elasticity != constitutive::HenckyStVK<dim>::name) {
-    plastic->fail("model", model + " plasticity needs 'elasticity: " +
-                               std::string(constitutive::HenckyStVK<dim>::name) +
+    plastic->fail("model", model +
+                               " plasticity needs 'elasticity: " + std::string(constitutive::HenckyStVK<dim>::name) +
                                "' (its return map is closed-form in Hencky strain, Gao et al. 2017 "
-                               "sec. 4.2), but the material has '" + elasticity + "'");
+                               "sec. 4.2), but the material has '" +
+                               elasticity + "'");
   }
   if (model == plasticity::DruckerPrager<dim>::name) {
-    const double friction_angle =
-        plastic->number("friction_angle", 30.0, Range::half_open(0.0, 90.0));
+    const double friction_angle = plastic->number("friction_angle", 30.0, Range::half_open(0.0, 90.0));
     const double cohesion = plastic->number("cohesion", 0.0, Range::non_negative());
     material.plasticity = plasticity::DruckerPrager<dim>(friction_angle, cohesion, material.lame);
   } else if (model == plasticity::VonMises<dim>::name) {

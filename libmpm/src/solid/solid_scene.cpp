@@ -32,8 +32,8 @@ std::vector<Material<dim>> parse_materials(const Config& scene) {
 }
 
 template <int dim>
-std::uint16_t material_index(const std::vector<Material<dim>>& materials, const std::string& name,
-                             const Config& cfg, const std::string& key) {
+std::uint16_t material_index(const std::vector<Material<dim>>& materials, const std::string& name, const Config& cfg,
+                             const std::string& key) {
   std::string known;
   for (std::size_t m = 0; m < materials.size(); ++m) {
     if (materials[m].name == name) return static_cast<std::uint16_t>(m);
@@ -42,10 +42,9 @@ std::uint16_t material_index(const std::vector<Material<dim>>& materials, const 
   cfg.fail(key, "no material named '" + name + "' (materials: " + known + ")");
 }
 
-
 template <int dim>
-void add_particles(SolidScene<dim>& scene, const std::vector<Vec<dim>>& positions, double volume,
-                   std::uint16_t m, const Vec<dim>& velocity, const std::string& where) {
+void add_particles(SolidScene<dim>& scene, const std::vector<Vec<dim>>& positions, double volume, std::uint16_t m,
+                   const Vec<dim>& velocity, const std::string& where) {
   if (const OutsideDomain outside = first_outside_domain(scene.settings, positions); !outside.why.empty())
     throw InputError(where + ": " + outside.why);
   Particles<dim>& P = scene.state.particles;
@@ -70,8 +69,10 @@ void seed_body(SolidScene<dim>& scene, const Config& body) {
   Vec<dim> centroid = Vec<dim>::Zero();
   for (const Vec<dim>& p : x) centroid += p / static_cast<double>(x.size());
   Eigen::Matrix<double, 3, 1> omega = Eigen::Matrix<double, 3, 1>::Zero();
-  if constexpr (dim == 2) omega[2] = body.number("angular_velocity", 0.0, Range::any());
-  else omega = body.vector<3>("angular_velocity", Vec<3>::Zero());
+  if constexpr (dim == 2)
+    omega[2] = body.number("angular_velocity", 0.0, Range::any());
+  else
+    omega = body.vector<3>("angular_velocity", Vec<3>::Zero());
   std::vector<Mat<dim>>& F = elastic_F(P);
   for (std::size_t p = first; p < P.size(); ++p) {
     F[p] = stretch.asDiagonal();
@@ -102,7 +103,7 @@ template <int dim>
 SolidScene<dim> load_solid_scene(const Config& scene) {
   SceneSettings<dim> settings = parse_scene_settings<dim>(scene);
   auto colliders = geometry::parse_colliders<dim>(scene, settings.domain_lo, settings.domain_hi,
-                                                   wall_layer(settings.kernel, settings.dx));
+                                                  wall_layer(settings.kernel, settings.dx));
   const std::string solver = scene.choice("solver", "explicit", solid_solver_names());
   SolidScene<dim> s = make_solid_scene(std::move(settings), parse_materials<dim>(scene), std::move(colliders), solver);
   seed_bodies(s, scene);
@@ -132,17 +133,17 @@ double elastic_energy(const MpmState<dim>& state, const std::vector<Material<dim
   return e;
 }
 
-#define MPM_SOLID_SCENE(dim)                                                                       \
-  template std::vector<Material<dim>> parse_materials<dim>(const Config&);                        \
-  template std::uint16_t material_index(const std::vector<Material<dim>>&, const std::string&,    \
-                                        const Config&, const std::string&);                       \
-  template void add_particles(SolidScene<dim>&, const std::vector<Vec<dim>>&, double, std::uint16_t, \
-                              const Vec<dim>&, const std::string&);                               \
-  template SolidScene<dim> make_solid_scene(SceneSettings<dim>, std::vector<Material<dim>>,          \
-                                           geometry::ColliderSet<dim>, const std::string&);       \
-  template void seed_bodies(SolidScene<dim>&, const Config&);                                     \
-  template SolidScene<dim> load_solid_scene<dim>(const Config&);                                  \
-  template Pipeline<MpmState<dim>> make_solid_pipeline(const SolidScene<dim>&);                   \
+#define MPM_SOLID_SCENE(dim)                                                                                          \
+  template std::vector<Material<dim>> parse_materials<dim>(const Config&);                                            \
+  template std::uint16_t material_index(const std::vector<Material<dim>>&, const std::string&, const Config&,         \
+                                        const std::string&);                                                          \
+  template void add_particles(SolidScene<dim>&, const std::vector<Vec<dim>>&, double, std::uint16_t, const Vec<dim>&, \
+                              const std::string&);                                                                    \
+  template SolidScene<dim> make_solid_scene(SceneSettings<dim>, std::vector<Material<dim>>,                           \
+                                            geometry::ColliderSet<dim>, const std::string&);                          \
+  template void seed_bodies(SolidScene<dim>&, const Config&);                                                         \
+  template SolidScene<dim> load_solid_scene<dim>(const Config&);                                                      \
+  template Pipeline<MpmState<dim>> make_solid_pipeline(const SolidScene<dim>&);                                       \
   template double elastic_energy(const MpmState<dim>&, const std::vector<Material<dim>>&);
 MPM_SOLID_SCENE(2)
 MPM_SOLID_SCENE(3)

@@ -34,8 +34,7 @@ struct DiFelice {
   double beta(double n_w, double slip) const {
     const double Re = p.reynolds(n_w, slip);
     const double sqrt_cd_re = 0.63 * std::sqrt(Re) + 4.8;
-    return p.stokes_scale() * (1.0 - n_w) * sqrt_cd_re * sqrt_cd_re *
-           std::pow(n_w, 1.0 - di_felice_exponent(Re));
+    return p.stokes_scale() * (1.0 - n_w) * sqrt_cd_re * sqrt_cd_re * std::pow(n_w, 1.0 - di_felice_exponent(Re));
   }
 };
 

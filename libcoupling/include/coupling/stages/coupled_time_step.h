@@ -14,7 +14,7 @@ namespace coupling::stages {
 //! frame end; copies time, dt and step into both phase states.
 template <int dim>
 class CoupledTimeStep final : public mpm::Stage<CoupledState<dim>> {
- public:
+public:
   using Settings = typename mpm::stages::TimeStepControl<dim>::Settings;
   CoupledTimeStep(Settings fluid, Settings sediment) : fluid_(fluid), sediment_(sediment) {}
   std::string name() const override { return "time_step"; }
@@ -22,7 +22,7 @@ class CoupledTimeStep final : public mpm::Stage<CoupledState<dim>> {
   std::vector<std::string> writes() const override { return {"dt"}; }
   void run(CoupledState<dim>& s) override;
 
- private:
+private:
   mpm::stages::TimeStepControl<dim> fluid_, sediment_;
 };
 

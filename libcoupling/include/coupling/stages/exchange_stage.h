@@ -12,20 +12,16 @@ namespace coupling::stages {
 //! The implicit drag exchange of momentum_exchange.h on the shared nodes.
 template <int dim>
 class ExchangeStage final : public mpm::Stage<CoupledState<dim>> {
- public:
+public:
   explicit ExchangeStage(drag::DragLaw law) : exchange_(law) {}
   std::string name() const override { return "exchange"; }
   std::vector<std::string> reads() const override {
     return {"fractions", "fluid.grid.velocity", "sediment.grid.velocity"};
   }
-  std::vector<std::string> writes() const override {
-    return {"fluid.grid.velocity", "sediment.grid.velocity"};
-  }
-  void run(CoupledState<dim>& s) override {
-    exchange_.apply(s.fluid.grid, s.sediment.grid, s.fractions.fluid, s.dt);
-  }
+  std::vector<std::string> writes() const override { return {"fluid.grid.velocity", "sediment.grid.velocity"}; }
+  void run(CoupledState<dim>& s) override { exchange_.apply(s.fluid.grid, s.sediment.grid, s.fractions.fluid, s.dt); }
 
- private:
+private:
   MomentumExchange<dim> exchange_;
 };
 

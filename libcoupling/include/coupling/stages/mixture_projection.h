@@ -30,7 +30,7 @@ namespace coupling::stages {
 //! Per unit volume the sediment feels -n_s grad p (buoyancy) and the drag it implies.
 template <int dim>
 class MixtureProjection final : public mpm::Stage<CoupledState<dim>> {
- public:
+public:
   MixtureProjection(double fluid_density, double sediment_density, drag::DragLaw law,
                     mpm::geometry::ColliderSet<dim> colliders, fluid::stages::PressureSettings settings);
   std::string name() const override { return "mixture_pressure"; }
@@ -47,7 +47,7 @@ class MixtureProjection final : public mpm::Stage<CoupledState<dim>> {
 
   const fluid::stages::PressureProjection<dim>& projection() const { return projection_; }
 
- private:
+private:
   double rho_w_, rho_s_;
   drag::DragLaw law_;
   fluid::stages::PressureProjection<dim> projection_;

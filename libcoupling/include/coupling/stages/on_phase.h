@@ -23,7 +23,7 @@ mpm::MpmState<dim>& phase_state(CoupledState<dim>& s, Phase phase) {
 
 template <int dim>
 class OnPhase final : public mpm::Stage<CoupledState<dim>> {
- public:
+public:
   OnPhase(Phase phase, std::unique_ptr<mpm::Stage<mpm::MpmState<dim>>> stage)
       : phase_(phase), stage_(std::move(stage)) {}
 
@@ -47,7 +47,7 @@ class OnPhase final : public mpm::Stage<CoupledState<dim>> {
   Phase phase() const { return phase_; }
   mpm::Stage<mpm::MpmState<dim>>& stage() { return *stage_; }
 
- private:
+private:
   std::vector<std::string> prefixed(std::vector<std::string> fields) const {
     for (std::string& f : fields) f = phase_name(phase_) + "." + f;
     return fields;

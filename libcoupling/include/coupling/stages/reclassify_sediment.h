@@ -56,9 +56,8 @@ namespace stages {
 //! The switch of the header comment. The continuum particles hold material `continuum`.
 template <int dim>
 class ReclassifySediment final : public mpm::Stage<CoupledState<dim>> {
- public:
-  ReclassifySediment(SedimentSwitching thresholds, double sediment_density, std::uint16_t continuum,
-                     bool wet);
+public:
+  ReclassifySediment(SedimentSwitching thresholds, double sediment_density, std::uint16_t continuum, bool wet);
   std::string name() const override { return "reclassify"; }
   std::vector<std::string> reads() const override;
   std::vector<std::string> writes() const override {
@@ -72,7 +71,7 @@ class ReclassifySediment final : public mpm::Stage<CoupledState<dim>> {
   mpm::Index to_discrete() const { return to_discrete_; }
   mpm::Index to_continuum() const { return to_continuum_; }
 
- private:
+private:
   SedimentSwitching thresholds_;
   double rho_s_;
   std::uint16_t continuum_;

@@ -19,7 +19,7 @@ namespace coupling::stages {
 //! clamped with the floor n_min.
 template <int dim>
 class VolumeFractionStage final : public mpm::Stage<CoupledState<dim>> {
- public:
+public:
   VolumeFractionStage(double fluid_density, double sediment_density, double min_fluid_fraction)
       : rho_w_(fluid_density), rho_s_(sediment_density), min_fluid_(min_fluid_fraction) {}
   std::string name() const override { return "volume_fraction"; }
@@ -27,7 +27,7 @@ class VolumeFractionStage final : public mpm::Stage<CoupledState<dim>> {
   std::vector<std::string> writes() const override { return {"fractions"}; }
   void run(CoupledState<dim>& s) override;
 
- private:
+private:
   double rho_w_, rho_s_, min_fluid_;
   std::vector<double> phi_;
 };

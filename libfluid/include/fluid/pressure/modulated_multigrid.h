@@ -71,9 +71,9 @@ template <int dim>
 class ModulatedMultigrid {
 public:
   struct Options {
-    double near_null_ratio = 0.3;            //!< a pattern is a child when its median energy ratio is below this
+    double near_null_ratio = 0.3;           //!< a pattern is a child when its median energy ratio is below this
     std::int64_t max_bottom_unknowns = 64;  //!< invert spaces of at most this many unknowns
-    int smoothing_sweeps = 1;                //!< Gauss-Seidel sweeps before and after the coarse corrections
+    int smoothing_sweeps = 1;               //!< Gauss-Seidel sweeps before and after the coarse corrections
   };
 
   //! Assembles A over the fluid cells of `op` and builds the tree.
@@ -115,7 +115,7 @@ private:
   Options options_;
   std::array<bool, dim> periodic_{};
   std::vector<std::int64_t> fluid_cells_;  //!< box index of each fine unknown
-  std::deque<Space> spaces_;  //!< a deque: building appends while references are held
+  std::deque<Space> spaces_;               //!< a deque: building appends while references are held
 };
 
 }  // namespace fluid

@@ -99,8 +99,8 @@ private:
   Options options_;
   std::vector<Level> levels_;
   std::vector<double> transfer_in_, transfer_out_;  //!< scratch of the axis-by-axis transfers
-  std::vector<double> checkerboard_;  //!< S = diag((-1)^(i+j)); empty unless 2D NodeCell
-  std::vector<std::int64_t> bottom_cells_;  //!< fluid cells of the coarsest level
+  std::vector<double> checkerboard_;                //!< S = diag((-1)^(i+j)); empty unless 2D NodeCell
+  std::vector<std::int64_t> bottom_cells_;          //!< fluid cells of the coarsest level
   Eigen::MatrixXd bottom_pinv_;
 };
 

@@ -23,8 +23,8 @@ public:
   virtual std::string name() const = 0;
   //! Solves A p = b on the fluid cells of `op` (p is resized to the cell count; empty cells 0).
   //! `p` holds the initial guess on entry when it has the right size.
-  virtual SolveResult solve(const CellOperator<dim>& op, const std::vector<double>& b,
-                            std::vector<double>& p, const SolveControl& control) = 0;
+  virtual SolveResult solve(const CellOperator<dim>& op, const std::vector<double>& b, std::vector<double>& p,
+                            const SolveControl& control) = 0;
 };
 
 //! Names accepted by make_pressure_solver, in the order of docs/user_guide.md.

@@ -50,7 +50,7 @@ struct FluidScene {
   stages::PressureSettings pressure;
   mpm::geometry::ColliderSet<dim> colliders;
   std::shared_ptr<const FluidSolver<dim>> solver;  //!< fluid.solver (fluid_solver.h)
-  mpm::MpmState<dim> state;  //!< particles seeded (with the solver's channels), grid sized to the domain
+  mpm::MpmState<dim> state;                 //!< particles seeded (with the solver's channels), grid sized to the domain
   mpm::geometry::FlowBoundaries<dim> flow;  //!< inflow/outflow (already applied to `colliders`)
 };
 

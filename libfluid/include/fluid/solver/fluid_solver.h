@@ -76,6 +76,7 @@ void append_viscosity(typename FluidSolver<dim>::Stages& stages, const FluidMate
 //! sqrt(dx / |g|) (a particle starting from rest falls less than wave_cfl^2 dx / 2 in one step),
 //! or a faster moving collider (a cavity lid drags the liquid next to it at its speed).
 template <int dim>
-double free_surface_wave_speed(const mpm::SceneSettings<dim>& settings, const mpm::geometry::ColliderSet<dim>& colliders);
+double free_surface_wave_speed(const mpm::SceneSettings<dim>& settings,
+                               const mpm::geometry::ColliderSet<dim>& colliders);
 
 }  // namespace fluid

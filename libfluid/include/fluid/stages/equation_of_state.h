@@ -51,7 +51,9 @@ template <int dim>
 class VolumeRatioUpdate final : public mpm::Stage<mpm::MpmState<dim>> {
 public:
   std::string name() const override { return "volume_ratio"; }
-  std::vector<std::string> reads() const override { return {"grid.velocity", "particle.order", "particle.volume_ratio"}; }
+  std::vector<std::string> reads() const override {
+    return {"grid.velocity", "particle.order", "particle.volume_ratio"};
+  }
   std::vector<std::string> writes() const override { return {"particle.volume_ratio"}; }
   void run(mpm::MpmState<dim>& s) override;
   //! density_deviation: max_p |1 / J_p - 1| over the compressed particles, the error of the

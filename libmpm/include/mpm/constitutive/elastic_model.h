@@ -19,8 +19,7 @@ using ElasticModel = std::variant<FixedCorotated<dim>, NeoHookean<dim>, HenckySt
 
 //! Scene-file names of the alternatives, in variant order.
 inline std::vector<std::string> elastic_model_names() {
-  return {std::string(FixedCorotated<3>::name), std::string(NeoHookean<3>::name),
-          std::string(HenckyStVK<3>::name)};
+  return {std::string(FixedCorotated<3>::name), std::string(NeoHookean<3>::name), std::string(HenckyStVK<3>::name)};
 }
 
 //! The alternative called `name` with the given Lamé parameters.

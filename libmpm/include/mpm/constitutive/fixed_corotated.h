@@ -52,8 +52,7 @@ struct FixedCorotated {
         const double q = d2J_dsigma2(s, i, j);
         d.dp_dsigma(i, j) += lambda * (J - 1.0) * q;
         d.sym(i, j) = 2.0 * mu - lambda * (J - 1.0) * q;
-        d.skew(i, j) = 2.0 * mu - 4.0 * mu / detail::safe_denominator(s(i) + s(j)) +
-                       lambda * (J - 1.0) * q;
+        d.skew(i, j) = 2.0 * mu - 4.0 * mu / detail::safe_denominator(s(i) + s(j)) + lambda * (J - 1.0) * q;
       }
     }
     return detail::principal_differential(f, d, dF);

@@ -28,9 +28,7 @@ struct HenckyStVK {
   double lambda = 0.0;  //!< [Pa]
 
   //! Principal Hencky strain eps_i = log|sigma_i| of the rotation-variant singular values.
-  static Vec<dim> principal_strain(const Vec<dim>& sigma) {
-    return safe(sigma).array().abs().log().matrix();
-  }
+  static Vec<dim> principal_strain(const Vec<dim>& sigma) { return safe(sigma).array().abs().log().matrix(); }
 
   //! Principal Kirchhoff stress tau_i = dpsi/deps_i [Pa].
   Vec<dim> principal_kirchhoff(const Vec<dim>& eps) const {
@@ -62,8 +60,7 @@ struct HenckyStVK {
           continue;
         }
         // p_i = (2 mu log|s_i| + lambda tr eps) / s_i: divided differences of log|x|/x and 1/x.
-        d.sym(i, j) =
-            2.0 * mu * divided_log_over_x(s(i), s(j)) - lambda * eps.sum() / (s(i) * s(j));
+        d.sym(i, j) = 2.0 * mu * divided_log_over_x(s(i), s(j)) - lambda * eps.sum() / (s(i) * s(j));
         d.skew(i, j) = (p(i) + p(j)) / detail::safe_denominator(s(i) + s(j));
       }
     }

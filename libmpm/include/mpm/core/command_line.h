@@ -18,7 +18,6 @@ struct CommandLine {
 
 //! Parses argv. On --help prints usage and exits 0; on a malformed command line prints the
 //! error with usage to stderr and exits 2.
-CommandLine parse_command_line(int argc, char** argv, const std::string& app_name,
-                               const std::string& description);
+CommandLine parse_command_line(int argc, char** argv, const std::string& app_name, const std::string& description);
 
 }  // namespace mpm

@@ -28,8 +28,8 @@ struct Range {
   double lo = -1e308, hi = 1e308;
   bool lo_open = false, hi_open = false;
 
-  static Range positive() { return {0.0, 1e308, true, false}; }        //!< (0, inf)
-  static Range non_negative() { return {0.0, 1e308, false, false}; }   //!< [0, inf)
+  static Range positive() { return {0.0, 1e308, true, false}; }       //!< (0, inf)
+  static Range non_negative() { return {0.0, 1e308, false, false}; }  //!< [0, inf)
   static Range closed(double a, double b) { return {a, b, false, false}; }
   static Range open(double a, double b) { return {a, b, true, true}; }
   static Range half_open(double a, double b) { return {a, b, false, true}; }  //!< [a, b)
@@ -52,17 +52,18 @@ public:
 
   bool has(const std::string& key) const;
 
-  double number(const std::string& key, Range range) const;                  //!< required
-  double number(const std::string& key, double fallback, Range range) const; //!< optional
-  int integer(const std::string& key, int fallback, int lo, int hi) const;   //!< optional, [lo, hi]
+  double number(const std::string& key, Range range) const;                   //!< required
+  double number(const std::string& key, double fallback, Range range) const;  //!< optional
+  int integer(const std::string& key, int fallback, int lo, int hi) const;    //!< optional, [lo, hi]
   bool flag(const std::string& key, bool fallback) const;
-  std::string text(const std::string& key) const;                            //!< required
+  std::string text(const std::string& key) const;  //!< required
   std::string text(const std::string& key, const std::string& fallback) const;
   //! One of `allowed`; an unknown value lists the allowed ones.
   std::string choice(const std::string& key, const std::string& fallback,
                      const std::vector<std::string>& allowed) const;
   //! A sequence of exactly `dim` numbers, each within `range`.
-  template <int dim> Vec<dim> vector(const std::string& key, Range range = Range::any()) const;
+  template <int dim>
+  Vec<dim> vector(const std::string& key, Range range = Range::any()) const;
   template <int dim>
   Vec<dim> vector(const std::string& key, const Vec<dim>& fallback, Range range = Range::any()) const;
 
@@ -71,9 +72,9 @@ public:
   //! An optional sequence of scalars as text (absent: empty).
   std::vector<std::string> texts(const std::string& key) const;
 
-  Config child(const std::string& key) const;                    //!< required map
+  Config child(const std::string& key) const;  //!< required map
   std::optional<Config> optional_child(const std::string& key) const;
-  std::vector<Config> list(const std::string& key) const;         //!< sequence of maps (may be absent: empty)
+  std::vector<Config> list(const std::string& key) const;  //!< sequence of maps (may be absent: empty)
 
   //! Throws an InputError for `key` of this map with a custom reason (cross-field checks).
   [[noreturn]] void fail(const std::string& key, const std::string& reason) const;

@@ -51,8 +51,8 @@ inline std::string failed_check(const char* expression, const char* file, int li
 //! A programming error caught in debug builds only (MFEM_ASSERT): throws std::logic_error with
 //! the expression, file and line; compiled out with NDEBUG (release builds, hot loops).
 #ifndef NDEBUG
-#define MPM_ASSERT(cond)                                                                                  \
-  do {                                                                                                    \
+#define MPM_ASSERT(cond)                                                                                      \
+  do {                                                                                                        \
     if (!(cond)) throw std::logic_error(::mpm::detail::failed_check(#cond, __FILE__, __LINE__, "assertion")); \
   } while (0)
 #else

@@ -10,8 +10,10 @@ namespace mpm {
 
 template <class T>
 bool is_finite_value(const T& value) {
-  if constexpr (std::is_arithmetic_v<T>) return std::isfinite(value);
-  else return value.allFinite();
+  if constexpr (std::is_arithmetic_v<T>)
+    return std::isfinite(value);
+  else
+    return value.allFinite();
 }
 
 //! Throws NumericalError "stage 'g2p': particle 17 has non-finite velocity" for the first
@@ -21,8 +23,7 @@ void check_finite(const std::vector<T>& values, const std::string& stage, const 
                   const std::string& quantity) {
   for (std::size_t i = 0; i < values.size(); ++i)
     if (!is_finite_value(values[i]))
-      throw NumericalError("stage '" + stage + "': " + item + " " + std::to_string(i) +
-                           " has non-finite " + quantity);
+      throw NumericalError("stage '" + stage + "': " + item + " " + std::to_string(i) + " has non-finite " + quantity);
 }
 
 }  // namespace mpm

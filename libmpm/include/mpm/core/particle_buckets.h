@@ -70,16 +70,16 @@ using MoveParticles = std::function<void(const std::vector<std::uint32_t>& order
 //! the index is scattered, calls move(order) for the caller to store its particles anew in
 //! bucket order (new index i holds old index order[i]); without `move` the index stays.
 template <int dim, class T>
-bool sort_into_buckets(const std::vector<Eigen::Matrix<T, dim, 1>>& x, const Kernel& kernel,
-                       SparseGrid<dim>& grid, ParticleBuckets<dim>& buckets,
-                       const MoveParticles& move = {}, const std::string& stage = "sort");
+bool sort_into_buckets(const std::vector<Eigen::Matrix<T, dim, 1>>& x, const Kernel& kernel, SparseGrid<dim>& grid,
+                       ParticleBuckets<dim>& buckets, const MoveParticles& move = {},
+                       const std::string& stage = "sort");
 
 //! For callers that keep their particles stored in bucket order: returns the permutation into
 //! block order (new index i holds old index order[i]), empty when the particles are already
 //! in order, and fills `buckets` for the particles after the caller has applied it.
 template <int dim, class T>
-std::vector<std::uint32_t> bucket_order(const std::vector<Eigen::Matrix<T, dim, 1>>& x,
-                                        const Kernel& kernel, SparseGrid<dim>& grid,
-                                        ParticleBuckets<dim>& buckets, const std::string& stage = "sort");
+std::vector<std::uint32_t> bucket_order(const std::vector<Eigen::Matrix<T, dim, 1>>& x, const Kernel& kernel,
+                                        SparseGrid<dim>& grid, ParticleBuckets<dim>& buckets,
+                                        const std::string& stage = "sort");
 
 }  // namespace mpm

@@ -79,8 +79,7 @@ struct Particles {
   //! Sets the number of particles to n, keeping the first min(n, size()). New particles get zero
   //! in the kinematic channels and each extra channel's initial value.
   void resize(std::size_t n) {
-    visit_channels(*this,
-                   [n](const ChannelInfo&, auto& values, const auto& initial) { values.resize(n, initial); });
+    visit_channels(*this, [n](const ChannelInfo&, auto& values, const auto& initial) { values.resize(n, initial); });
   }
 
   //! Declares the extra channel `name` holding T (double, Vec<dim>, Mat<dim> or std::uint16_t)
@@ -102,8 +101,8 @@ struct Particles {
       const std::string& shown = use.output_name.empty() ? name : use.output_name;
       for_each_channel([&](const ChannelInfo& info, const auto&) {
         if (info.use.output && info.frame_name() == shown)
-          throw Error("particle channel '" + name + "': channel '" + info.name + "' is written to frames as '" +
-                      shown + "' already");
+          throw Error("particle channel '" + name + "': channel '" + info.name + "' is written to frames as '" + shown +
+                      "' already");
       });
     }
     Extra& extra =
@@ -181,10 +180,14 @@ struct Particles {
   template <class T>
   static std::string type_name() {
     static_assert(is_channel_type<T>, "a particle channel holds double, Vec<dim>, Mat<dim> or std::uint16_t");
-    if constexpr (std::is_same_v<T, double>) return "double";
-    else if constexpr (std::is_same_v<T, Vec<dim>>) return "Vec<" + std::to_string(dim) + ">";
-    else if constexpr (std::is_same_v<T, Mat<dim>>) return "Mat<" + std::to_string(dim) + ">";
-    else return "uint16";
+    if constexpr (std::is_same_v<T, double>)
+      return "double";
+    else if constexpr (std::is_same_v<T, Vec<dim>>)
+      return "Vec<" + std::to_string(dim) + ">";
+    else if constexpr (std::is_same_v<T, Mat<dim>>)
+      return "Mat<" + std::to_string(dim) + ">";
+    else
+      return "uint16";
   }
 
 private:
@@ -221,9 +224,8 @@ private:
     visit(kinematic[4], self.volume0, 0.0);
     visit(kinematic[5], self.material, std::uint16_t{0});
     for (auto& extra : self.extras_)
-      std::visit(
-          [&](auto& column) { visit(std::as_const(extra.info), column.values, std::as_const(column.initial)); },
-          extra.column);
+      std::visit([&](auto& column) { visit(std::as_const(extra.info), column.values, std::as_const(column.initial)); },
+                 extra.column);
   }
 
   template <class T, class Self>

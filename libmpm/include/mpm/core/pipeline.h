@@ -104,8 +104,10 @@ public:
     for (const auto& s : stages_)
       for (const Diagnostic& d : s->diagnostics()) {
         auto same = std::find_if(all.begin(), all.end(), [&](const Diagnostic& e) { return e.name == d.name; });
-        if (same == all.end()) all.push_back(d);
-        else same->value += d.value;
+        if (same == all.end())
+          all.push_back(d);
+        else
+          same->value += d.value;
       }
     return all;
   }

@@ -34,8 +34,7 @@ class Runner {
 public:
   using Column = std::function<double(const State&)>;
 
-  Runner(std::string app_name, CommandLine command_line, const Config& scene,
-         const SceneSettings<dim>& settings);
+  Runner(std::string app_name, CommandLine command_line, const Config& scene, const SceneSettings<dim>& settings);
 
   //! Elastic energy of the state [J] (the solid supplies it; 0 without).
   void set_elastic_energy(Column energy) { elastic_energy_ = std::move(energy); }

@@ -47,13 +47,13 @@ inline std::string phase_column(const std::string& name, const std::string& phas
 template <int dim, class State>
 Runner<dim, State>::Runner(std::string app_name, CommandLine command_line, const Config& scene,
                            const SceneSettings<dim>& settings)
-    : app_(std::move(app_name)), cl_(std::move(command_line)), scene_(scene), settings_(settings),
-      out_(cl_.out_dir) {}
+    : app_(std::move(app_name)), cl_(std::move(command_line)), scene_(scene), settings_(settings), out_(cl_.out_dir) {}
 
 template <int dim, class State>
 std::vector<std::string> Runner<dim, State>::columns(State& state, const Pipeline<State>& pipeline) const {
-  std::vector<std::string> c = {"frame", "time", "dt", "steps", "kinetic_energy", "elastic_energy",
-                                "gravity_potential", "mass", "momentum_x", "momentum_y"};
+  std::vector<std::string> c = {
+      "frame", "time",       "dt",        "steps", "kinetic_energy", "elastic_energy", "gravity_potential",
+      "mass",  "momentum_x", "momentum_y"};
   if (dim == 3) c.push_back("momentum_z");
   c.push_back("max_speed");
   const auto all = phases(state);
@@ -114,8 +114,8 @@ int Runner<dim, State>::open_output(State& state, Pipeline<State>& pipeline) {
   verify<InputError>(header.dim == dim, "checkpoint '" + *cl_.restart + "' is " + std::to_string(header.dim) +
                                             "D, the scene is " + std::to_string(dim) + "D");
   verify<InputError>(header.scene_digest == scene_digest(),
-                     "checkpoint '" + *cl_.restart + "' was written by another scene (digest " +
-                         header.scene_digest + ", this scene " + scene_digest() +
+                     "checkpoint '" + *cl_.restart + "' was written by another scene (digest " + header.scene_digest +
+                         ", this scene " + scene_digest() +
                          "): a restart needs the same keys and values, except time.end and output.*");
   state.time = header.time;
   state.step = header.step;
@@ -146,8 +146,10 @@ void Runner<dim, State>::append_diagnostics(State& state, int frame, const Pipel
     mass += m;
     phase_mass.push_back(m);
   }
-  std::vector<double> r = {double(frame), state.time, state.dt, double(state.step - steps_at_last_frame_),
-                           kinetic, elastic_energy_ ? elastic_energy_(state) : 0.0, potential, mass};
+  std::vector<double> r = {double(frame), state.time,
+                           state.dt,      double(state.step - steps_at_last_frame_),
+                           kinetic,       elastic_energy_ ? elastic_energy_(state) : 0.0,
+                           potential,     mass};
   for (int a = 0; a < dim; ++a) r.push_back(momentum[a]);
   r.push_back(std::sqrt(max_speed2));
   if (phase_mass.size() > 1) r.insert(r.end(), phase_mass.begin(), phase_mass.end());
@@ -179,12 +181,12 @@ void Runner<dim, State>::run(State& state, Pipeline<State>& pipeline) {
 
   const int frames = settings_.frame_count();
   for (int frame = first_frame + 1; frame <= frames; ++frame) {
-    advance(state, pipeline, std::min(frame * settings_.frame_dt, settings_.end_time),
-            settings_.max_steps_per_frame, 1e-12 * settings_.frame_dt);
+    advance(state, pipeline, std::min(frame * settings_.frame_dt, settings_.end_time), settings_.max_steps_per_frame,
+            1e-12 * settings_.frame_dt);
     append_diagnostics(state, frame, pipeline);
     write_frame(state, frame);
-    const bool checkpoint = frame == frames ||
-                            (settings_.output.checkpoint_every > 0 && frame % settings_.output.checkpoint_every == 0);
+    const bool checkpoint =
+        frame == frames || (settings_.output.checkpoint_every > 0 && frame % settings_.output.checkpoint_every == 0);
     if (checkpoint) {
       std::vector<io::CheckpointPhase<dim>> stored;
       for (const PhaseRef<dim>& phase : phases(state)) stored.push_back({phase.name, phase.particles});
@@ -253,17 +255,17 @@ void Runner<dim, State>::progress(const State& state, int frame, bool last) cons
   const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
   const int frames = settings_.frame_count();
   const double eta = elapsed / frame * (frames - frame);
-  std::fprintf(stderr, "\r[%s] frame %d/%d  t = %.4g s  steps %lld  elapsed %.1f s  ETA %.1f s   %s",
-               app_.c_str(), frame, frames, state.time, static_cast<long long>(state.step), elapsed,
-               eta, last ? "\n" : "");
+  std::fprintf(stderr, "\r[%s] frame %d/%d  t = %.4g s  steps %lld  elapsed %.1f s  ETA %.1f s   %s", app_.c_str(),
+               frame, frames, state.time, static_cast<long long>(state.step), elapsed, eta, last ? "\n" : "");
   std::fflush(stderr);
 }
 
 template <int dim, class State>
 void Runner<dim, State>::write_summary(const std::vector<std::pair<std::string, double>>& results) const {
-  std::vector<std::pair<std::string, std::string>> info = {
-      {"app", app_}, {"scene_file", cl_.scene_file}, {"dim", std::to_string(dim)},
-      {"wall_seconds", std::to_string(wall_seconds_)}};
+  std::vector<std::pair<std::string, std::string>> info = {{"app", app_},
+                                                           {"scene_file", cl_.scene_file},
+                                                           {"dim", std::to_string(dim)},
+                                                           {"wall_seconds", std::to_string(wall_seconds_)}};
   std::string stages;
   for (const auto& s : stage_names_) stages += (stages.empty() ? "" : ",") + s;
   info.emplace_back("stages", stages);

@@ -13,11 +13,11 @@
 namespace mpm {
 
 struct OutputSettings {
-  bool particles = true;          //!< particles_NNNN.h5 + .xdmf per frame
-  bool png = true;                //!< preview_NNNN.png per frame
-  std::string color_by = "speed"; //!< attribute coloured in previews
-  int png_width = 640;            //!< [px]
-  int checkpoint_every = 0;       //!< frames between checkpoints, 0 = only the last frame
+  bool particles = true;           //!< particles_NNNN.h5 + .xdmf per frame
+  bool png = true;                 //!< preview_NNNN.png per frame
+  std::string color_by = "speed";  //!< attribute coloured in previews
+  int png_width = 640;             //!< [px]
+  int checkpoint_every = 0;        //!< frames between checkpoints, 0 = only the last frame
 };
 
 template <int dim>
@@ -29,13 +29,13 @@ struct SceneSettings {
   std::array<bool, dim> periodic{};
   Kernel kernel;
   TransferScheme transfer;
-  double end_time = 1.0;          //!< [s]
-  double frame_dt = 0.02;         //!< output interval [s]
-  double cfl = 0.4;               //!< particle CFL number
-  double wave_cfl = 0.5;          //!< elastic-wave Courant number
-  double max_dt = 1e300;          //!< user upper bound on dt [s]
-  int max_steps_per_frame = 200000;   //!< stops a run whose step collapsed instead of hanging
-  Vec<dim> gravity;               //!< [m/s^2]
+  double end_time = 1.0;             //!< [s]
+  double frame_dt = 0.02;            //!< output interval [s]
+  double cfl = 0.4;                  //!< particle CFL number
+  double wave_cfl = 0.5;             //!< elastic-wave Courant number
+  double max_dt = 1e300;             //!< user upper bound on dt [s]
+  int max_steps_per_frame = 200000;  //!< stops a run whose step collapsed instead of hanging
+  Vec<dim> gravity;                  //!< [m/s^2]
   OutputSettings output;
 
   int frame_count() const;

@@ -29,7 +29,7 @@ template <int dim>
 class SparseGrid {
 public:
   static constexpr int block_bits = dim == 3 ? 2 : 3;
-  static constexpr int block_size = 1 << block_bits;          //!< B nodes per axis
+  static constexpr int block_size = 1 << block_bits;  //!< B nodes per axis
   static constexpr int nodes_per_block = ipow(block_size, dim);
 
   //! Ghost nodes beyond each end of a periodic axis: covers the widest kernel (cubic B-spline,
@@ -72,7 +72,10 @@ public:
   }
   IVec<dim> block_coord(int id) const {
     IVec<dim> c;
-    for (int a = 0; a < dim; ++a) { c[a] = id % block_counts_[a]; id /= block_counts_[a]; }
+    for (int a = 0; a < dim; ++a) {
+      c[a] = id % block_counts_[a];
+      id /= block_counts_[a];
+    }
     return c;
   }
   int table_size() const { return static_cast<int>(slot_.size()); }
@@ -89,19 +92,17 @@ public:
 
   //! Integer coordinate and position of storage node k.
   IVec<dim> node_coord(std::size_t k) const;
-  Vec<dim> node_position(std::size_t k) const {
-    return origin_ + dx_ * node_coord(k).template cast<double>();
-  }
+  Vec<dim> node_position(std::size_t k) const { return origin_ + dx_ * node_coord(k).template cast<double>(); }
   //! Storage index of integer node `node`, or -1 if its block is not allocated.
   Index node_index(const IVec<dim>& node) const;
 
   std::vector<std::pair<std::string, std::size_t>> memory_per_field() const;
 
   // Node channels.
-  std::vector<double> mass;             //!< [kg]
-  std::vector<Vec<dim>> velocity;       //!< momentum after P2G, velocity after normalisation [m/s]
-  std::vector<Vec<dim>> velocity_old;   //!< velocity before forces (FLIP only)
-  std::vector<Vec<dim>> force;          //!< internal force [N] (solid only)
+  std::vector<double> mass;            //!< [kg]
+  std::vector<Vec<dim>> velocity;      //!< momentum after P2G, velocity after normalisation [m/s]
+  std::vector<Vec<dim>> velocity_old;  //!< velocity before forces (FLIP only)
+  std::vector<Vec<dim>> force;         //!< internal force [N] (solid only)
 
 private:
   double dx_ = 1.0;

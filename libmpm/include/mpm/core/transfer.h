@@ -24,8 +24,8 @@ struct TransferScheme {
 
 //! Accumulates node mass and momentum (into grid.velocity); zeroes both first.
 template <int dim>
-void particles_to_grid(const Particles<dim>& particles, const ParticleBuckets<dim>& buckets,
-                       const Kernel& kernel, const TransferScheme& scheme, SparseGrid<dim>& grid);
+void particles_to_grid(const Particles<dim>& particles, const ParticleBuckets<dim>& buckets, const Kernel& kernel,
+                       const TransferScheme& scheme, SparseGrid<dim>& grid);
 
 //! Divides momentum by mass (nodes without mass get zero velocity); keeps a copy in
 //! grid.velocity_old when the scheme needs it.
@@ -34,9 +34,8 @@ void momentum_to_velocity(SparseGrid<dim>& grid, const TransferScheme& scheme);
 
 //! Updates v_p, C_p from grid.velocity (and velocity_old for FLIP) and advects x_p by dt.
 template <int dim>
-void grid_to_particles(Particles<dim>& particles, const ParticleBuckets<dim>& buckets,
-                       const Kernel& kernel, const TransferScheme& scheme,
-                       const SparseGrid<dim>& grid, double dt);
+void grid_to_particles(Particles<dim>& particles, const ParticleBuckets<dim>& buckets, const Kernel& kernel,
+                       const TransferScheme& scheme, const SparseGrid<dim>& grid, double dt);
 
 //! out_i = sum_p w_ip values[p] on every node (out sized to the grid's node storage, zeroed
 //! first): a per-particle quantity carried to the grid with the P2G weights (a volume fraction).
@@ -54,8 +53,7 @@ void stress_to_grid_forces(const std::vector<Mat<dim>>& weighted_stress, const P
 
 //! Velocity gradient grad v_p = sum_i v_i (grad w_ip)^T [1/s] for every particle.
 template <int dim>
-void velocity_gradient(const Particles<dim>& particles, const ParticleBuckets<dim>& buckets,
-                       const Kernel& kernel, const SparseGrid<dim>& grid,
-                       std::vector<Mat<dim>>& grad_v);
+void velocity_gradient(const Particles<dim>& particles, const ParticleBuckets<dim>& buckets, const Kernel& kernel,
+                       const SparseGrid<dim>& grid, std::vector<Mat<dim>>& grad_v);
 
 }  // namespace mpm

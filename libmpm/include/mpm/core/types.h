@@ -5,9 +5,12 @@
 
 namespace mpm {
 
-template <int dim> using Vec = Eigen::Matrix<double, dim, 1>;
-template <int dim> using Mat = Eigen::Matrix<double, dim, dim>;
-template <int dim> using IVec = Eigen::Matrix<int, dim, 1>;
+template <int dim>
+using Vec = Eigen::Matrix<double, dim, 1>;
+template <int dim>
+using Mat = Eigen::Matrix<double, dim, dim>;
+template <int dim>
+using IVec = Eigen::Matrix<int, dim, 1>;
 
 using Index = std::int64_t;
 

@@ -42,9 +42,9 @@ std::string face_name(const Face& face);
 template <int dim>
 struct Inflow {
   Face face;
-  Vec<dim> velocity;            //!< U [m/s]
-  Vec<dim> lo, hi;              //!< the inlet box [m]
-  int particles_per_cell = 1;   //!< k^dim
+  Vec<dim> velocity;           //!< U [m/s]
+  Vec<dim> lo, hi;             //!< the inlet box [m]
+  int particles_per_cell = 1;  //!< k^dim
 };
 
 template <int dim>
@@ -63,7 +63,8 @@ FlowBoundaries<dim> parse_flow_boundaries(const Config& scene, const SceneSettin
 //! InputError at `at`'s key lo or hi unless the box [lo, hi] lies inside the domain of
 //! `settings` (an inlet or an emitter: particles outside would stop the run at the next sort).
 template <int dim>
-void require_inside_domain(const Config& at, const Vec<dim>& lo, const Vec<dim>& hi, const SceneSettings<dim>& settings);
+void require_inside_domain(const Config& at, const Vec<dim>& lo, const Vec<dim>& hi,
+                           const SceneSettings<dim>& settings);
 
 //! Opens the walls of the flow faces and adds the inlet (a fixed box, sticky relative to U,
 //! Motion::fixed) to `colliders`, so the boundary stage, the viscous solve and the pressure

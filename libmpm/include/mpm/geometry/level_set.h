@@ -42,8 +42,8 @@ public:
 
   //! Box around the narrow band, so around the whole obstacle [m].
   const BoundingBox& bounding_box() const;
-  double voxel_size() const;  //!< [m]
-  double background() const;  //!< |phi| beyond the narrow band [m]
+  double voxel_size() const;          //!< [m]
+  double background() const;          //!< |phi| beyond the narrow band [m]
   const std::string& source() const;  //!< the file it was read from
 
   //! Writes the grid to a .vdb file (e.g. to convert a mesh once); throws IoError on failure.

@@ -35,8 +35,8 @@ std::vector<Vec<dim>> seed_lattice(const Vec<dim>& lo, const Vec<dim>& hi, doubl
 
 //! The box [lo, hi).
 template <int dim>
-std::vector<Vec<dim>> seed_box(const Vec<dim>& lo, const Vec<dim>& hi, double dx, int particles_per_cell,
-                               double jitter, std::uint64_t seed);
+std::vector<Vec<dim>> seed_box(const Vec<dim>& lo, const Vec<dim>& hi, double dx, int particles_per_cell, double jitter,
+                               std::uint64_t seed);
 
 //! The ball |x - center| < radius.
 template <int dim>
@@ -45,7 +45,7 @@ std::vector<Vec<dim>> seed_sphere(const Vec<dim>& center, double radius, double 
 
 //! The interior phi < 0 of a level set (e.g. a closed mesh; in 2D its section z = slice_z).
 template <int dim>
-std::vector<Vec<dim>> seed_level_set(const LevelSetShape<dim>& shape, double dx, int particles_per_cell,
-                                     double jitter, std::uint64_t seed);
+std::vector<Vec<dim>> seed_level_set(const LevelSetShape<dim>& shape, double dx, int particles_per_cell, double jitter,
+                                     std::uint64_t seed);
 
 }  // namespace mpm::geometry

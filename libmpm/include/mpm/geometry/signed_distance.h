@@ -109,14 +109,12 @@ private:
 template <int dim>
 class Cylinder {
 public:
-  Cylinder(const Vec<dim>& point, double radius)
-    requires(dim == 2)
+  Cylinder(const Vec<dim>& point, double radius) requires(dim == 2)
       : point_(point), axis_(Vec<dim>::Zero()), radius_(radius) {
     verify<InputError>(radius > 0.0, "cylinder: the radius must be > 0");
   }
   Cylinder(const Vec<dim>& point, const Vec<dim>& axis, double radius,
-           std::optional<double> half_length = std::nullopt)
-    requires(dim == 3)
+           std::optional<double> half_length = std::nullopt) requires(dim == 3)
       : point_(point), radius_(radius), half_length_(half_length) {
     verify<InputError>(axis.norm() > 0.0, "cylinder: the axis must be a nonzero vector");
     verify<InputError>(radius > 0.0, "cylinder: the radius must be > 0");
@@ -141,8 +139,8 @@ public:
       return r > 0.0 ? Vec<dim>(d / r) : Vec<dim>::Unit(0);
     } else {
       const Split s = split(x);
-      const Vec<dim> radial_unit = s.radial_distance > 0.0 ? Vec<dim>(s.radial / s.radial_distance)
-                                                           : Vec<dim>(axis_.unitOrthogonal());
+      const Vec<dim> radial_unit =
+          s.radial_distance > 0.0 ? Vec<dim>(s.radial / s.radial_distance) : Vec<dim>(axis_.unitOrthogonal());
       if (!half_length_) return radial_unit;
       // Chain rule through q = (|radial| - radius, |along| - half_length).
       const Vec<2> g = detail::box_distance<2>(q(s)).gradient;
@@ -166,9 +164,7 @@ private:
     const Vec<dim> radial = d - along * axis_;
     return {along, radial, radial.norm()};
   }
-  Vec<2> q(const Split& s) const {
-    return {s.radial_distance - radius_, std::abs(s.along) - *half_length_};
-  }
+  Vec<2> q(const Split& s) const { return {s.radial_distance - radius_, std::abs(s.along) - *half_length_}; }
 
   Vec<dim> point_;
   Vec<dim> axis_;

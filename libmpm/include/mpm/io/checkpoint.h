@@ -51,8 +51,7 @@ template <int dim>
 void save_checkpoint(const std::filesystem::path& path, const std::vector<CheckpointPhase<dim>>& phases,
                      const CheckpointHeader& header);
 template <int dim>
-void save_checkpoint(const std::filesystem::path& path, const Particles<dim>& p,
-                     const CheckpointHeader& header) {
+void save_checkpoint(const std::filesystem::path& path, const Particles<dim>& p, const CheckpointHeader& header) {
   save_checkpoint<dim>(path, {{"", &p}}, header);
 }
 

@@ -24,8 +24,7 @@ public:
   //! Reopens the file of an earlier run for appending, keeping only the rows whose "frame"
   //! column is <= last_frame_kept: a restart from that frame's checkpoint writes the later
   //! rows again. `columns` must contain "frame" and equal the file's header (IoError otherwise).
-  void open_for_restart(const std::filesystem::path& path, std::vector<std::string> columns,
-                        int last_frame_kept);
+  void open_for_restart(const std::filesystem::path& path, std::vector<std::string> columns, int last_frame_kept);
 
   //! Appends one row and flushes it; throws IoError when the row's length differs from the
   //! header or the write fails.

@@ -26,13 +26,11 @@ std::string particle_file_name(int frame, const std::string& stem = "particles")
 
 //! Writes h5_path and its sidecar (same stem, .xdmf); time in [s].
 template <int dim>
-void write_particles(const std::filesystem::path& h5_path, const Particles<dim>& p, double time,
-                     int frame);
+void write_particles(const std::filesystem::path& h5_path, const Particles<dim>& p, double time, int frame);
 
 //! Writes dir/<stem>.xdmf, a temporal collection of `frames` (frame number, time [s]). Each
 //! frame's grid is described from dir/particle_file_name(frame, stem), which must exist.
-void write_time_series_xdmf(const std::filesystem::path& dir,
-                            const std::vector<std::pair<int, double>>& frames,
+void write_time_series_xdmf(const std::filesystem::path& dir, const std::vector<std::pair<int, double>>& frames,
                             const std::string& stem = "particles");
 
 }  // namespace mpm::io

@@ -20,7 +20,7 @@ namespace mpm::io {
 struct PreviewOptions {
   std::array<double, 3> domain_lo{0.0, 0.0, 0.0};  //!< [m]; the image shows [lo, hi] in x and y
   std::array<double, 3> domain_hi{1.0, 1.0, 1.0};  //!< [m]
-  int width_px = 640;              //!< the height follows from the aspect ratio of the domain
+  int width_px = 640;                              //!< the height follows from the aspect ratio of the domain
   //! "speed", "height" (y) or a scalar of the particle frames: "material", "J", "plastic", ...
   std::string color_by = "speed";
   double point_radius_px = 2.0;
@@ -51,7 +51,6 @@ void write_png_preview(const std::filesystem::path& path, const std::vector<Prev
 //! Throws InputError for invalid options (also for a color_by the particles do not carry, such
 //! as J without the solid channels) and IoError when the file cannot be written.
 template <int dim>
-void write_png_preview(const std::filesystem::path& path, const Particles<dim>& p,
-                       const PreviewOptions& options);
+void write_png_preview(const std::filesystem::path& path, const Particles<dim>& p, const PreviewOptions& options);
 
 }  // namespace mpm::io

@@ -16,8 +16,7 @@ namespace mpm::io {
 //!    (YAML 1.2 core schema) become booleans, anything else stays a string.
 //!  - info: strings (version, host, date, ...).
 //! A key repeated within one section throws InputError; a failed write throws IoError.
-void write_summary(const std::filesystem::path& path,
-                   const std::vector<std::pair<std::string, double>>& results,
+void write_summary(const std::filesystem::path& path, const std::vector<std::pair<std::string, double>>& results,
                    const std::vector<std::pair<std::string, std::string>>& parameters,
                    const std::vector<std::pair<std::string, std::string>>& info);
 

@@ -12,8 +12,8 @@
 #include <mpm/core/types.h>
 
 #include <Eigen/LU>
-#include <cmath>
 #include <Eigen/SVD>
+#include <cmath>
 
 namespace mpm::math {
 
@@ -57,8 +57,7 @@ Svd<dim> svd(const Mat<dim>& F) {
   if constexpr (dim == 2) {
     return svd2(F);
   } else {
-    const Eigen::JacobiSVD<Mat<dim>, Eigen::NoQRPreconditioner> jacobi(F, Eigen::ComputeFullU |
-                                                                             Eigen::ComputeFullV);
+    const Eigen::JacobiSVD<Mat<dim>, Eigen::NoQRPreconditioner> jacobi(F, Eigen::ComputeFullU | Eigen::ComputeFullV);
     Svd<dim> result{jacobi.matrixU(), jacobi.singularValues(), jacobi.matrixV()};
     // Eigen returns orthogonal factors with det = +-1 and sigma >= 0. A reflection in U or V
     // is moved onto the smallest singular value, where it perturbs F the least.

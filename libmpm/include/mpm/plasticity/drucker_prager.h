@@ -45,11 +45,11 @@ public:
   //! friction_angle [deg] in [0, 90), cohesion [Pa] >= 0; lame of the Hencky StVK elasticity.
   DruckerPrager(double friction_angle, double cohesion, const constitutive::Lame& lame)
       : elastic_{lame.mu, lame.lambda} {
-    verify<InputError>(friction_angle >= 0.0 && friction_angle < 90.0,
-                       "Drucker-Prager friction angle " + std::to_string(friction_angle) +
-                           " deg: expected a value in [0, 90)");
-    verify<InputError>(cohesion >= 0.0, "Drucker-Prager cohesion " + std::to_string(cohesion) +
-                                            " Pa: expected a value >= 0");
+    verify<InputError>(
+        friction_angle >= 0.0 && friction_angle < 90.0,
+        "Drucker-Prager friction angle " + std::to_string(friction_angle) + " deg: expected a value in [0, 90)");
+    verify<InputError>(cohesion >= 0.0,
+                       "Drucker-Prager cohesion " + std::to_string(cohesion) + " Pa: expected a value >= 0");
     const double sin_phi = std::sin(friction_angle * std::numbers::pi / 180.0);
     const double cos_phi = std::cos(friction_angle * std::numbers::pi / 180.0);
     alpha_ = std::sqrt(2.0 / 3.0) * 2.0 * sin_phi / (3.0 - sin_phi);
@@ -76,7 +76,7 @@ public:
     } else {
       const double y = yield(elastic_.principal_kirchhoff(eps));
       if (y <= 0.0 && plastic == 0.0) return false;  // I, nothing stored to absorb
-      if (y > 0.0) {                                  // III
+      if (y > 0.0) {                                 // III
         const Vec<dim> dev = eps - Vec<dim>::Constant(trace / dim);
         H -= y / (2.0 * elastic_.mu * dev.norm()) * dev;
       }

@@ -35,8 +35,7 @@ using PlasticityModel = std::variant<NoPlasticity, DruckerPrager<dim>, VonMises<
 
 //! Scene-file names of the alternatives, in variant order.
 inline std::vector<std::string> plasticity_model_names() {
-  return {std::string(NoPlasticity::name), std::string(DruckerPrager<3>::name),
-          std::string(VonMises<3>::name)};
+  return {std::string(NoPlasticity::name), std::string(DruckerPrager<3>::name), std::string(VonMises<3>::name)};
 }
 
 }  // namespace mpm::plasticity

@@ -32,8 +32,7 @@ public:
   VonMises(double yield_stress, const constitutive::Lame& lame)
       : elastic_{lame.mu, lame.lambda}, yield_stress_(yield_stress) {
     verify<InputError>(yield_stress > 0.0,
-                       "von Mises yield stress " + std::to_string(yield_stress) +
-                           " Pa: expected > 0");
+                       "von Mises yield stress " + std::to_string(yield_stress) + " Pa: expected > 0");
   }
 
   //! y of the Kirchhoff stress of Fe [Pa]; <= 0 is admissible.
@@ -57,9 +56,7 @@ public:
 private:
   using Hencky = constitutive::HenckyStVK<dim>;
 
-  static Vec<dim> deviator(const Vec<dim>& eps) {
-    return eps - Vec<dim>::Constant(eps.sum() / dim);
-  }
+  static Vec<dim> deviator(const Vec<dim>& eps) { return eps - Vec<dim>::Constant(eps.sum() / dim); }
 
   //! y from the deviatoric Hencky strain: dev tau = 2 mu dev eps.
   double yield(const Vec<dim>& dev_eps) const {

@@ -36,14 +36,14 @@ std::vector<Material<dim>> parse_materials(const Config& scene);
 
 //! Index of the material called `name`; InputError at `cfg`'s `key` when none is.
 template <int dim>
-std::uint16_t material_index(const std::vector<Material<dim>>& materials, const std::string& name,
-                             const Config& cfg, const std::string& key);
+std::uint16_t material_index(const std::vector<Material<dim>>& materials, const std::string& name, const Config& cfg,
+                             const std::string& key);
 
 //! Appends particles at `positions`, each of volume `volume` [m^dim] of material `m`, moving
 //! with `velocity`. Every particle must lie inside the domain (InputError naming `where`).
 template <int dim>
-void add_particles(SolidScene<dim>& scene, const std::vector<Vec<dim>>& positions, double volume,
-                   std::uint16_t m, const Vec<dim>& velocity, const std::string& where);
+void add_particles(SolidScene<dim>& scene, const std::vector<Vec<dim>>& positions, double volume, std::uint16_t m,
+                   const Vec<dim>& velocity, const std::string& where);
 
 //! A scene with an empty particle set, the grid sized to the settings' domain and the solid
 //! solver called `solver` (solid_solver_names()).

@@ -35,8 +35,10 @@ ParticleSource<dim>::ParticleSource(const Settings& settings) : settings_(settin
   slab_lo[axis_] = 0.0;
   slab_hi[axis_] = h_;
   face_points_ = geometry::seed_box<dim>(slab_lo, slab_hi, c.dx, c.particles_per_cell, 0.0, 0);
-  verify<InputError>(!face_points_.empty(), "source: the upstream face of the box holds no point of the "
-                                            "seeding lattice (spacing " + std::to_string(h_) + " m)");
+  verify<InputError>(!face_points_.empty(),
+                     "source: the upstream face of the box holds no point of the "
+                     "seeding lattice (spacing " +
+                         std::to_string(h_) + " m)");
   for (Vec<dim>& q : face_points_) q[axis_] = 0.0;
 
   // Planes of the lattice lie at (i + 1/2) h (seeding.h).

@@ -23,15 +23,17 @@ void ReturnMap<dim>::run(MpmState<dim>& s) {
   std::vector<Mat<dim>>& F = solid::elastic_F(P);
   std::vector<double>& plastic = solid::plastic_state(P);
   for (std::size_t m = 0; m < materials_.size(); ++m) {
-    std::visit([&](const auto& model) {
-      using Model = std::decay_t<decltype(model)>;
-      if constexpr (!std::is_same_v<Model, plasticity::NoPlasticity>) {
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.size(), 4096), [&](const auto& r) {
-          for (std::size_t p = r.begin(); p != r.end(); ++p)
-            if (P.material[p] == m) model.project(F[p], plastic[p]);
-        });
-      }
-    }, materials_[m].plasticity);
+    std::visit(
+        [&](const auto& model) {
+          using Model = std::decay_t<decltype(model)>;
+          if constexpr (!std::is_same_v<Model, plasticity::NoPlasticity>) {
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.size(), 4096), [&](const auto& r) {
+              for (std::size_t p = r.begin(); p != r.end(); ++p)
+                if (P.material[p] == m) model.project(F[p], plastic[p]);
+            });
+          }
+        },
+        materials_[m].plasticity);
   }
   check_finite(F, name(), "particle", "elastic deformation gradient F^E");
 }

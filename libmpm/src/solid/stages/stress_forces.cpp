@@ -31,18 +31,21 @@ void StressForces<dim>::run(MpmState<dim>& s) {
   Particles<dim>& P = s.particles;
   const std::vector<Mat<dim>>& F = solid::elastic_F(std::as_const(P));
   // The material loops below write only listed materials: stress-free particles keep zero.
-  if (stress_free_particles_) weighted_stress_.assign(P.size(), Mat<dim>::Zero());
-  else weighted_stress_.resize(P.size());
+  if (stress_free_particles_)
+    weighted_stress_.assign(P.size(), Mat<dim>::Zero());
+  else
+    weighted_stress_.resize(P.size());
   for (std::size_t m = 0; m < materials_.size(); ++m) {
-    std::visit([&](const auto& model) {
-      using Model = std::decay_t<decltype(model)>;
-      if constexpr (!Model::supports_inversion) check_not_inverted(P, F, m, Model::name);
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.size(), 4096), [&](const auto& r) {
-        for (std::size_t p = r.begin(); p != r.end(); ++p)
-          if (P.material[p] == m)
-            weighted_stress_[p] = P.volume0[p] * model.first_piola(F[p]) * F[p].transpose();
-      });
-    }, materials_[m].elastic);
+    std::visit(
+        [&](const auto& model) {
+          using Model = std::decay_t<decltype(model)>;
+          if constexpr (!Model::supports_inversion) check_not_inverted(P, F, m, Model::name);
+          tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.size(), 4096), [&](const auto& r) {
+            for (std::size_t p = r.begin(); p != r.end(); ++p)
+              if (P.material[p] == m) weighted_stress_[p] = P.volume0[p] * model.first_piola(F[p]) * F[p].transpose();
+          });
+        },
+        materials_[m].elastic);
   }
   check_finite(weighted_stress_, name(), "particle", "Kirchhoff stress");
 

@@ -25,8 +25,8 @@ std::vector<NodeState> random_nodes(int n) {
   std::uniform_real_distribution<double> mass(1e-6, 10.0), speed(-3.0, 3.0);
   std::vector<NodeState> nodes;
   for (int i = 0; i < n; ++i)
-    nodes.push_back({mass(rng), mass(rng), Vec<3>(speed(rng), speed(rng), speed(rng)),
-                     Vec<3>(speed(rng), speed(rng), speed(rng))});
+    nodes.push_back(
+        {mass(rng), mass(rng), Vec<3>(speed(rng), speed(rng), speed(rng)), Vec<3>(speed(rng), speed(rng), speed(rng))});
   return nodes;
 }
 

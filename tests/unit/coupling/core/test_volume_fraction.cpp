@@ -121,8 +121,7 @@ TEST_CASE("cell_average is the cell-centre value of a linear node field") {
   mpm::Particles<2> P = lattice<2>(4, 12, 2, 0.1, 0.5);
   Setup<2> s(P, mpm::QuadraticBSpline{}, 0.1, 1.6);
   std::vector<double> f(s.grid.node_storage());
-  for (std::size_t k = 0; k < f.size(); ++k)
-    f[k] = 3.0 + 2.0 * s.grid.node_coord(k)[0] - 5.0 * s.grid.node_coord(k)[1];
+  for (std::size_t k = 0; k < f.size(); ++k) f[k] = 3.0 + 2.0 * s.grid.node_coord(k)[0] - 5.0 * s.grid.node_coord(k)[1];
   CHECK(coupling::cell_average(s.grid, f, IVec<2>(6, 9)) ==
         doctest::Approx(3.0 + 2.0 * 6.5 - 5.0 * 9.5).epsilon(1e-15));
 }
@@ -149,7 +148,6 @@ TEST_CASE("the clamp keeps n_w >= n_min and n_s + n_w = 1") {
   CHECK(s.phi[k] == doctest::Approx(0.9).epsilon(1e-14));
   CHECK(packed.sediment[k] == doctest::Approx(0.65).epsilon(1e-15));
   CHECK(packed.fluid[k] == doctest::Approx(0.35).epsilon(1e-15));
-  CHECK_THROWS_AS(
-      coupling::sediment_fraction(P, s.buckets, mpm::Kernel{mpm::QuadraticBSpline{}}, s.grid, 0.0, s.phi),
-      mpm::InputError);
+  CHECK_THROWS_AS(coupling::sediment_fraction(P, s.buckets, mpm::Kernel{mpm::QuadraticBSpline{}}, s.grid, 0.0, s.phi),
+                  mpm::InputError);
 }

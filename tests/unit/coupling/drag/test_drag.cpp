@@ -57,8 +57,7 @@ TEST_CASE("the Stokes limit of every law has the documented n_w factors") {
   // Wen-Yu: Stokes n_w^-2.65.
   CHECK(Gidaspow{kSand}.beta(0.9, 0.0) == doctest::Approx(stokes * std::pow(0.9, -2.65)).epsilon(1e-14));
   // Di Felice: Cd Re -> 4.8^2 = 23.04 and chi -> 3.7: 17.28 mu n_s n_w^-2.7 / d^2.
-  const double di_felice_0 =
-      17.28 * kSand.viscosity * 0.1 * std::pow(0.9, -2.7) / (kSand.diameter * kSand.diameter);
+  const double di_felice_0 = 17.28 * kSand.viscosity * 0.1 * std::pow(0.9, -2.7) / (kSand.diameter * kSand.diameter);
   CHECK(DiFelice{kSand}.beta(0.9, 0.0) == doctest::Approx(di_felice_0).epsilon(1e-14));
   CHECK(DiFelice{kSand}.beta(0.9, 1e-16) == doctest::Approx(di_felice_0).epsilon(1e-7));
 }
@@ -72,8 +71,7 @@ TEST_CASE("hindered settling implied at low Re: v_s / v_Stokes = n_w^2 beta_Stok
     const auto ratio = [&](double beta) { return n_w * n_w * stokes / beta; };
     CHECK(ratio(Stokes{kSand}.beta(n_w, 0.0)) == doctest::Approx(std::pow(n_w, 2.0)).epsilon(1e-14));
     CHECK(ratio(Gidaspow{kSand}.beta(n_w, 0.0)) == doctest::Approx(std::pow(n_w, 4.65)).epsilon(1e-14));
-    CHECK(ratio(DiFelice{kSand}.beta(n_w, 0.0)) ==
-          doctest::Approx(std::pow(n_w, 4.7) * 24.0 / 23.04).epsilon(1e-14));
+    CHECK(ratio(DiFelice{kSand}.beta(n_w, 0.0)) == doctest::Approx(std::pow(n_w, 4.7) * 24.0 / 23.04).epsilon(1e-14));
   }
 }
 
@@ -97,8 +95,7 @@ TEST_CASE("beta is finite and non-negative, zero without sediment, and nondecrea
 
 TEST_CASE("continuity and the published switches") {
   // Schiller-Naumann: Cd jumps from 0.43829 to 0.44 at Re = 1000.
-  const double below = schiller_naumann_cd_re(1000.0 - 1e-9) / 1000.0,
-               above = schiller_naumann_cd_re(1000.0) / 1000.0;
+  const double below = schiller_naumann_cd_re(1000.0 - 1e-9) / 1000.0, above = schiller_naumann_cd_re(1000.0) / 1000.0;
   CHECK(below == doctest::Approx(0.43828814001999694).epsilon(1e-9));
   CHECK(above == doctest::Approx(0.44).epsilon(1e-15));
   // Di Felice is smooth in n_w and in the slip (here across Re = 10^1.5, the minimum of chi).
@@ -110,16 +107,14 @@ TEST_CASE("continuity and the published switches") {
   // Gidaspow: Ergun below n_w = 0.8, Wen-Yu from 0.8 on; at Re -> 0 Ergun is 7.5 mu/d^2 and
   // Wen-Yu 3.6 0.8^-2.65 mu/d^2 there (ratio 1.15331).
   const Gidaspow g{kSand};
-  CHECK(g.beta(std::nextafter(0.8, 0.0), 0.0) / g.beta(0.8, 0.0) ==
-        doctest::Approx(1.1533131083067483).epsilon(1e-9));
+  CHECK(g.beta(std::nextafter(0.8, 0.0), 0.0) / g.beta(0.8, 0.0) == doctest::Approx(1.1533131083067483).epsilon(1e-9));
   CHECK(g.beta(0.8, 0.05) ==
         doctest::Approx(SchillerNaumann{kSand}.beta(0.8, 0.05) * std::pow(0.8, -2.65)).epsilon(1e-14));
 }
 
 TEST_CASE("parse_drag_law reads the law and validates every key") {
   const DragLaw law = parse_drag_law(mpm::Config::parse(
-      "drag: {law: di_felice, grain_diameter: 3.0e-4}\nfluid: {density: 998, viscosity: 1.1e-3}\n",
-      "scene.yaml"));
+      "drag: {law: di_felice, grain_diameter: 3.0e-4}\nfluid: {density: 998, viscosity: 1.1e-3}\n", "scene.yaml"));
   CHECK(std::holds_alternative<DiFelice>(law));
   CHECK(parameters(law).diameter == 3.0e-4);
   CHECK(parameters(law).density == 998.0);

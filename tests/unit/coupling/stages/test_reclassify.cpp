@@ -7,8 +7,8 @@
 #include <coupling/scene_loader.h>
 #include <coupling/stages/on_phase.h>
 #include <coupling/stages/reclassify_sediment.h>
-#include <mpm/core/advance.h>
 #include <doctest/doctest.h>
+#include <mpm/core/advance.h>
 #include <mpm/core/stages/particles_to_grid.h>
 #include <mpm/core/stages/sort_particles.h>
 #include <mpm/geometry/seeding.h>
@@ -76,15 +76,16 @@ domain: {lo: [0, 0], hi: [0.5, 0.25]}
 grid: {dx: 0.0125}
 time: {end: 0.3}
 gravity: [0, -9.81]
-walls: {contact: )") + (wet ? "sticky" : "slip") + "}\nsediment: " + sand.substr(0, sand.size() - 1) +
-                                switching + "}\n" +
-                                (wet ? "fluid: {density: 1000, viscosity: 1.0e-3}\n"
-                                       "drag: {law: di_felice, grain_diameter: 5.0e-4}\n"
-                                       "pressure: {solver: mgpcg, tolerance: 1.0e-10}\n"
-                                     : "") +
-                                R"(bodies:
+walls: {contact: )") + (wet ? "sticky" : "slip") +
+                            "}\nsediment: " + sand.substr(0, sand.size() - 1) + switching + "}\n" +
+                            (wet ? "fluid: {density: 1000, viscosity: 1.0e-3}\n"
+                                   "drag: {law: di_felice, grain_diameter: 5.0e-4}\n"
+                                   "pressure: {solver: mgpcg, tolerance: 1.0e-10}\n"
+                                 : "") +
+                            R"(bodies:
   - {phase: sediment, shape: box, lo: [0.025, 0.025], hi: [0.475, 0.125], packing_fraction: 0.6}
-)" + (wet ? "  - {phase: fluid, shape: box, lo: [0.025, 0.025], hi: [0.475, 0.2]}\n" : "") + extra);
+)" + (wet ? "  - {phase: fluid, shape: box, lo: [0.025, 0.025], hi: [0.475, 0.2]}\n" : "") +
+                            extra);
 }
 
 double top(const CoupledState<2>& s) {
@@ -166,9 +167,9 @@ TEST_CASE("reclassify in the dry pipeline: a dense bed stays continuum, an isola
 
 TEST_CASE("reclassify: a bed deposited as discrete grains does not expand when it turns continuum") {
   struct Run {
-    double top0, highest;       // bed top before and the highest over the run [m]
-    double grains0, grains;     // sum m_p / rho_s before and after [m^2]
-    double volume;              // sum V_p^0 det F^E after: the volume the continuum's stress sees
+    double top0, highest;    // bed top before and the highest over the run [m]
+    double grains0, grains;  // sum m_p / rho_s before and after [m^2]
+    double volume;           // sum V_p^0 det F^E after: the volume the continuum's stress sees
     SedimentCounts counts;
   };
   // 300 steps of the bed, every grain of material `material` with a compressed F^E = 0.9 I,
@@ -191,8 +192,9 @@ TEST_CASE("reclassify: a bed deposited as discrete grains does not expand when i
     r.grains = grain_volume(s);
     for (std::size_t p = 0; p < P.size(); ++p) r.volume += P.volume0[p] * F[p].determinant();
     r.counts = count_sediment(s);
-    MESSAGE((wet ? "wet" : "dry") << ", switching '" << switching << "': top " << r.top0 << " -> highest " << r.highest << " m, "
-                          << r.counts.discrete << " of " << P.size() << " discrete, t = " << s.time << " s");
+    MESSAGE((wet ? "wet" : "dry") << ", switching '" << switching << "': top " << r.top0 << " -> highest " << r.highest
+                                  << " m, " << r.counts.discrete << " of " << P.size() << " discrete, t = " << s.time
+                                  << " s");
     return r;
   };
   const double dx = 0.0125;

@@ -78,8 +78,10 @@ void check_operator(int n) {
     std::vector<double> Ax, Ay, d;
     op.apply(x, Ax);
     op.apply(y, Ay);
-    const Eigen::VectorXd Ax_dense = A * Eigen::Map<const Eigen::VectorXd>(x.data(), static_cast<Eigen::Index>(x.size()));
-    for (std::size_t c = 0; c < x.size(); ++c) CHECK(std::abs(Ax[c] - Ax_dense[static_cast<Eigen::Index>(c)]) <= 1e-12 * scale);
+    const Eigen::VectorXd Ax_dense =
+        A * Eigen::Map<const Eigen::VectorXd>(x.data(), static_cast<Eigen::Index>(x.size()));
+    for (std::size_t c = 0; c < x.size(); ++c)
+      CHECK(std::abs(Ax[c] - Ax_dense[static_cast<Eigen::Index>(c)]) <= 1e-12 * scale);
     op.diagonal(d);
     for (std::size_t c = 0; c < d.size(); ++c)
       CHECK(std::abs(d[c] - A(static_cast<Eigen::Index>(c), static_cast<Eigen::Index>(c))) <= 1e-14 * scale);

@@ -41,12 +41,11 @@ std::string tank_yaml(const std::string& extra = "") {
   const std::string water = dim == 2 ? "[0.45, 0.2]" : "[0.4, 0.25, 0.4]";
   const std::string origin = dim == 2 ? "[0.05, 0.05]" : "[0.1, 0.1, 0.1]";
   return "dim: " + std::to_string(dim) + "\ndomain: {lo: " + lo + ", hi: " + hi + "}\n" +
-         "grid: {dx: " + (dim == 2 ? "0.025" : "0.05") + "}\n" +
-         "time: {end: 1.0, frame_dt: 0.05}\ngravity: " + v + "\n" +
-         "fluid: {density: 1000, viscosity: 0.0}\n" +
+         "grid: {dx: " + (dim == 2 ? "0.025" : "0.05") + "}\n" + "time: {end: 1.0, frame_dt: 0.05}\ngravity: " + v +
+         "\n" + "fluid: {density: 1000, viscosity: 0.0}\n" +
          "pressure: {solver: cg, tolerance: 1.0e-12, max_iterations: 5000}\n" +
-         "walls: {contact: sticky, y_max: open}\n" +
-         "bodies:\n  - {shape: box, lo: " + origin + ", hi: " + water + "}\n" + extra;
+         "walls: {contact: sticky, y_max: open}\n" + "bodies:\n  - {shape: box, lo: " + origin + ", hi: " + water +
+         "}\n" + extra;
 }
 
 //! Node velocities of the operator box of `stage` (zero where the grid has no node).
@@ -176,9 +175,7 @@ TEST_CASE("pressure projection: D u = 0 in every fluid cell, walls untouched (2D
   check_projection_divergence_free<3>();
 }
 
-TEST_CASE("pressure projection: mixture constraint div(n_w v_w + n_s v_s) = 0") {
-  check_mixture_constraint<2>();
-}
+TEST_CASE("pressure projection: mixture constraint div(n_w v_w + n_s v_s) = 0") { check_mixture_constraint<2>(); }
 
 TEST_CASE("pressure projection: a closed cavity with a moving lid and one empty cell is solvable") {
   // Every wall closed and the lid sliding: A has the Q1-P0 null vectors, and the lid makes
@@ -280,9 +277,9 @@ TEST_CASE("weakly compressible tank: hydrostatic pressure from the equation of s
   // The same tank with the pressure from each particle's volume (fluid.solver:
   // weakly_compressible): the liquid compresses until p(J) balances its weight. A little
   // viscosity damps the sound waves the release starts.
-  const Config cfg = Config::parse(tank_yaml<2>(), "tank.yaml",
-                                   {"fluid.solver=weakly_compressible", "fluid.speed_of_sound=15",
-                                    "fluid.viscosity=2"});
+  const Config cfg =
+      Config::parse(tank_yaml<2>(), "tank.yaml",
+                    {"fluid.solver=weakly_compressible", "fluid.speed_of_sound=15", "fluid.viscosity=2"});
   fluid::FluidScene<2> scene = fluid::load_fluid_scene<2>(cfg);
   REQUIRE(scene.solver->name() == "weakly_compressible");
   auto pipeline = fluid::make_fluid_pipeline(scene);

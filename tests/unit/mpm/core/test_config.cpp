@@ -92,8 +92,9 @@ TEST_CASE("errors name file, line, column, key path, value and accepted range") 
           "scene.yaml:2:3: key 'solid.yield_stress': missing required key");
   }
   SUBCASE("bad choice lists the allowed values") {
-    CHECK(input_error([&] { solid.choice("model", "neo_hookean", {"neo_hookean", "fixed_corotated"}); }) ==
-          "scene.yaml:5:10: key 'solid.model' = neo_hookian: expected one of 'neo_hookean', 'fixed_corotated'");
+    CHECK(input_error([&] {
+            solid.choice("model", "neo_hookean", {"neo_hookean", "fixed_corotated"});
+          }) == "scene.yaml:5:10: key 'solid.model' = neo_hookian: expected one of 'neo_hookean', 'fixed_corotated'");
   }
   SUBCASE("wrong vector length") {
     CHECK(input_error([&] { scene.vector<3>("gravity"); }) ==
@@ -200,9 +201,11 @@ TEST_CASE("resolved() lists every read value once, defaults included, in reading
   solid.number("density", mpm::Range::positive());
   scene.flag("verbose", false);
   scene.list("bodies")[0].text("shape");
-  const std::vector<std::pair<std::string, std::string>> expected = {
-      {"solid.density", "2000"}, {"dt", "1e-04"}, {"gravity", "[0, -9.81]"},
-      {"verbose", "false"},      {"bodies[0].shape", "box"}};
+  const std::vector<std::pair<std::string, std::string>> expected = {{"solid.density", "2000"},
+                                                                     {"dt", "1e-04"},
+                                                                     {"gravity", "[0, -9.81]"},
+                                                                     {"verbose", "false"},
+                                                                     {"bodies[0].shape", "box"}};
   const auto resolved = scene.resolved();
   REQUIRE(resolved.size() == expected.size());
   for (std::size_t i = 0; i < expected.size(); ++i) {

@@ -62,8 +62,8 @@ struct Scene {
     const Config material = Config::parse("{density: 1000, youngs_modulus: 1.0e5, poisson_ratio: 0.3}");
     auto scene = solid::make_solid_scene<2>(settings, {parse_material<2>(material)}, {});
     const double volume = geometry::particle_volume<2>(settings.dx, 4);
-    solid::add_particles<2>(scene, geometry::seed_box<2>(Vec<2>::Constant(0.2), Vec<2>::Constant(0.4),
-                                                         settings.dx, 4, 0.0, 1),
+    solid::add_particles<2>(scene,
+                            geometry::seed_box<2>(Vec<2>::Constant(0.2), Vec<2>::Constant(0.4), settings.dx, 4, 0.0, 1),
                             volume, 0, Vec<2>(0.5, 0.1), "block");
     solid::add_particles<2>(scene, {Vec<2>::Constant(0.8)}, volume, 0, Vec<2>::Zero(), "lone");
     return scene;
@@ -81,8 +81,7 @@ TEST_CASE("check_finite names the first non-finite entry") {
         "stage 'g2p': particle 3 has non-finite velocity");
   std::vector<double> m(3, 1.0);
   m[2] = -kInf;
-  CHECK(numerical_error([&] { check_finite(m, "p2g", "node", "mass"); }) ==
-        "stage 'p2g': node 2 has non-finite mass");
+  CHECK(numerical_error([&] { check_finite(m, "p2g", "node", "mass"); }) == "stage 'p2g': node 2 has non-finite mass");
 }
 
 TEST_CASE("the prepared state is finite, so each stage below fails only for the planted value") {

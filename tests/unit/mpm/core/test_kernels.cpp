@@ -11,20 +11,20 @@
 using namespace mpm;
 
 namespace {
-std::vector<Kernel> all_kernels() {
-  return {QuadraticBSpline{}, CubicBSpline{}, UGimp{0.5}, UGimp{0.25}, UGimp{0.1}};
-}
+std::vector<Kernel> all_kernels() { return {QuadraticBSpline{}, CubicBSpline{}, UGimp{0.5}, UGimp{0.25}, UGimp{0.1}}; }
 
 // Weight and derivative of node `node` at coordinate xi (0 outside the stencil).
 void weight_of_node(const Kernel& kernel, double xi, int node, double& w, double& dw) {
-  std::visit([&](const auto& k) {
-    int base;
-    double ws[4], dws[4];
-    k(xi, base, ws, dws);
-    const int i = node - base;
-    w = (i >= 0 && i < k.support) ? ws[i] : 0.0;
-    dw = (i >= 0 && i < k.support) ? dws[i] : 0.0;
-  }, kernel);
+  std::visit(
+      [&](const auto& k) {
+        int base;
+        double ws[4], dws[4];
+        k(xi, base, ws, dws);
+        const int i = node - base;
+        w = (i >= 0 && i < k.support) ? ws[i] : 0.0;
+        dw = (i >= 0 && i < k.support) ? dws[i] : 0.0;
+      },
+      kernel);
 }
 }  // namespace
 
@@ -32,23 +32,25 @@ TEST_CASE("kernels: partition of unity, non-negativity and linear reproduction")
   for (const Kernel& kernel : all_kernels()) {
     CAPTURE(kernel_name(kernel));
     for (double xi = 3.0; xi < 5.0; xi += 0.01237) {
-      std::visit([&](const auto& k) {
-        int base;
-        double w[4], dw[4];
-        k(xi, base, w, dw);
-        double sum = 0.0, first = 0.0, dsum = 0.0, dfirst = 0.0;
-        for (int i = 0; i < k.support; ++i) {
-          CHECK(w[i] >= -1e-15);
-          sum += w[i];
-          first += w[i] * (base + i - xi);
-          dsum += dw[i];
-          dfirst += dw[i] * (base + i);
-        }
-        CHECK(sum == doctest::Approx(1.0).epsilon(1e-14));
-        CHECK(std::fabs(first) < 1e-13);
-        CHECK(std::fabs(dsum) < 1e-13);              // d/dxi of sum w = 0
-        CHECK(dfirst == doctest::Approx(1.0).epsilon(1e-13));  // d/dxi of sum w x_i = 1
-      }, kernel);
+      std::visit(
+          [&](const auto& k) {
+            int base;
+            double w[4], dw[4];
+            k(xi, base, w, dw);
+            double sum = 0.0, first = 0.0, dsum = 0.0, dfirst = 0.0;
+            for (int i = 0; i < k.support; ++i) {
+              CHECK(w[i] >= -1e-15);
+              sum += w[i];
+              first += w[i] * (base + i - xi);
+              dsum += dw[i];
+              dfirst += dw[i] * (base + i);
+            }
+            CHECK(sum == doctest::Approx(1.0).epsilon(1e-14));
+            CHECK(std::fabs(first) < 1e-13);
+            CHECK(std::fabs(dsum) < 1e-13);                        // d/dxi of sum w = 0
+            CHECK(dfirst == doctest::Approx(1.0).epsilon(1e-13));  // d/dxi of sum w x_i = 1
+          },
+          kernel);
     }
   }
 }
@@ -64,8 +66,8 @@ TEST_CASE("kernels: C1 continuity and derivative against finite differences") {
         weight_of_node(kernel, xi - h, node, wm, dwm);
         weight_of_node(kernel, xi + h, node, wp, dwp);
         weight_of_node(kernel, xi, node, w, dw);
-        CHECK(std::fabs(wp - wm) < 4.0 * h);          // w continuous
-        CHECK(std::fabs(dwp - dwm) < 1e-4);           // dw continuous (C1)
+        CHECK(std::fabs(wp - wm) < 4.0 * h);  // w continuous
+        CHECK(std::fabs(dwp - dwm) < 1e-4);   // dw continuous (C1)
         CHECK((wp - wm) / (2 * h) == doctest::Approx(dw).epsilon(1e-5).scale(1.0));
       }
     }

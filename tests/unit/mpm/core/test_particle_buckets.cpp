@@ -44,7 +44,8 @@ void check_storage_orders() {
   const Kernel kernel = QuadraticBSpline{};
   SparseGrid<dim> grid(Vec<dim>::Zero(), Vec<dim>::Ones(), 1.0 / 32);
   ParticleBuckets<dim> buckets;
-  Particles<dim> P = random_cloud<dim>(20000, Vec<dim>::Constant(0.2), Vec<dim>::Constant(0.8), 11);  // random storage: scattered
+  Particles<dim> P =
+      random_cloud<dim>(20000, Vec<dim>::Constant(0.2), Vec<dim>::Constant(0.8), 11);  // random storage: scattered
   CHECK(sort_into_buckets(P, kernel, grid, buckets));
   for (std::size_t i = 0; i < P.size(); ++i) REQUIRE(buckets.particle[i] == i);
   check_buckets(P, kernel, grid, buckets);

@@ -230,8 +230,7 @@ TEST_CASE("add_channel is idempotent for the same name and type and refuses a ty
   CHECK_THROWS_AS(P.add_channel("", 0.0, kStored), Error);
   CHECK_THROWS_AS(P.add_channel("ok", 0.0, {.output = true, .output_name = "a b"}), Error);
   // Two channels cannot share a dataset of the particle frames.
-  CHECK(contains(error_of([&] { P.add_channel("speedup", 0.0, {.output = true, .output_name = "age"}); }),
-                 "as 'age'"));
+  CHECK(contains(error_of([&] { P.add_channel("speedup", 0.0, {.output = true, .output_name = "age"}); }), "as 'age'"));
   CHECK_FALSE(P.has_channel("speedup"));
 
   // Lookups.
@@ -256,10 +255,9 @@ TEST_CASE("the memory report and the pipeline fields list the extra channels aft
     if (name == "particle.strain") CHECK(bytes == 1000 * sizeof(Mat<3>));
     if (name == "particle.tag") CHECK(bytes == P.template channel<std::uint16_t>("tag").capacity() * 2);
   }
-  const std::vector<std::string> expected{"particle.x",      "particle.v",   "particle.C",
-                                          "particle.mass",   "particle.volume0", "particle.material",
-                                          "particle.age",    "particle.anchor",  "particle.strain",
-                                          "particle.tag"};
+  const std::vector<std::string> expected{"particle.x",       "particle.v",        "particle.C",   "particle.mass",
+                                          "particle.volume0", "particle.material", "particle.age", "particle.anchor",
+                                          "particle.strain",  "particle.tag"};
   CHECK(names == expected);
   CHECK(particle_fields(P) == expected);
 }
@@ -365,8 +363,8 @@ TEST_CASE("a pipeline whose stage reads particle.F is assembled only when the pa
   const Config material = Config::parse("{density: 1000, youngs_modulus: 1.0e5, poisson_ratio: 0.3}");
   // Built by hand, without make_solid_scene (which declares the solid channels).
   const std::vector<Material<2>> materials = {parse_material<2>(material)};
-  solid::SolidScene<2> scene{settings, materials, {}, solid::make_solid_solver<2>("explicit", materials),
-                             initial_state(settings)};
+  solid::SolidScene<2> scene{
+      settings, materials, {}, solid::make_solid_solver<2>("explicit", materials), initial_state(settings)};
   CHECK_FALSE(scene.state.particles.has_channel("F"));
   CHECK_THROWS_WITH_AS(solid::make_solid_pipeline(scene),
                        doctest::Contains("reads field 'particle.F' that no earlier stage writes"), InputError);

@@ -116,7 +116,7 @@ TEST_CASE("periodic fill + G2P: a uniform flow crosses the seam unchanged") {
   MpmState<2> s = fold(cloud, QuadraticBSpline{});
   momentum_to_velocity(s.grid, s.transfer);
   stages::PeriodicFill<2>().run(s);
-  s.dt = 0.1;  // moves every particle 0.07 in x: some cross x = 1
+  s.dt = 0.1;                                    // moves every particle 0.07 in x: some cross x = 1
   const std::vector<Vec<2>> x0 = s.particles.x;  // the sort may have reordered the particles
   grid_to_particles(s.particles, s.buckets, s.kernel, s.transfer, s.grid, s.dt);
   stages::PeriodicWrap<2>().run(s);

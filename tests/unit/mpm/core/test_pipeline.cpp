@@ -21,7 +21,10 @@ class Named final : public mpm::Stage<Clock> {
 public:
   Named(std::string name, std::vector<std::string> reads, std::vector<std::string> writes, double dt = 0.0,
         std::vector<mpm::Diagnostic> diagnostics = {})
-      : name_(std::move(name)), reads_(std::move(reads)), writes_(std::move(writes)), dt_(dt),
+      : name_(std::move(name)),
+        reads_(std::move(reads)),
+        writes_(std::move(writes)),
+        dt_(dt),
         diagnostics_(std::move(diagnostics)) {}
   std::string name() const override { return name_; }
   std::vector<std::string> reads() const override { return reads_; }

@@ -4,8 +4,8 @@
 #include <mpm/core/solve/conjugate_gradient.h>
 #include <mpm/core/solve/preconditioners.h>
 
-#include <Eigen/Dense>
 #include <doctest/doctest.h>
+#include <Eigen/Dense>
 
 #include <cmath>
 #include <random>
@@ -87,7 +87,8 @@ TEST_CASE("Jacobi preconditioning removes a badly scaled diagonal") {
   const std::vector<double> b = random_vector(60, 4);
   std::vector<double> plain, jacobi;
   const auto r_plain = conjugate_gradient(A, IdentityPreconditioner{}, b, plain, SolveControl{1e-10, 0.0, 5000});
-  const auto r_jacobi = conjugate_gradient(A, JacobiPreconditioner(diagonal), b, jacobi, SolveControl{1e-10, 0.0, 5000});
+  const auto r_jacobi =
+      conjugate_gradient(A, JacobiPreconditioner(diagonal), b, jacobi, SolveControl{1e-10, 0.0, 5000});
   CHECK(r_jacobi.converged);
   CHECK(r_jacobi.iterations * 3 < r_plain.iterations);
   const Eigen::VectorXd exact = A.A.ldlt().solve(Eigen::Map<const Eigen::VectorXd>(b.data(), 60));
@@ -109,7 +110,8 @@ TEST_CASE("CG on vector unknowns equals one scalar solve per component") {
     const std::vector<double> bc = random_vector(25, 10 + c);
     for (int i = 0; i < 25; ++i) b[i][c] = bc[i];
   }
-  const auto result = conjugate_gradient(apply_vec, JacobiPreconditioner(diagonal), b, x, SolveControl{1e-12, 0.0, 500});
+  const auto result =
+      conjugate_gradient(apply_vec, JacobiPreconditioner(diagonal), b, x, SolveControl{1e-12, 0.0, 500});
   CHECK(result.converged);
   for (int c = 0; c < 3; ++c) {
     Eigen::VectorXd bc(25);

@@ -5,8 +5,8 @@
 #include <mpm/core/error.h>
 #include <mpm/core/transfer.h>
 
-#include <Eigen/Geometry>
 #include <doctest/doctest.h>
+#include <Eigen/Geometry>
 
 #include "random_particles.h"
 
@@ -19,27 +19,31 @@ using test::random_cloud;
 
 template <int dim>
 double cross(const Vec<dim>& a, const Vec<dim>& b, int axis) {
-  if constexpr (dim == 2) return a[0] * b[1] - a[1] * b[0];
-  else return a.cross(b)[axis];
+  if constexpr (dim == 2)
+    return a[0] * b[1] - a[1] * b[0];
+  else
+    return a.cross(b)[axis];
 }
 
 // APIC inertia D_p = sum_i w_ip (x_i - x_p)(x_i - x_p)^T computed by brute force.
 template <int dim>
 Mat<dim> inertia(const Kernel& kernel, const SparseGrid<dim>& g, const Vec<dim>& x) {
   Mat<dim> D = Mat<dim>::Zero();
-  std::visit([&](const auto& k) {
-    int base[dim];
-    double w[dim][4], dw[dim][4];
-    for (int a = 0; a < dim; ++a) k((x[a] - g.origin()[a]) / g.dx(), base[a], w[a], dw[a]);
-    for (int a = 0; a < dim; ++a) {
-      double s = 0;
-      for (int i = 0; i < k.support; ++i) {
-        const double r = (g.origin()[a] + (base[a] + i) * g.dx()) - x[a];
-        s += w[a][i] * r * r;
-      }
-      D(a, a) = s;  // off-diagonals vanish by linear reproduction
-    }
-  }, kernel);
+  std::visit(
+      [&](const auto& k) {
+        int base[dim];
+        double w[dim][4], dw[dim][4];
+        for (int a = 0; a < dim; ++a) k((x[a] - g.origin()[a]) / g.dx(), base[a], w[a], dw[a]);
+        for (int a = 0; a < dim; ++a) {
+          double s = 0;
+          for (int i = 0; i < k.support; ++i) {
+            const double r = (g.origin()[a] + (base[a] + i) * g.dx()) - x[a];
+            s += w[a][i] * r * r;
+          }
+          D(a, a) = s;  // off-diagonals vanish by linear reproduction
+        }
+      },
+      kernel);
   return D;
 }
 
@@ -87,8 +91,7 @@ void check_affine_reproduction(const Kernel& kernel) {
   CAPTURE(kernel_name(kernel));
   SparseGrid<dim> grid(Vec<dim>::Zero(), Vec<dim>::Ones(), 1.0 / 16);
   // Dense enough that every node of a particle's stencil receives mass from many particles.
-  Particles<dim> P = random_cloud<dim>(dim == 2 ? 8000 : 40000, Vec<dim>::Constant(0.25),
-                                       Vec<dim>::Constant(0.75), 3);
+  Particles<dim> P = random_cloud<dim>(dim == 2 ? 8000 : 40000, Vec<dim>::Constant(0.25), Vec<dim>::Constant(0.75), 3);
   Mat<dim> A;
   for (int a = 0; a < dim * dim; ++a) A.data()[a] = 0.3 * (a + 1) - 1.0;
   const Vec<dim> b = Vec<dim>::LinSpaced(0.5, -0.5);
@@ -102,8 +105,7 @@ void check_affine_reproduction(const Kernel& kernel) {
   particles_to_grid(P, buckets, kernel, apic, grid);
   momentum_to_velocity(grid, apic);
   for (std::size_t k = 0; k < grid.node_storage(); ++k)
-    if (grid.mass[k] > 0)
-      REQUIRE((grid.velocity[k] - (A * grid.node_position(k) + b)).norm() < 1e-12);
+    if (grid.mass[k] > 0) REQUIRE((grid.velocity[k] - (A * grid.node_position(k) + b)).norm() < 1e-12);
   const Particles<dim> before = P;
   grid_to_particles(P, buckets, kernel, apic, grid, 0.0);
   double max_v = 0, max_C = 0;
@@ -141,8 +143,7 @@ TEST_CASE("sparse grid allocates only blocks near particles") {
   // Every stencil node of every particle is allocated.
   for (std::size_t p = 0; p < P.size(); ++p) {
     const IVec<3> base = stencil_base(grid, Kernel{QuadraticBSpline{}}, P.x[p]);
-    for (int c = 0; c < 27; ++c)
-      REQUIRE(grid.node_index(base + IVec<3>(c % 3, (c / 3) % 3, c / 9)) >= 0);
+    for (int c = 0; c < 27; ++c) REQUIRE(grid.node_index(base + IVec<3>(c % 3, (c / 3) % 3, c / 9)) >= 0);
   }
 }
 

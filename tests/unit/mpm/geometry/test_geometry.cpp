@@ -31,8 +31,8 @@ namespace {
 //! A file in a fresh temporary folder of this test process.
 std::string temp_file(const std::string& name) {
   static const std::filesystem::path folder = [] {
-    std::filesystem::path p = std::filesystem::temp_directory_path() /
-                              ("mpm_test_geometry_" + std::to_string(std::random_device{}()));
+    std::filesystem::path p =
+        std::filesystem::temp_directory_path() / ("mpm_test_geometry_" + std::to_string(std::random_device{}()));
     std::filesystem::create_directories(p);
     return p;
   }();
@@ -121,11 +121,11 @@ TEST_CASE("half space: signed distance and normal") {
 
 TEST_CASE("box: exact signed distance inside and outside") {
   const Box<3> box(Vec<3>(0, 0, 0), Vec<3>(2, 1, 4));
-  CHECK(box.phi(Vec<3>(1, 0.5, 2)) == doctest::Approx(-0.5));       // centre: nearest face y
-  CHECK(box.phi(Vec<3>(0.1, 0.5, 2)) == doctest::Approx(-0.1));     // near face x = 0
-  CHECK(box.phi(Vec<3>(3, 0.5, 2)) == doctest::Approx(1.0));        // beside a face
+  CHECK(box.phi(Vec<3>(1, 0.5, 2)) == doctest::Approx(-0.5));          // centre: nearest face y
+  CHECK(box.phi(Vec<3>(0.1, 0.5, 2)) == doctest::Approx(-0.1));        // near face x = 0
+  CHECK(box.phi(Vec<3>(3, 0.5, 2)) == doctest::Approx(1.0));           // beside a face
   CHECK(box.phi(Vec<3>(3, 2, 2)) == doctest::Approx(std::sqrt(2.0)));  // beside an edge
-  CHECK(box.phi(Vec<3>(-1, -2, 6)) == doctest::Approx(3.0));        // beside a corner: sqrt(1 + 4 + 4)
+  CHECK(box.phi(Vec<3>(-1, -2, 6)) == doctest::Approx(3.0));           // beside a corner: sqrt(1 + 4 + 4)
   CHECK(box.phi(Vec<3>(2, 0.3, 1)) == doctest::Approx(0.0));
   CHECK((box.normal(Vec<3>(1.9, 0.5, 2)) - Vec<3>(1, 0, 0)).norm() < 1e-14);
   CHECK((box.normal(Vec<3>(-0.5, 0.5, 5)) - Vec<3>(-0.5, 0, 1).normalized()).norm() < 1e-14);
@@ -157,7 +157,7 @@ TEST_CASE("sphere and cylinder: exact signed distance") {
   CHECK(can.phi(Vec<3>(0, 0, 0)) == doctest::Approx(-1.0));
   CHECK(can.phi(Vec<3>(1.8, 0, 0)) == doctest::Approx(-0.2));  // nearer the cap than the side
   CHECK(can.phi(Vec<3>(3, 0, 0.5)) == doctest::Approx(1.0));
-  CHECK(can.phi(Vec<3>(5, 0, 5)) == doctest::Approx(5.0));     // rim: sqrt(3^2 + 4^2)
+  CHECK(can.phi(Vec<3>(5, 0, 5)) == doctest::Approx(5.0));  // rim: sqrt(3^2 + 4^2)
   CHECK((can.normal(Vec<3>(-2.5, 0.1, 0.2)) - Vec<3>(-1, 0, 0)).norm() < 1e-14);
   check_eikonal<3>(can, Vec<3>(-3, -2, -2), Vec<3>(3, 2, 2), [](const Vec<3>& x) {
     const double rho = x.tail<2>().norm();
@@ -266,7 +266,8 @@ walls:
   thickness: 0.08
   y_max: open
   x_min: sticky
-)", "scene.yaml");
+)",
+                                     "scene.yaml");
   const ColliderSet<2> set = parse_colliders<2>(scene, Vec<2>(0, 0), Vec<2>(1, 1), 0.05);
   REQUIRE(set.colliders().size() == 4);
   const Collider<2>& floor = set.colliders()[0];
@@ -304,11 +305,12 @@ walls:
         std::string::npos);
   CHECK(error_of("colliders:\n  - {type: sphere, center: [0, 0, 0], radius: 1, contact: slip, friction: 0.2}\n")
             .find("separate") != std::string::npos);
-  CHECK(error_of("colliders:\n  - {type: sphere, center: [0, 0, 0], radius: 1, friction: -0.2}\n")
-            .find("friction") != std::string::npos);
+  CHECK(error_of("colliders:\n  - {type: sphere, center: [0, 0, 0], radius: 1, friction: -0.2}\n").find("friction") !=
+        std::string::npos);
   CHECK(error_of("colliders:\n  - {type: level_set, file: mesh.ply}\n").find("unknown extension") != std::string::npos);
-  CHECK(error_of("colliders:\n  - {type: level_set, file: missing.obj, voxel_size: 0.01}\n")
-            .find("colliders[0].file") != std::string::npos);
+  CHECK(
+      error_of("colliders:\n  - {type: level_set, file: missing.obj, voxel_size: 0.01}\n").find("colliders[0].file") !=
+      std::string::npos);
   CHECK(error_of("walls: {thickness: 0.6}\n").find("walls.thickness") != std::string::npos);
   CHECK(error_of("walls: {z_max: ajar}\n").find("open") != std::string::npos);
 }
@@ -429,15 +431,15 @@ TEST_CASE("mesh level set of the unit cube") {
 
 TEST_CASE("slotted plate mesh and level-set colliders from a scene") {
   const std::string plate_file = std::string(SEDIMENT_DATA_DIR) + "/meshes/slotted_plate.obj";
-  const Config scene = Config::parse("colliders:\n  - {type: level_set, file: " + plate_file +
-                                         ", voxel_size: 0.005, slice_z: 0.3, contact: slip}\n",
-                                     "scene.yaml");
+  const Config scene = Config::parse(
+      "colliders:\n  - {type: level_set, file: " + plate_file + ", voxel_size: 0.005, slice_z: 0.3, contact: slip}\n",
+      "scene.yaml");
   const ColliderSet<2> set = parse_colliders<2>(scene, Vec<2>(0, 0), Vec<2>(1, 1), 0.05);
   CHECK(set.uses_level_sets());
   const Collider<2>& plate = set.colliders().front();
   for (const double slit : {0.275, 0.525, 0.775}) {
     CHECK(std::abs(plate.phi(Vec<2>(slit, 0.43), 0.0) - 0.01) < 0.0025);  // half a slit, +- half a voxel
-    CHECK(plate.phi(Vec<2>(slit + 0.05, 0.43), 0.0) < 0.0);  // in a bar
+    CHECK(plate.phi(Vec<2>(slit + 0.05, 0.43), 0.0) < 0.0);               // in a bar
   }
   CHECK(std::abs(plate.phi(Vec<2>(0.1, 0.47), 0.0) - 0.01) < 0.0025);  // above the plate
   // No node of a 0.05 m grid is in a slit: the uniform grid sees a solid plate.
@@ -454,8 +456,8 @@ TEST_CASE("level sets without OpenVDB fail with the reason") {
   CHECK_THROWS_WITH_AS(LevelSet::from_mesh(obj, 0.05), doctest::Contains("-DSEDIMENT_WITH_OPENVDB=ON"), InputError);
   CHECK_THROWS_WITH_AS(LevelSet::from_vdb("plate.vdb"), doctest::Contains("no OpenVDB"), InputError);
   const Config scene = Config::parse("colliders:\n  - {type: level_set, file: " + obj + ", voxel_size: 0.05}\n");
-  CHECK_THROWS_WITH_AS(parse_colliders<3>(scene, Vec<3>::Zero(), Vec<3>::Ones(), 0.1),
-                       doctest::Contains("no OpenVDB"), InputError);
+  CHECK_THROWS_WITH_AS(parse_colliders<3>(scene, Vec<3>::Zero(), Vec<3>::Ones(), 0.1), doctest::Contains("no OpenVDB"),
+                       InputError);
 }
 
 #endif

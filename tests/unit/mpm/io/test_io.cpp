@@ -10,11 +10,11 @@
 #include <mpm/io/summary_json.h>
 #include <mpm/solid/solid_channels.h>
 
-#include <Eigen/LU>
 #include <doctest/doctest.h>
 #include <hdf5.h>
-#include <nlohmann/json.hpp>
 #include <png.h>
+#include <Eigen/LU>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <array>
@@ -40,8 +40,7 @@ namespace {
 class ScratchDir {
 public:
   explicit ScratchDir(const std::string& name)
-      : path_(fs::temp_directory_path() /
-              ("mpm_test_io_" + std::to_string(::getpid()) + "_" + name)) {
+      : path_(fs::temp_directory_path() / ("mpm_test_io_" + std::to_string(::getpid()) + "_" + name)) {
     fs::remove_all(path_);
     fs::create_directories(path_);
   }
@@ -51,8 +50,7 @@ public:
 
   std::vector<std::string> entries() const {
     std::vector<std::string> names;
-    for (const auto& entry : fs::directory_iterator(path_))
-      names.push_back(entry.path().filename());
+    for (const auto& entry : fs::directory_iterator(path_)) names.push_back(entry.path().filename());
     std::sort(names.begin(), names.end());
     return names;
   }
@@ -66,14 +64,11 @@ std::string read_text(const fs::path& path) {
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
-void write_text(const fs::path& path, const std::string& text) {
-  std::ofstream(path, std::ios::binary) << text;
-}
+void write_text(const fs::path& path, const std::string& text) { std::ofstream(path, std::ios::binary) << text; }
 
 template <class T>
 bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
-  return a.size() == b.size() &&
-         (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
+  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
 }
 
 //! An empty particle set with the solid channels F and plastic when `solid`: what a scene
@@ -93,13 +88,11 @@ Particles<dim> random_particles(std::size_t n, bool deformation, unsigned seed) 
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   Particles<dim> p = declared<dim>(deformation);
   for (std::size_t i = 0; i < n; ++i)
-    p.push_back(Vec<dim>::NullaryExpr([&] { return u(rng); }),
-                Vec<dim>::NullaryExpr([&] { return u(rng); }), 1.0 + u(rng), 1e-3 * (1.5 + u(rng)),
-                static_cast<std::uint16_t>(rng() % 7));
+    p.push_back(Vec<dim>::NullaryExpr([&] { return u(rng); }), Vec<dim>::NullaryExpr([&] { return u(rng); }),
+                1.0 + u(rng), 1e-3 * (1.5 + u(rng)), static_cast<std::uint16_t>(rng() % 7));
   for (auto& C : p.C) C = Mat<dim>::NullaryExpr([&] { return u(rng); });
   if (deformation) {
-    for (auto& F : solid::elastic_F(p))
-      F = Mat<dim>::Identity() + 0.1 * Mat<dim>::NullaryExpr([&] { return u(rng); });
+    for (auto& F : solid::elastic_F(p)) F = Mat<dim>::Identity() + 0.1 * Mat<dim>::NullaryExpr([&] { return u(rng); });
     for (auto& plastic : solid::plastic_state(p)) plastic = 0.01 * u(rng);
   }
   p.v[0][0] = -0.0;
@@ -160,8 +153,7 @@ Picture read_png(const fs::path& path) {
   image.version = PNG_IMAGE_VERSION;
   REQUIRE(png_image_begin_read_from_file(&image, path.c_str()));
   image.format = PNG_FORMAT_RGB;
-  Picture picture{int(image.width), int(image.height),
-                  std::vector<std::uint8_t>(PNG_IMAGE_SIZE(image))};
+  Picture picture{int(image.width), int(image.height), std::vector<std::uint8_t>(PNG_IMAGE_SIZE(image))};
   REQUIRE(png_image_finish_read(&image, nullptr, picture.rgb.data(), 0, nullptr));
   return picture;
 }
@@ -220,16 +212,10 @@ TEST_CASE("every writer throws IoError naming its target and leaves no file when
   };
   CHECK(throws_naming([&] { io::write_particles(folder / "particles_0000.h5", p, 0.0, 0); },
                       folder / "particles_0000.h5"));
-  CHECK(throws_naming(
-      [&] {
-        io::save_checkpoint(folder / "c.h5", p, {2, 0, 0, 0.0, 0.0, "", {}});
-      },
-      folder / "c.h5"));
+  CHECK(throws_naming([&] { io::save_checkpoint(folder / "c.h5", p, {2, 0, 0, 0.0, 0.0, "", {}}); }, folder / "c.h5"));
   CHECK(throws_naming([&] { io::write_png_preview(folder / "p.png", p, {}); }, folder / "p.png"));
-  CHECK(
-      throws_naming([&] { io::write_summary(folder / "s.json", {}, {}, {}); }, folder / "s.json"));
-  CHECK(throws_naming([&] { io::DiagnosticsCsv().open(folder / "d.csv", {"frame"}); },
-                      folder / "d.csv"));
+  CHECK(throws_naming([&] { io::write_summary(folder / "s.json", {}, {}, {}); }, folder / "s.json"));
+  CHECK(throws_naming([&] { io::DiagnosticsCsv().open(folder / "d.csv", {"frame"}); }, folder / "d.csv"));
   CHECK(dir.entries() == std::vector<std::string>{"file"});
 }
 
@@ -240,8 +226,12 @@ TEST_CASE_TEMPLATE("checkpoint round trip is bit-identical", Dim, std::integral_
   for (const bool deformation : {false, true}) {
     CAPTURE(deformation);
     const Particles<dim> p = random_particles<dim>(50, deformation, 7);
-    const io::CheckpointHeader saved{dim,         12,           3456789012345,
-                                     0.1 + 0.2,   1.0 / 3.0,    "sha256:abc",
+    const io::CheckpointHeader saved{dim,
+                                     12,
+                                     3456789012345,
+                                     0.1 + 0.2,
+                                     1.0 / 3.0,
+                                     "sha256:abc",
                                      {{"3.pressure/p", {0.1, -2.5e-300, 7.0}}, {"empty", {}}}};
     io::save_checkpoint(dir / "c.h5", p, saved);
     io::CheckpointHeader loaded;
@@ -400,8 +390,7 @@ TEST_CASE("particle HDF5 file holds the documented datasets") {
 namespace {
 
 //! The texts between each `open` and the `close` that follows it, in order.
-std::vector<std::string> all_between(const std::string& text, const std::string& open,
-                                     const std::string& close) {
+std::vector<std::string> all_between(const std::string& text, const std::string& open, const std::string& close) {
   std::vector<std::string> found;
   for (std::size_t at = text.find(open); at != std::string::npos; at = text.find(open, at)) {
     at += open.size();
@@ -445,8 +434,7 @@ TEST_CASE("XDMF files reference existing datasets with their dimensions") {
   io::write_particles(dir / io::particle_file_name(2), random_particles<2>(9, true, 7), 0.2, 2);
 
   const std::string frame1 = read_text(dir / "particles_0001.xdmf");
-  CHECK(frame1.find(
-            R"(<Topology TopologyType="Polyvertex" NumberOfElements="9" NodesPerElement="1"/>)") !=
+  CHECK(frame1.find(R"(<Topology TopologyType="Polyvertex" NumberOfElements="9" NodesPerElement="1"/>)") !=
         std::string::npos);
   CHECK(frame1.find(R"(<Geometry GeometryType="XYZ">)") != std::string::npos);
   CHECK(frame1.find(">particles_0001.h5:/position</DataItem>") != std::string::npos);
@@ -487,10 +475,8 @@ TEST_CASE("PNG preview: size, colours, painter's order and NaN") {
   CHECK(bytes.substr(0, 8) == "\x89PNG\r\n\x1a\n");
   CHECK(bytes.substr(12, 4) == "IHDR");
   const auto big_endian = [&](std::size_t at) {
-    return (std::uint32_t(std::uint8_t(bytes[at])) << 24) |
-           (std::uint32_t(std::uint8_t(bytes[at + 1])) << 16) |
-           (std::uint32_t(std::uint8_t(bytes[at + 2])) << 8) |
-           std::uint32_t(std::uint8_t(bytes[at + 3]));
+    return (std::uint32_t(std::uint8_t(bytes[at])) << 24) | (std::uint32_t(std::uint8_t(bytes[at + 1])) << 16) |
+           (std::uint32_t(std::uint8_t(bytes[at + 2])) << 8) | std::uint32_t(std::uint8_t(bytes[at + 3]));
   };
   CHECK(big_endian(16) == 200);
   CHECK(big_endian(20) == 100);
@@ -525,9 +511,7 @@ TEST_CASE("PNG preview: size, colours, painter's order and NaN") {
 TEST_CASE("diagnostics CSV: full precision, fixed row length, restart truncation") {
   const ScratchDir dir("csv");
   const std::vector<std::string> columns{"frame", "time", "energy"};
-  const auto row = [](int frame) {
-    return std::vector<double>{double(frame), 0.1 * frame, 1.0 / (3.0 + frame)};
-  };
+  const auto row = [](int frame) { return std::vector<double>{double(frame), 0.1 * frame, 1.0 / (3.0 + frame)}; };
   io::DiagnosticsCsv csv;
   csv.open(dir / "d.csv", columns);
   for (int frame = 0; frame < 6; ++frame) csv.append(row(frame));
@@ -543,8 +527,7 @@ TEST_CASE("diagnostics CSV: full precision, fixed row length, restart truncation
   while (std::getline(lines, line)) {
     std::vector<double> values;
     std::istringstream fields(line);
-    for (std::string field; std::getline(fields, field, ',');)
-      values.push_back(std::strtod(field.c_str(), nullptr));
+    for (std::string field; std::getline(fields, field, ',');) values.push_back(std::strtod(field.c_str(), nullptr));
     rows.push_back(values);
   }
   REQUIRE(rows.size() == 7);
@@ -562,16 +545,14 @@ TEST_CASE("diagnostics CSV: full precision, fixed row length, restart truncation
         "1,0.10000000000000001,0.25\n2,0.20000000000000001,0.20000000000000001\n"
         "3,0.30000000000000004,0.16666666666666666\n");
 
-  CHECK_THROWS_AS(io::DiagnosticsCsv().open_for_restart(dir / "d.csv", {"frame", "time"}, 2),
-                  IoError);
+  CHECK_THROWS_AS(io::DiagnosticsCsv().open_for_restart(dir / "d.csv", {"frame", "time"}, 2), IoError);
   CHECK_THROWS_AS(io::DiagnosticsCsv().open_for_restart(dir / "none.csv", columns, 2), IoError);
   CHECK_THROWS_AS(io::DiagnosticsCsv().open(dir / "e.csv", {"a,b"}), InputError);
 }
 
 TEST_CASE("summary JSON parses back with numbers as numbers") {
   const ScratchDir dir("json");
-  io::write_summary(dir / "summary.json",
-                    {{"third", 1.0 / 3.0}, {"blown_up", std::nan("")}, {"huge", 1e308}},
+  io::write_summary(dir / "summary.json", {{"third", 1.0 / 3.0}, {"blown_up", std::nan("")}, {"huge", 1e308}},
                     {{"cfl", "0.4"},
                      {"steps", "10"},
                      {"plus", "+5"},
@@ -600,6 +581,5 @@ TEST_CASE("summary JSON parses back with numbers as numbers") {
   CHECK(j["info"]["version"] == "0.1.0");
   CHECK(dir.entries() == std::vector<std::string>{"summary.json"});
 
-  CHECK_THROWS_AS(io::write_summary(dir / "dup.json", {{"a", 1.0}, {"a", 2.0}}, {}, {}),
-                  InputError);
+  CHECK_THROWS_AS(io::write_summary(dir / "dup.json", {{"a", 1.0}, {"a", 2.0}}, {}, {}), InputError);
 }

@@ -43,15 +43,12 @@ struct AsTuple<std::variant<Types...>> {
   using type = std::tuple<Types...>;
 };
 
-using AllElasticModels = decltype(std::tuple_cat(
-    std::declval<AsTuple<constitutive::ElasticModel<2>>::type>(),
-    std::declval<AsTuple<constitutive::ElasticModel<3>>::type>()));
+using AllElasticModels = decltype(std::tuple_cat(std::declval<AsTuple<constitutive::ElasticModel<2>>::type>(),
+                                                 std::declval<AsTuple<constitutive::ElasticModel<3>>::type>()));
 
 const constitutive::Lame kLame = constitutive::Lame::from_youngs_poisson(1e6, 0.3);
 
-double uniform(std::mt19937& rng, double lo, double hi) {
-  return std::uniform_real_distribution<double>(lo, hi)(rng);
-}
+double uniform(std::mt19937& rng, double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(rng); }
 
 // Rotations built without the SVD under test.
 template <int dim>
@@ -94,14 +91,11 @@ Mat<dim> finite_difference_gradient(const Model& model, const Mat<dim>& F, doubl
   return P;
 }
 
-double relative_error(const auto& approx, const auto& exact) {
-  return (approx - exact).norm() / exact.norm();
-}
+double relative_error(const auto& approx, const auto& exact) { return (approx - exact).norm() / exact.norm(); }
 
 }  // namespace
 
-TEST_CASE_TEMPLATE_DEFINE("elastic model: P = dpsi/dF, dP, rest state, rotation invariance", Model,
-                          elastic_models) {
+TEST_CASE_TEMPLATE_DEFINE("elastic model: P = dpsi/dF, dP, rest state, rotation invariance", Model, elastic_models) {
   constexpr int dim = DimOf<Model>::value;
   INFO(std::string(Model::name), " in ", dim, "D");
   const Model model{kLame.mu, kLame.lambda};
@@ -112,8 +106,7 @@ TEST_CASE_TEMPLATE_DEFINE("elastic model: P = dpsi/dF, dP, rest state, rotation 
   CHECK(model.first_piola(Mat<dim>::Identity()).norm() <= 1e-12 * stress_scale);
 
   std::vector<Mat<dim>> samples;
-  for (int n = 0; n < 6; ++n)
-    samples.push_back(with_stretches<dim>(rng, random_stretches<dim>(rng, 0.6, 1.5)));
+  for (int n = 0; n < 6; ++n) samples.push_back(with_stretches<dim>(rng, random_stretches<dim>(rng, 0.6, 1.5)));
   // Repeated singular values: the divided differences of the differential meet 0/0.
   Vec<dim> repeated = Vec<dim>::Constant(1.2);
   repeated(dim - 1) = 0.8;
@@ -135,8 +128,7 @@ TEST_CASE_TEMPLATE_DEFINE("elastic model: P = dpsi/dF, dP, rest state, rotation 
 
     const Mat<dim> dF = random_matrix<dim>(rng);
     const double h = 1e-6;
-    const Mat<dim> dP_fd =
-        (model.first_piola(F + h * dF) - model.first_piola(F - h * dF)) / (2 * h);
+    const Mat<dim> dP_fd = (model.first_piola(F + h * dF) - model.first_piola(F - h * dF)) / (2 * h);
     CHECK(relative_error(dP_fd, model.first_piola_differential(F, dF)) < 1e-6);
 
     const Mat<dim> R = random_rotation<dim>(rng);
@@ -214,9 +206,9 @@ std::vector<plasticity::VonMises<3>> return_maps() {
 
 }  // namespace
 
-TEST_CASE_TEMPLATE("return map: lands on the yield surface, idempotent, admissible states untouched",
-                   Model, plasticity::DruckerPrager<2>, plasticity::DruckerPrager<3>,
-                   plasticity::VonMises<2>, plasticity::VonMises<3>) {
+TEST_CASE_TEMPLATE("return map: lands on the yield surface, idempotent, admissible states untouched", Model,
+                   plasticity::DruckerPrager<2>, plasticity::DruckerPrager<3>, plasticity::VonMises<2>,
+                   plasticity::VonMises<3>) {
   constexpr int dim = DimOf<Model>::value;
   const constitutive::HenckyStVK<dim> elastic{kLame.mu, kLame.lambda};
   std::mt19937 rng(2016);
@@ -224,8 +216,7 @@ TEST_CASE_TEMPLATE("return map: lands on the yield surface, idempotent, admissib
     int outside = 0, inside = 0;
     for (int n = 0; n < 200; ++n) {
       // Every other trial is mildly compressed with little shear, mostly admissible.
-      const Vec<dim> stretch = n % 2 ? random_stretches<dim>(rng, 0.97, 0.995)
-                                     : random_stretches<dim>(rng, 0.9, 1.1);
+      const Vec<dim> stretch = n % 2 ? random_stretches<dim>(rng, 0.97, 0.995) : random_stretches<dim>(rng, 0.9, 1.1);
       const Mat<dim> trial = with_stretches<dim>(rng, stretch);
       CAPTURE(trial);
       Mat<dim> Fe = trial;
@@ -303,22 +294,18 @@ TEST_CASE_TEMPLATE("Drucker-Prager volume correction: no volume gain", Matrix, M
       Fe = increment * Fe;
       model.project(Fe, plastic);
       CHECK(plastic >= 0.0);
-      CHECK(std::log(Fe.determinant()) + plastic ==
-            doctest::Approx(log_J_total).scale(1.0).epsilon(1e-12));
+      CHECK(std::log(Fe.determinant()) + plastic == doctest::Approx(log_J_total).scale(1.0).epsilon(1e-12));
     }
   }
 }
 
-TEST_CASE_TEMPLATE("Drucker-Prager cohesion moves the apex to tr tau = 3 c cot(phi)", Matrix,
-                   Mat<2>, Mat<3>) {
+TEST_CASE_TEMPLATE("Drucker-Prager cohesion moves the apex to tr tau = 3 c cot(phi)", Matrix, Mat<2>, Mat<3>) {
   constexpr int dim = Matrix::RowsAtCompileTime;
   const double phi = 35.0, cohesion = 5e3;
   const plasticity::DruckerPrager<dim> cohesive(phi, cohesion, kLame);
   const plasticity::DruckerPrager<dim> dry(phi, 0.0, kLame);
   const constitutive::HenckyStVK<dim> elastic{kLame.mu, kLame.lambda};
-  const auto trace_tau = [&](const Mat<dim>& F) {
-    return (elastic.first_piola(F) * F.transpose()).trace();
-  };
+  const auto trace_tau = [&](const Mat<dim>& F) { return (elastic.first_piola(F) * F.transpose()).trace(); };
   const double apex = 3.0 * cohesion / std::tan(phi * std::numbers::pi / 180.0);
 
   // Far beyond the apex in tension: both project to their apex.
@@ -366,8 +353,8 @@ plasticity:
   CHECK(m.energy(F) == doctest::Approx(hencky.energy(F)));
   CHECK(relative_error(m.kirchhoff(F), Mat<3>(hencky.first_piola(F) * F.transpose())) < 1e-14);
 
-  const Material<2> jelly = parse_material<2>(
-      Config::parse("density: 1000\nyoungs_modulus: 1e5\npoisson_ratio: 0.4\n"));
+  const Material<2> jelly =
+      parse_material<2>(Config::parse("density: 1000\nyoungs_modulus: 1e5\npoisson_ratio: 0.4\n"));
   CHECK(jelly.name == "material");
   CHECK(std::holds_alternative<constitutive::FixedCorotated<2>>(jelly.elastic));
   CHECK(std::holds_alternative<plasticity::NoPlasticity>(jelly.plasticity));
@@ -378,6 +365,5 @@ plasticity:
                        doctest::Contains("hencky_stvk"), InputError);
   CHECK_THROWS_AS(parse_material<3>(Config::parse(base + "poisson_ratio: 0.5\n")), InputError);
   const std::string no_yield_stress = "elasticity: hencky_stvk\nplasticity: {model: von_mises}\n";
-  CHECK_THROWS_AS(parse_material<3>(Config::parse(base + "poisson_ratio: 0.3\n" + no_yield_stress)),
-                  InputError);
+  CHECK_THROWS_AS(parse_material<3>(Config::parse(base + "poisson_ratio: 0.3\n" + no_yield_stress)), InputError);
 }

@@ -30,13 +30,10 @@ struct PrincipalDifferential {
 inline constexpr double min_stretch = 1e-6;
 
 //! x with its magnitude raised to min_stretch, sign kept (0 counts as positive).
-inline double safe_denominator(double x) {
-  return std::abs(x) >= min_stretch ? x : std::copysign(min_stretch, x);
-}
+inline double safe_denominator(double x) { return std::abs(x) >= min_stretch ? x : std::copysign(min_stretch, x); }
 
 template <int dim>
-Mat<dim> principal_differential(const math::Svd<dim>& f, const PrincipalDifferential<dim>& d,
-                                const Mat<dim>& dF) {
+Mat<dim> principal_differential(const math::Svd<dim>& f, const PrincipalDifferential<dim>& d, const Mat<dim>& dF) {
   const Mat<dim> M = f.U.transpose() * dF * f.V;
   Mat<dim> D;
   for (int i = 0; i < dim; ++i) {

@@ -37,9 +37,9 @@ constexpr int patch_nodes = ipow(patch_width<dim>, dim);
 template <int dim, int S, class T = double>
 struct Stencil {
   using VecT = Eigen::Matrix<T, dim, 1>;
-  T w[dim][S];     //!< N(r) per axis
-  T dw[dim][S];    //!< dN/dxi per axis [1/cell] (left unset by compute<false>)
-  T rel[dim][S];   //!< node minus particle position per axis [cells]
+  T w[dim][S];       //!< N(r) per axis
+  T dw[dim][S];      //!< dN/dxi per axis [1/cell] (left unset by compute<false>)
+  T rel[dim][S];     //!< node minus particle position per axis [cells]
   int patch_offset;  //!< patch index of the first stencil node
 
   template <bool gradient = true, class K>
@@ -95,8 +95,7 @@ struct Stencil {
           const T wjk = w[1][j] * w[2][k];
           for (int i = 0; i < S; ++i) {
             const VecT grad(dw[0][i] * wjk, w[0][i] * dw[1][j] * w[2][k], w[0][i] * w[1][j] * dw[2][k]);
-            fn(patch_offset + i + W * (j + W * k), w[0][i] * wjk, grad,
-               VecT(rel[0][i], rel[1][j], rel[2][k]));
+            fn(patch_offset + i + W * (j + W * k), w[0][i] * wjk, grad, VecT(rel[0][i], rel[1][j], rel[2][k]));
           }
         }
     }
@@ -139,8 +138,7 @@ void for_each_patch_node(const SparseGrid<dim>& grid, int block, Fn&& fn) {
     }
     const std::size_t first =
         static_cast<std::size_t>(grid.slot(grid.block_id(corner_node))) * SparseGrid<dim>::nodes_per_block;
-    for (int l = 0; l < SparseGrid<dim>::nodes_per_block; ++l)
-      fn(corner_patch + block_to_patch<dim>[l], first + l);
+    for (int l = 0; l < SparseGrid<dim>::nodes_per_block; ++l) fn(corner_patch + block_to_patch<dim>[l], first + l);
   }
 }
 
@@ -152,7 +150,9 @@ struct PatchFrame {
   PatchFrame(const SparseGrid<dim>& grid, int block)
       : origin(grid.block_coord(block) * SparseGrid<dim>::block_size), map(grid) {}
   template <class T>
-  Eigen::Matrix<T, dim, 1> cells(const Eigen::Matrix<T, dim, 1>& x) const { return map(x); }
+  Eigen::Matrix<T, dim, 1> cells(const Eigen::Matrix<T, dim, 1>& x) const {
+    return map(x);
+  }
 };
 
 //! bucket_body(first, last, const PatchFrame&, T* patch) adds Ch values per node of the
@@ -162,20 +162,20 @@ template <int dim, int Ch, class T, class BucketBody>
 void scatter_buckets(const SparseGrid<dim>& grid, const ParticleBuckets<dim>& buckets,
                      const std::array<BasicChannelView<T>, Ch>& channels, BucketBody&& bucket_body) {
   for (const std::vector<int>& same_color : buckets.by_color) {
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, same_color.size(), 4),
-                      [&](const tbb::blocked_range<std::size_t>& range) {
-      alignas(64) std::array<T, patch_nodes<dim> * Ch> patch;
-      for (std::size_t r = range.begin(); r != range.end(); ++r) {
-        const int b = same_color[r];
-        patch.fill(T(0));
-        bucket_body(buckets.particle.data() + buckets.begin[b], buckets.particle.data() + buckets.begin[b + 1],
-                    PatchFrame<dim>(grid, buckets.block[b]), patch.data());
-        for_each_patch_node(grid, buckets.block[b], [&](int node, std::size_t k) {
-          for (int c = 0; c < Ch; ++c)
-            channels[c].data[k * channels[c].stride + channels[c].offset] += patch[node * Ch + c];
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, same_color.size(), 4), [&](const tbb::blocked_range<std::size_t>& range) {
+          alignas(64) std::array<T, patch_nodes<dim> * Ch> patch;
+          for (std::size_t r = range.begin(); r != range.end(); ++r) {
+            const int b = same_color[r];
+            patch.fill(T(0));
+            bucket_body(buckets.particle.data() + buckets.begin[b], buckets.particle.data() + buckets.begin[b + 1],
+                        PatchFrame<dim>(grid, buckets.block[b]), patch.data());
+            for_each_patch_node(grid, buckets.block[b], [&](int node, std::size_t k) {
+              for (int c = 0; c < Ch; ++c)
+                channels[c].data[k * channels[c].stride + channels[c].offset] += patch[node * Ch + c];
+            });
+          }
         });
-      }
-    });
   }
 }
 
@@ -183,10 +183,11 @@ void scatter_buckets(const SparseGrid<dim>& grid, const ParticleBuckets<dim>& bu
 template <int dim, int Ch, class T, class Body>
 void scatter(const SparseGrid<dim>& grid, const ParticleBuckets<dim>& buckets,
              const std::array<BasicChannelView<T>, Ch>& channels, Body&& body) {
-  scatter_buckets<dim, Ch>(grid, buckets, channels,
-                           [&](const std::uint32_t* first, const std::uint32_t* last, const PatchFrame<dim>& f, T* patch) {
-    for (const std::uint32_t* p = first; p != last; ++p) body(*p, f, patch);
-  });
+  scatter_buckets<dim, Ch>(
+      grid, buckets, channels,
+      [&](const std::uint32_t* first, const std::uint32_t* last, const PatchFrame<dim>& f, T* patch) {
+        for (const std::uint32_t* p = first; p != last; ++p) body(*p, f, patch);
+      });
 }
 
 //! bucket_body(first, last, const PatchFrame&, const T* patch) reads Ch values per node for
@@ -194,8 +195,7 @@ void scatter(const SparseGrid<dim>& grid, const ParticleBuckets<dim>& buckets,
 template <int dim, int Ch, class T, class BucketBody>
 void gather_buckets(const SparseGrid<dim>& grid, const ParticleBuckets<dim>& buckets,
                     const std::array<BasicChannelView<T>, Ch>& channels, BucketBody&& bucket_body) {
-  tbb::parallel_for(tbb::blocked_range<int>(0, buckets.count(), 4),
-                    [&](const tbb::blocked_range<int>& range) {
+  tbb::parallel_for(tbb::blocked_range<int>(0, buckets.count(), 4), [&](const tbb::blocked_range<int>& range) {
     alignas(64) std::array<T, patch_nodes<dim> * Ch> patch;
     for (int b = range.begin(); b != range.end(); ++b) {
       for_each_patch_node(grid, buckets.block[b], [&](int node, std::size_t k) {
@@ -212,15 +212,18 @@ void gather_buckets(const SparseGrid<dim>& grid, const ParticleBuckets<dim>& buc
 template <int dim, int Ch, class T, class Body>
 void gather(const SparseGrid<dim>& grid, const ParticleBuckets<dim>& buckets,
             const std::array<BasicChannelView<T>, Ch>& channels, Body&& body) {
-  gather_buckets<dim, Ch>(grid, buckets, channels,
-                          [&](const std::uint32_t* first, const std::uint32_t* last, const PatchFrame<dim>& f, const T* patch) {
-    for (const std::uint32_t* p = first; p != last; ++p) body(*p, f, patch);
-  });
+  gather_buckets<dim, Ch>(
+      grid, buckets, channels,
+      [&](const std::uint32_t* first, const std::uint32_t* last, const PatchFrame<dim>& f, const T* patch) {
+        for (const std::uint32_t* p = first; p != last; ++p) body(*p, f, patch);
+      });
 }
 
 //! Views of a scalar channel and of the components of a vector channel.
 template <class T>
-BasicChannelView<T> scalar_view(std::vector<T>& c) { return {c.data(), 1, 0}; }
+BasicChannelView<T> scalar_view(std::vector<T>& c) {
+  return {c.data(), 1, 0};
+}
 template <int dim, class T>
 BasicChannelView<T> component_view(std::vector<Eigen::Matrix<T, dim, 1>>& c, int a) {
   return {reinterpret_cast<T*>(c.data()), dim, a};

@@ -42,8 +42,8 @@ void prefetch(const Object& object) {
 //! broken where particles changed buckets) ahead of the loads.
 constexpr std::ptrdiff_t chunk_size = 16;
 template <class Prefetch, class Prepare, class Finish>
-[[gnu::always_inline]] inline void in_chunks(const std::uint32_t* first, const std::uint32_t* last,
-                                             Prefetch&& prefetch, Prepare&& prepare, Finish&& finish) {
+[[gnu::always_inline]] inline void in_chunks(const std::uint32_t* first, const std::uint32_t* last, Prefetch&& prefetch,
+                                             Prepare&& prepare, Finish&& finish) {
   const std::ptrdiff_t n = last - first;
   for (std::ptrdiff_t i = 0; i < std::min(n, chunk_size); ++i) prefetch(first[i]);
   for (std::ptrdiff_t i = 0; i < n; i += chunk_size) {
@@ -58,11 +58,24 @@ template <class Prefetch, class Prepare, class Finish>
 //! the function's target has (4 doubles: two SSE registers in the baseline code, one AVX
 //! register in the AVX2 code of with_simd). Eigen's fixed-size types pick their packets
 //! when the library is compiled, so they stay on SSE even in a function compiled for AVX2.
-template <class T, int n> struct PackOf;
-template <> struct PackOf<double, 2> { typedef double type __attribute__((vector_size(16))); };
-template <> struct PackOf<double, 4> { typedef double type __attribute__((vector_size(32))); };
-template <> struct PackOf<float, 2> { typedef float type __attribute__((vector_size(8))); };
-template <> struct PackOf<float, 4> { typedef float type __attribute__((vector_size(16))); };
+template <class T, int n>
+struct PackOf;
+template <>
+struct PackOf<double, 2> {
+  typedef double type __attribute__((vector_size(16)));
+};
+template <>
+struct PackOf<double, 4> {
+  typedef double type __attribute__((vector_size(32)));
+};
+template <>
+struct PackOf<float, 2> {
+  typedef float type __attribute__((vector_size(8)));
+};
+template <>
+struct PackOf<float, 4> {
+  typedef float type __attribute__((vector_size(16)));
+};
 template <class T, int n>
 using Pack = typename PackOf<T, n>::type;
 
@@ -74,7 +87,9 @@ template <class P, class T>
 
 #if defined(__GNUC__) && defined(__x86_64__)
 template <class Fn, class... Args>
-[[gnu::target("avx2")]] void call_avx2(const Fn& fn, Args... args) { fn(args...); }
+[[gnu::target("avx2")]] void call_avx2(const Fn& fn, Args... args) {
+  fn(args...);
+}
 inline bool cpu_has_avx2() { return __builtin_cpu_supports("avx2"); }
 #else
 inline bool cpu_has_avx2() { return false; }
@@ -136,8 +151,10 @@ template <bool affine, int dim, int S, class T, class Node>
 //! (-0 + 0 = +0 keeps the compiler from dropping the add).
 template <class Acc, class X>
 [[gnu::always_inline]] inline void accumulate(bool first, Acc& acc, const X& x) {
-  if (first) acc = x;
-  else acc += x;
+  if (first)
+    acc = x;
+  else
+    acc += x;
 }
 
 //! Moments of the node values v (Ch values apart in the patch; Lanes = Pack<T, Ch>) over the
@@ -145,8 +162,7 @@ template <class Acc, class X>
 //! n_a = rel_a - rel_a[0], so sum w rel_a v = t[a] + rel_a[0] s. Integer offsets turn the
 //! moments into sums of the products w v: a node costs one multiply and a few adds.
 template <int Ch, int dim, int S, class T, class Lanes>
-[[gnu::always_inline]] inline void collect(const Stencil<dim, S, T>& st, const T* patch, Lanes& s,
-                                           Lanes (&t)[dim]) {
+[[gnu::always_inline]] inline void collect(const Stencil<dim, S, T>& st, const T* patch, Lanes& s, Lanes (&t)[dim]) {
   constexpr int W = patch_width<dim>;
   const auto row = [&](int offset, Lanes& m0, Lanes& m1) {  // sum w v and sum n_0 w v along axis 0
     for (int i = 0; i < S; ++i) {
@@ -188,27 +204,31 @@ template <int Ch, int dim, int S, class T, class Lanes>
 //! Adds (w m_p, w m_p (v_p + C_p (x_i - x_p))) into channels {mass, momentum_0..dim-1}
 //! (C_p term only when `affine`).
 template <int dim, class K, bool affine, class PS, class T>
-void p2g(const PS& P, const ParticleBuckets<dim>& buckets, const K& kernel,
-         const SparseGrid<dim>& grid, const std::array<BasicChannelView<T>, dim + 1>& channels) {
+void p2g(const PS& P, const ParticleBuckets<dim>& buckets, const K& kernel, const SparseGrid<dim>& grid,
+         const std::array<BasicChannelView<T>, dim + 1>& channels) {
   using Node = Eigen::Matrix<T, dim + 1, 1>;
   const T dx = static_cast<T>(grid.dx());
-  scatter_buckets<dim, dim + 1>(grid, buckets, channels,
-                                [&](const std::uint32_t* first, const std::uint32_t* last,
-                                    const PatchFrame<dim>& f, T* patch) {
-    Stencil<dim, K::support, T> st[chunk_size];
-    Node c[chunk_size][dim + 1];
-    in_chunks(first, last, [&](std::uint32_t p) {
-      prefetch(P.x[p]);
-      prefetch(P.v[p]);
-      prefetch(P.C[p]);
-      prefetch(P.mass[p]);
-    }, [&](std::uint32_t p, int q) {
-      st[q].template compute<false>(kernel, f.cells(P.x[p]), f.origin);
-      const T m = P.mass[p];
-      c[q][0] << m, m * P.v[p];
-      for (int a = 0; a < dim; ++a) c[q][a + 1] << T(0), (m * dx) * P.C[p].col(a);
-    }, [&](std::uint32_t, int q) { spread<affine>(st[q], c[q], patch); });
-  });
+  scatter_buckets<dim, dim + 1>(
+      grid, buckets, channels,
+      [&](const std::uint32_t* first, const std::uint32_t* last, const PatchFrame<dim>& f, T* patch) {
+        Stencil<dim, K::support, T> st[chunk_size];
+        Node c[chunk_size][dim + 1];
+        in_chunks(
+            first, last,
+            [&](std::uint32_t p) {
+              prefetch(P.x[p]);
+              prefetch(P.v[p]);
+              prefetch(P.C[p]);
+              prefetch(P.mass[p]);
+            },
+            [&](std::uint32_t p, int q) {
+              st[q].template compute<false>(kernel, f.cells(P.x[p]), f.origin);
+              const T m = P.mass[p];
+              c[q][0] << m, m * P.v[p];
+              for (int a = 0; a < dim; ++a) c[q][a + 1] << T(0), (m * dx) * P.C[p].col(a);
+            },
+            [&](std::uint32_t, int q) { spread<affine>(st[q], c[q], patch); });
+      });
 }
 
 //! APIC (flip = false): v_p = sum w v_i, C_p = B_p D_p^-1 from `velocity` channels.
@@ -225,49 +245,51 @@ void g2p(PS& P, const ParticleBuckets<dim>& buckets, const K& kernel, const Spar
   std::array<BasicChannelView<T>, lanes> read;
   for (int c = 0; c < lanes; ++c) read[c] = channels[c < int(Ch) ? c : 0];
   const T inv_dx = static_cast<T>(1.0 / grid.dx());
-  const auto bucket = [&](const std::uint32_t* first, const std::uint32_t* last,
-                          const PatchFrame<dim>* f, const T* patch) __attribute__((always_inline)) {
+  const auto bucket = [&](const std::uint32_t* first, const std::uint32_t* last, const PatchFrame<dim>* f,
+                          const T* patch) __attribute__((always_inline)) {
     Stencil<dim, K::support, T> st[chunk_size];
     T inv_D[chunk_size][dim];  // APIC D_p^-1 [1/cells^2]; its division overlaps in the set-up
-    in_chunks(first, last, [&](std::uint32_t p) __attribute__((always_inline)) {
-      prefetch(P.x[p]);
-      prefetch(P.v[p]);
-      if constexpr (!flip) prefetch(P.C[p]);
-    }, [&](std::uint32_t p, int q) __attribute__((always_inline)) {
-      st[q].template compute<flip>(kernel, f->cells(P.x[p]), f->origin);
-      if constexpr (!flip) st[q].inverse_inertia(inv_D[q]);
-    }, [&](std::uint32_t p, int q) __attribute__((always_inline)) {
-      if constexpr (flip) {
-        VecT v_pic = VecT::Zero();
-        VecT dv = VecT::Zero();
-        st[q].for_each_node([&](int node, T w, const VecT&, const VecT&) {
-          const Eigen::Map<const VecT> vi(patch + node * lanes);
-          v_pic.noalias() += w * vi;
-          dv.noalias() += w * (vi - Eigen::Map<const VecT>(patch + node * lanes + dim));
+    in_chunks(
+        first, last,
+        [&](std::uint32_t p) __attribute__((always_inline)) {
+          prefetch(P.x[p]);
+          prefetch(P.v[p]);
+          if constexpr (!flip) prefetch(P.C[p]);
+        },
+        [&](std::uint32_t p, int q) __attribute__((always_inline)) {
+          st[q].template compute<flip>(kernel, f->cells(P.x[p]), f->origin);
+          if constexpr (!flip) st[q].inverse_inertia(inv_D[q]);
+        },
+        [&](std::uint32_t p, int q) __attribute__((always_inline)) {
+          if constexpr (flip) {
+            VecT v_pic = VecT::Zero();
+            VecT dv = VecT::Zero();
+            st[q].for_each_node([&](int node, T w, const VecT&, const VecT&) {
+              const Eigen::Map<const VecT> vi(patch + node * lanes);
+              v_pic.noalias() += w * vi;
+              dv.noalias() += w * (vi - Eigen::Map<const VecT>(patch + node * lanes + dim));
+            });
+            P.v[p] = flip_ratio * (P.v[p] + dv) + (1 - flip_ratio) * v_pic;
+            P.x[p] += dt * v_pic;
+          } else {
+            using Lanes = Pack<T, lanes>;
+            Lanes s, t[dim];  // B_p = sum w v (x_i - x_p)^T [cells]: column a is t[a] + rel_a[0] s
+            collect<lanes>(st[q], patch, s, t);
+            for (int a = 0; a < dim; ++a) {
+              const Lanes column = (t[a] + st[q].rel[a][0] * s) * (inv_D[q][a] * inv_dx);
+              for (int b = 0; b < dim; ++b) P.C[p](b, a) = column[b];
+            }
+            for (int b = 0; b < dim; ++b) {
+              P.v[p][b] = s[b];
+              P.x[p][b] += dt * s[b];
+            }
+          }
         });
-        P.v[p] = flip_ratio * (P.v[p] + dv) + (1 - flip_ratio) * v_pic;
-        P.x[p] += dt * v_pic;
-      } else {
-        using Lanes = Pack<T, lanes>;
-        Lanes s, t[dim];  // B_p = sum w v (x_i - x_p)^T [cells]: column a is t[a] + rel_a[0] s
-        collect<lanes>(st[q], patch, s, t);
-        for (int a = 0; a < dim; ++a) {
-          const Lanes column = (t[a] + st[q].rel[a][0] * s) * (inv_D[q][a] * inv_dx);
-          for (int b = 0; b < dim; ++b) P.C[p](b, a) = column[b];
-        }
-        for (int b = 0; b < dim; ++b) {
-          P.v[p][b] = s[b];
-          P.x[p][b] += dt * s[b];
-        }
-      }
-    });
   };
   const bool avx2 = cpu_has_avx2();
   gather_buckets<dim, lanes>(grid, buckets, read,
-                             [&](const std::uint32_t* first, const std::uint32_t* last,
-                                 const PatchFrame<dim>& f, const T* patch) {
-    with_simd(avx2, bucket, first, last, &f, patch);
-  });
+                             [&](const std::uint32_t* first, const std::uint32_t* last, const PatchFrame<dim>& f,
+                                 const T* patch) { with_simd(avx2, bucket, first, last, &f, patch); });
 }
 
 }  // namespace mpm::detail

@@ -31,8 +31,10 @@ namespace mpm::solve {
 //! out = L in, for an object with apply() or a callable.
 template <class Map, class Vector>
 void apply(Map& map, const Vector& in, Vector& out) {
-  if constexpr (std::is_invocable_v<Map&, const Vector&, Vector&>) map(in, out);
-  else map.apply(in, out);
+  if constexpr (std::is_invocable_v<Map&, const Vector&, Vector&>)
+    map(in, out);
+  else
+    map.apply(in, out);
 }
 
 //! Solves A x = b from the initial guess in x (resized to b with zeros when its size differs).

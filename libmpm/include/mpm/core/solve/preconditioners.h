@@ -13,7 +13,9 @@ namespace mpm::solve {
 //! M = I: plain conjugate gradients.
 struct IdentityPreconditioner {
   template <class Vector>
-  void apply(const Vector& r, Vector& z) const { z = r; }
+  void apply(const Vector& r, Vector& z) const {
+    z = r;
+  }
 };
 
 //! M = diag(A)^-1. A zero diagonal entry (a row of A that is zero, e.g. a cell cut off from

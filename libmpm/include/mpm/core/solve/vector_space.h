@@ -14,15 +14,19 @@ namespace mpm::solve {
 //! The additive identity of an element type.
 template <class T>
 T zero() {
-  if constexpr (std::is_arithmetic_v<T>) return T(0);
-  else return T::Zero();
+  if constexpr (std::is_arithmetic_v<T>)
+    return T(0);
+  else
+    return T::Zero();
 }
 
 //! The Euclidean inner product of two element values.
 template <class T>
 double inner(const T& a, const T& b) {
-  if constexpr (std::is_arithmetic_v<T>) return a * b;
-  else return a.dot(b);
+  if constexpr (std::is_arithmetic_v<T>)
+    return a * b;
+  else
+    return a.dot(b);
 }
 
 //! The Euclidean inner product of two vectors of equal size.

@@ -38,9 +38,7 @@ public:
   }
   void run(MpmState<dim>& s) override;
   //! The totals removed, so that a restarted run keeps counting from the checkpoint.
-  CarriedData carried() const override {
-    return {{"removed", {removed_mass_, static_cast<double>(removed_count_)}}};
-  }
+  CarriedData carried() const override { return {{"removed", {removed_mass_, static_cast<double>(removed_count_)}}}; }
   void restore(const CarriedData& data) override {
     for (const auto& [name, values] : data)
       if (name == "removed" && values.size() == 2) {

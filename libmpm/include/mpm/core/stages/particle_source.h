@@ -30,14 +30,14 @@ template <int dim>
 class ParticleSource final : public Stage<MpmState<dim>> {
 public:
   struct Settings {
-    Vec<dim> lo, hi;                //!< the box [m]
-    Vec<dim> velocity;              //!< v of the stream [m/s], not zero
-    double dx = 0.0;                //!< grid spacing of the seeding lattice [m]
-    int particles_per_cell = 1;     //!< k^dim
-    double particle_mass = 0.0;     //!< m_p [kg] (fluid: n_w rho_w V_p; grains: rho_s V_p)
-    double particle_volume = 0.0;   //!< V_p [m^dim] (usually dx^dim / particles_per_cell)
-    std::uint16_t material = 0;     //!< material index of the emitted particles
-    double start = 0.0;             //!< [s]
+    Vec<dim> lo, hi;                                        //!< the box [m]
+    Vec<dim> velocity;                                      //!< v of the stream [m/s], not zero
+    double dx = 0.0;                                        //!< grid spacing of the seeding lattice [m]
+    int particles_per_cell = 1;                             //!< k^dim
+    double particle_mass = 0.0;                             //!< m_p [kg] (fluid: n_w rho_w V_p; grains: rho_s V_p)
+    double particle_volume = 0.0;                           //!< V_p [m^dim] (usually dx^dim / particles_per_cell)
+    std::uint16_t material = 0;                             //!< material index of the emitted particles
+    double start = 0.0;                                     //!< [s]
     double stop = std::numeric_limits<double>::infinity();  //!< [s], >= start
   };
 
@@ -65,10 +65,10 @@ public:
 private:
   Settings settings_;
   int axis_ = 0;
-  double sign_ = 1.0;           // +1: flow towards +axis
-  double h_ = 0.0;              // lattice spacing [m]
-  double first_plane_ = 0.0;    // along-axis position of the first inner lattice plane at start [m]
-  double delta_ = 0.0;          // its distance from the upstream face [m]
+  double sign_ = 1.0;                  // +1: flow towards +axis
+  double h_ = 0.0;                     // lattice spacing [m]
+  double first_plane_ = 0.0;           // along-axis position of the first inner lattice plane at start [m]
+  double delta_ = 0.0;                 // its distance from the upstream face [m]
   std::vector<Vec<dim>> face_points_;  // transverse lattice of a layer (axis coordinate 0)
   std::int64_t emitted_ = 0;
   bool started_ = false;

@@ -11,10 +11,10 @@ template <int dim>
 class TimeStepControl final : public Stage<MpmState<dim>> {
 public:
   struct Settings {
-    double cfl = 0.5;          //!< fraction of a cell a particle may cross per step, (0, 1]
-    double wave_speed = 0.0;   //!< fastest elastic wave speed of the scene [m/s] (0: none)
-    double wave_cfl = 0.5;     //!< dt <= wave_cfl dx / wave_speed
-    double max_dt = 1e300;     //!< user upper bound [s]
+    double cfl = 0.5;         //!< fraction of a cell a particle may cross per step, (0, 1]
+    double wave_speed = 0.0;  //!< fastest elastic wave speed of the scene [m/s] (0: none)
+    double wave_cfl = 0.5;    //!< dt <= wave_cfl dx / wave_speed
+    double max_dt = 1e300;    //!< user upper bound [s]
   };
   explicit TimeStepControl(Settings settings) : settings_(settings) {}
   std::string name() const override { return "time_step"; }
