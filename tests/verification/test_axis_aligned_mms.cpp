@@ -40,6 +40,7 @@
 // max_p |e_p(T)|, rms_p |e_p(T)|, and max over all steps and particles.
 #include "convergence.h"
 
+#include <mpm/core/advance.h>
 #include <mpm/core/particle_buckets.h>
 #include <mpm/core/pipeline.h>
 #include <mpm/core/stages/grid_to_particles.h>
@@ -283,10 +284,7 @@ MmsErrors run_mms(int cells, const Kernel& kernel, const MmsSettings& in) {
 
   double space_time = 0.0;
   for (int n = 0; n < steps; ++n) {
-    state.dt_limit = in.end_time - state.time;
-    pipeline.step(state);
-    state.time += state.dt;
-    ++state.step;
+    mpm::step_towards(state, pipeline, in.end_time);
     space_time = std::max(space_time, max_error(state, ref, field));
   }
   double rms = 0.0;

@@ -34,6 +34,7 @@
 // The value against v_com(t^n) is printed as well; it adds the O(dt) half-step shift.
 #include "convergence.h"
 
+#include <mpm/core/advance.h>
 #include <mpm/solid/solid_scene.h>
 
 #include <mpm/constitutive/fixed_corotated.h>
@@ -117,10 +118,7 @@ BarRun run_bar(int cells, const Kernel& kernel, FixedEnd fixed_end) {
   double e_half = 0.0, e_node = 0.0;
   const double amplitude = 2.0 * kV0 / std::numbers::pi;
   for (int n = 0; n < steps; ++n) {
-    state.dt_limit = period - state.time;
-    pipeline.step(state);
-    state.time += state.dt;
-    ++state.step;
+    mpm::step_towards(state, pipeline, period);
     double mass = 0.0, momentum = 0.0;
     for (std::size_t p = 0; p < P.size(); ++p) {
       run.max_vy = std::max(run.max_vy, std::fabs(P.v[p][1]));

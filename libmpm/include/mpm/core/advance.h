@@ -11,6 +11,17 @@
 
 namespace mpm {
 
+//! One step towards t_end: the time-step stage sees the time left as state.dt_limit, and the
+//! clock lands exactly on t_end when the step takes all of it. For loops that look at the state
+//! after every step; advance() is the loop itself.
+template <class State>
+void step_towards(State& state, Pipeline<State>& pipeline, double t_end) {
+  state.dt_limit = t_end - state.time;
+  pipeline.step(state);
+  state.time = state.dt >= state.dt_limit ? t_end : state.time + state.dt;
+  ++state.step;
+}
+
 //! Steps `pipeline` until state.time is within `slack` [s] of t_end. NumericalError, naming the
 //! time-step stage, when a step is not positive or more than `max_steps` steps do not get
 //! there (a collapsing step ends the run instead of hanging it). State has time, dt, dt_limit
@@ -20,8 +31,7 @@ void advance(State& state, Pipeline<State>& pipeline, double t_end, std::int64_t
              double slack = 0.0) {
   std::int64_t steps = 0;
   while (state.time < t_end - slack) {
-    state.dt_limit = t_end - state.time;
-    pipeline.step(state);
+    step_towards(state, pipeline, t_end);
     if (!(state.dt > 0.0) || ++steps > max_steps) {
       char why[256];
       std::snprintf(why, sizeof why,
@@ -30,8 +40,6 @@ void advance(State& state, Pipeline<State>& pipeline, double t_end, std::int64_t
                     state.dt, state.time, static_cast<long long>(max_steps), t_end);
       throw NumericalError(why);
     }
-    state.time = state.dt >= state.dt_limit ? t_end : state.time + state.dt;
-    ++state.step;
   }
 }
 

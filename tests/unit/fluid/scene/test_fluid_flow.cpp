@@ -4,6 +4,7 @@
 // initial mass plus what the source emitted minus what the sink removed.
 #include <fluid/scene/fluid_scene.h>
 
+#include <mpm/core/advance.h>
 #include <mpm/core/stages/particle_sink.h>
 #include <mpm/core/stages/particle_source.h>
 
@@ -62,10 +63,7 @@ TEST_CASE("inlet nodes keep U through the projection; mass in = out + stored ove
 
   int inlet_nodes = 0;
   while (s.time < 1.0) {
-    s.dt_limit = 1.0 - s.time;
-    pipeline.step(s);
-    s.time = s.dt >= s.dt_limit ? 1.0 : s.time + s.dt;
-    ++s.step;
+    mpm::step_towards(s, pipeline, 1.0);
     // Inlet nodes above the floor's wall layer (y > 0) end the step at U exactly.
     for (std::size_t k = 0; k < s.grid.node_storage(); ++k) {
       const Vec<2> x = s.grid.node_position(k);

@@ -5,6 +5,7 @@
 // vectors beyond the constants); the pipeline holds the three periodic stages.
 #include <fluid/scene/fluid_scene.h>
 
+#include <mpm/core/advance.h>
 #include <mpm/geometry/seeding.h>
 
 #include <doctest/doctest.h>
@@ -41,11 +42,7 @@ TEST_CASE("3D periodic shear flow decays at the exact viscous rate") {
     CAPTURE(stage);
     CHECK(std::find(names.begin(), names.end(), stage) != names.end());
   }
-  for (int step = 0; step < 20; ++step) {
-    scene.state.dt_limit = dt;
-    pipeline.step(scene.state);
-    scene.state.time += scene.state.dt;
-  }
+  for (int step = 0; step < 20; ++step) mpm::step_towards(scene.state, pipeline, scene.state.time + dt);
   const double decay = std::exp(-nu * scene.state.time);
   double error = 0.0, norm = 0.0;
   for (std::size_t p = 0; p < P.size(); ++p) {

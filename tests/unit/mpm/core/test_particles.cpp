@@ -31,6 +31,8 @@
 
 #include <unistd.h>
 
+#include "../hdf5_reading.h"
+
 namespace fs = std::filesystem;
 using namespace mpm;
 
@@ -116,17 +118,6 @@ Particles<dim> with_extras(std::size_t n, unsigned seed) {
   std::memcpy(&strain[2](1, 0), &payload_nan, sizeof payload_nan);
   tag[3] = 65535;
   return P;
-}
-
-std::vector<hsize_t> dataset_shape(hid_t file, const std::string& name) {
-  const hid_t set = H5Dopen2(file, name.c_str(), H5P_DEFAULT);
-  REQUIRE(set >= 0);
-  const hid_t space = H5Dget_space(set);
-  std::vector<hsize_t> dims(static_cast<std::size_t>(H5Sget_simple_extent_ndims(space)));
-  H5Sget_simple_extent_dims(space, dims.data(), nullptr);
-  H5Sclose(space);
-  H5Dclose(set);
-  return dims;
 }
 
 }  // namespace

@@ -31,6 +31,8 @@
 
 #include <unistd.h>
 
+#include "../hdf5_reading.h"
+
 namespace fs = std::filesystem;
 using namespace mpm;
 
@@ -101,40 +103,6 @@ Particles<dim> random_particles(std::size_t n, bool deformation, unsigned seed) 
   std::memcpy(&p.C[2](0, 0), &payload_nan, sizeof payload_nan);
   p.material[3] = 65535;
   return p;
-}
-
-// ---------------------------------------------------------------- HDF5 reading (C API)
-
-std::vector<hsize_t> dataset_shape(hid_t file, const std::string& name) {
-  const hid_t set = H5Dopen2(file, name.c_str(), H5P_DEFAULT);
-  REQUIRE(set >= 0);
-  const hid_t space = H5Dget_space(set);
-  std::vector<hsize_t> dims(static_cast<std::size_t>(H5Sget_simple_extent_ndims(space)));
-  H5Sget_simple_extent_dims(space, dims.data(), nullptr);
-  H5Sclose(space);
-  H5Dclose(set);
-  return dims;
-}
-
-template <class T>
-std::vector<T> read_dataset(hid_t file, const std::string& name, hid_t type) {
-  std::size_t count = 1;
-  for (const hsize_t d : dataset_shape(file, name)) count *= d;
-  std::vector<T> values(count);
-  const hid_t set = H5Dopen2(file, name.c_str(), H5P_DEFAULT);
-  REQUIRE(H5Dread(set, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()) >= 0);
-  H5Dclose(set);
-  return values;
-}
-
-template <class T>
-T read_attribute(hid_t file, const std::string& name, hid_t type) {
-  T value{};
-  const hid_t attribute = H5Aopen(file, name.c_str(), H5P_DEFAULT);
-  REQUIRE(attribute >= 0);
-  REQUIRE(H5Aread(attribute, type, &value) >= 0);
-  H5Aclose(attribute);
-  return value;
 }
 
 // ---------------------------------------------------------------- PNG reading (libpng)
