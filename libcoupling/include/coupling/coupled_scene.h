@@ -1,5 +1,5 @@
 #pragma once
-//! A coupled sediment-fluid scene and its pipeline (DESIGN.md, "the coupled step";
+//! A coupled sediment-fluid scene and its pipeline (docs/coupling.md, "The coupled step";
 //! docs/coupling.md). Either phase may be absent: a dry scene builds no fluid grid and no
 //! pressure solver, a clear-fluid scene no sediment stages.
 //!

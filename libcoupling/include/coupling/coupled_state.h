@@ -1,5 +1,5 @@
 #pragma once
-//! The state of the coupled sediment-fluid step (DESIGN.md, "the coupled step"): one MpmState
+//! The state of the coupled sediment-fluid step (docs/coupling.md, "The coupled step"): one MpmState
 //! per phase, each with its own particles and sparse grid over the same lattice (same origin,
 //! dx and extent, so node k of one grid and the node with the same coordinate of the other
 //! coincide), plus the volume fractions and the shared clock.

@@ -1,5 +1,5 @@
 #pragma once
-//! The implicit interphase momentum exchange at the grid nodes (DESIGN.md, the coupled step;
+//! The implicit interphase momentum exchange at the grid nodes (docs/coupling.md, the coupled step;
 //! Gao et al. 2018). The drag terms of the LANS momentum equations, integrated over a node's
 //! volume V_i = dx^dim and a step dt by backward Euler, with K = beta V_i dt [kg]:
 //!   m_w v_w' = m_w v_w + K (v_s' - v_w'),

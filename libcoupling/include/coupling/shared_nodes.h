@@ -1,6 +1,6 @@
 #pragma once
 //! The fluid and the sediment each have their own sparse grid over the same lattice (same
-//! origin, dx and extent: DESIGN.md, "the two grids share node positions"), but each grid
+//! origin, dx and extent: the two grids share node positions), but each grid
 //! allocates only the blocks its own particles touch, so one node has a different storage
 //! index in each. This walks the nodes allocated in both.
 #include <mpm/core/error.h>

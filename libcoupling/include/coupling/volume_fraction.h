@@ -1,5 +1,5 @@
 #pragma once
-//! Sediment and fluid volume fractions on the sediment grid (DESIGN.md, LANS; docs/coupling.md).
+//! Sediment and fluid volume fractions on the sediment grid (LANS; docs/coupling.md).
 //!
 //! Each sediment particle occupies V_p = m_p / rho_s of grain material; spread by the MPM
 //! weights over the node volumes V_i = dx^dim:

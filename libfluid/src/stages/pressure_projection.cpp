@@ -1,4 +1,4 @@
-// Pressure projection on the semi-staggered grid (DESIGN.md "LANS fluid"; Gao et al. 2018,
+// Pressure projection on the semi-staggered grid (Gao et al. 2018,
 // mixture constraint of Anderson & Jackson 1967). Preconditions: grid velocities after the
 // explicit update (and viscosity) with the wall/collider conditions applied; particles inside
 // the grid. In order:

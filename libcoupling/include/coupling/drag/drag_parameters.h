@@ -4,7 +4,7 @@
 //! Conventions shared by all laws (docs/coupling.md):
 //!  * beta [kg/(m^3 s)] is the momentum-exchange coefficient per unit mixture volume: the drag
 //!    force density on the sediment is beta (v_w - v_s), on the fluid beta (v_s - v_w)
-//!    (DESIGN.md, LANS equations).
+//!    (the LANS equations).
 //!  * u = |v_s - v_w| is the slip speed between the phase (interstitial) velocities [m/s].
 //!  * Re = n_w rho_w u d / mu, the grain Reynolds number of the superficial slip velocity
 //!    n_w u, as in Wen & Yu (1966) and Gidaspow (1994, ch. 5) and Di Felice (1994).

@@ -1,6 +1,6 @@
 #pragma once
-//! Continuum <-> discrete switching of the sediment particles (DESIGN.md, "Continuum/discrete
-//! switching"; docs/coupling.md). A sediment particle is either part of the granular continuum
+//! Continuum <-> discrete switching of the sediment particles (docs/coupling.md, "Continuum/discrete
+//! switching"). A sediment particle is either part of the granular continuum
 //! (Drucker-Prager stress, deformation update, return map) or a discrete grain that carries no
 //! stress and moves by gravity, buoyancy and drag alone. Each step, after G2P, the local
 //! sediment fraction at the particle,

@@ -1,5 +1,5 @@
 #pragma once
-//! The volume fractions n_s, n_w of the shared nodes (DESIGN.md, LANS: the fractions weight
+//! The volume fractions n_s, n_w of the shared nodes (LANS: the fractions weight
 //! the momentum of each phase and the mixture constraint).
 #include <coupling/coupled_state.h>
 #include <mpm/core/stage.h>

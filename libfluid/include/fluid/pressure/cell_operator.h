@@ -2,7 +2,7 @@
 //! The pressure operator of the projection, matrix-free, on a dense box of cells.
 //!
 //! Unknowns p_c live at cell centres; velocities at the nodes (cell corners) of the same box
-//! (semi-staggered grid, DESIGN.md). Cells are fluid (an unknown) or empty (p = 0, free
+//! (semi-staggered grid). Cells are fluid (an unknown) or empty (p = 0, free
 //! surface); every other cell is also p = 0, and walls enter through node coefficients.
 //!
 //! Two operators share this interface:

@@ -1,5 +1,5 @@
 #pragma once
-//! One interface for every pressure solver back-end (STYLE.md: OpenVDB's ConjGradient State,
+//! One interface for every pressure solver back-end (after OpenVDB's ConjGradient State,
 //! AMReX's bottom-solver enum). A solve never fails silently: it returns its result and the
 //! caller (a scene setting) decides whether a non-converged solve warns or stops.
 #include <fluid/pressure/cell_operator.h>

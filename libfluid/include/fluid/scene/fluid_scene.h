@@ -1,5 +1,5 @@
 #pragma once
-//! Assembles a free-surface LANS fluid scene from a scene file (DESIGN.md):
+//! Assembles a free-surface LANS fluid scene from a scene file:
 //!   time_step -> [sink -> source] -> sort -> p2g -> [solver grid update] -> boundary
 //!   -> [solver projection] -> [solver particle update] -> g2p (and advection)
 //! which for the default solver (fluid.solver: projection, solver/projection_solver.h) reads

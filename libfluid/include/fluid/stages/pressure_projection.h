@@ -1,5 +1,5 @@
 #pragma once
-//! The pressure projection of the LANS fluid on the semi-staggered grid (DESIGN.md; Gao et al.
+//! The pressure projection of the LANS fluid on the semi-staggered grid (Gao et al.
 //! 2018): after the explicit update and the boundary conditions, makes the node velocity field
 //! discretely divergence-free in every fluid cell, with p = 0 in empty cells (free surface)
 //! and no pressure impulse on nodes whose velocity a wall or collider prescribes. On a grid
