@@ -60,6 +60,12 @@ FluidScene<dim> make_fluid_scene(mpm::SceneSettings<dim> settings, FluidMaterial
                                  const FluidSolverSettings& solver) {
   mpm::MpmState<dim> state = mpm::initial_state(settings);
   std::shared_ptr<const FluidSolver<dim>> s = make_fluid_solver<dim>(solver, fluid, pressure, colliders, settings);
+  // periodic_fold folds mass and momentum before the solver's grid update, so forces that a
+  // solver scatters onto ghost nodes would be lost: a periodic axis needs the projection.
+  const bool periodic = std::any_of(settings.periodic.begin(), settings.periodic.end(), [](bool p) { return p; });
+  MPM_VERIFY(!periodic || s->incompressible(), mpm::InputError,
+             "fluid solver '" + solver.name + "' has no periodic axes (its pressure forces are not folded); use " +
+                 "fluid.solver: projection");
   s->add_channels(state.particles);
   return {std::move(settings), fluid, std::move(pressure), std::move(colliders), std::move(s), std::move(state), {}};
 }

@@ -73,9 +73,12 @@ void seed_body(SolidScene<dim>& scene, const Config& body) {
     omega[2] = body.number("angular_velocity", 0.0, Range::any());
   else
     omega = body.vector<3>("angular_velocity", Vec<3>::Zero());
-  std::vector<Mat<dim>>& F = elastic_F(P);
+  // Only a solver that tracks deformation (explicit) carries F; stress-free grains start at rest.
+  std::vector<Mat<dim>>* F = P.template find_channel<Mat<dim>>(kElasticF);
+  if (!F && stretch != Vec<dim>::Ones())
+    body.fail("stretch", "a stretched body needs a solver that tracks deformation (solver: explicit)");
   for (std::size_t p = first; p < P.size(); ++p) {
-    F[p] = stretch.asDiagonal();
+    if (F) (*F)[p] = stretch.asDiagonal();
     Eigen::Matrix<double, 3, 1> r = Eigen::Matrix<double, 3, 1>::Zero();
     r.template head<dim>() = P.x[p] - centroid;
     P.v[p] += omega.cross(r).template head<dim>();
@@ -127,9 +130,10 @@ Pipeline<MpmState<dim>> make_solid_pipeline(const SolidScene<dim>& scene) {
 template <int dim>
 double elastic_energy(const MpmState<dim>& state, const std::vector<Material<dim>>& materials) {
   const Particles<dim>& P = state.particles;
-  const std::vector<Mat<dim>>& F = elastic_F(P);
+  const std::vector<Mat<dim>>* F = P.template find_channel<Mat<dim>>(kElasticF);
+  if (!F) return 0.0;  // stress-free grains store no elastic energy
   double e = 0.0;
-  for (std::size_t p = 0; p < P.size(); ++p) e += P.volume0[p] * materials[P.material[p]].energy(F[p]);
+  for (std::size_t p = 0; p < P.size(); ++p) e += P.volume0[p] * materials[P.material[p]].energy((*F)[p]);
   return e;
 }
 

@@ -1,5 +1,5 @@
 #pragma once
-//! The drag between the phases, implicit per shared node (docs/coupling.md, "The exchange").
+//! The drag between the phases, implicit per shared node (docs/coupling.md, "Implicit momentum exchange").
 #include <coupling/coupled_state.h>
 #include <coupling/momentum_exchange.h>
 #include <mpm/core/stage.h>

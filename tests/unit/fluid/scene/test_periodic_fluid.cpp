@@ -55,3 +55,16 @@ TEST_CASE("3D periodic shear flow decays at the exact viscous rate") {
   CHECK(scene.state.time == doctest::Approx(20 * dt));
   CHECK(std::sqrt(error / norm) <= 0.02);  // measured 0.013
 }
+
+TEST_CASE("a weakly compressible liquid refuses periodic axes (its forces are not folded)") {
+  SceneSettings<2> settings;
+  settings.domain_lo = Vec<2>::Zero();
+  settings.domain_hi = Vec<2>::Ones();
+  settings.dx = 0.125;
+  settings.periodic = {true, false};
+  fluid::FluidSolverSettings solver;
+  solver.name = "weakly_compressible";
+  CHECK_THROWS_WITH_AS(fluid::make_fluid_scene<2>(settings, {1000.0, 0.0}, {}, {}, solver),
+                       doctest::Contains("has no periodic axes"), InputError);
+  CHECK_NOTHROW(fluid::make_fluid_scene<2>(settings, {1000.0, 0.0}, {}, {}));
+}

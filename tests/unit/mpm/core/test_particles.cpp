@@ -3,6 +3,7 @@
 // idempotent and refuses a type clash; the memory report, the pipeline fields, particle frames and
 // checkpoints see the extra channels through the one list (for_each_channel); and a pipeline
 // whose stage reads a channel the particles lack fails when it is assembled.
+#include <mpm/core/advance.h>
 #include <mpm/core/error.h>
 #include <mpm/core/particles.h>
 #include <mpm/core/state.h>
@@ -364,4 +365,27 @@ TEST_CASE("a pipeline whose stage reads particle.F is assembled only when the pa
   solid::add_solid_channels(scene.state.particles);
   CHECK_NOTHROW(solid::make_solid_pipeline(scene));
   CHECK(solid::make_solid_scene<2>(settings, scene.materials, {}).state.particles.has_channel("plastic"));
+}
+
+TEST_CASE("a solid scene of stress-free grains carries no F, stores no elastic energy and falls") {
+  const std::string yaml = R"(
+dim: 2
+domain: {lo: [0, 0], hi: [1, 1]}
+grid: {dx: 0.05}
+time: {end: 0.05}
+gravity: [0, -9.81]
+solver: grains
+materials: [{name: sand, density: 2000, youngs_modulus: 1.0e5, poisson_ratio: 0.3}]
+bodies: [{shape: box, lo: [0.4, 0.5], hi: [0.6, 0.7], material: sand}]
+)";
+  solid::SolidScene<2> scene = solid::load_solid_scene<2>(Config::parse(yaml));
+  CHECK(scene.solver->name() == "grains");
+  CHECK_FALSE(scene.state.particles.has_channel("F"));
+  auto pipeline = solid::make_solid_pipeline(scene);
+  advance(scene.state, pipeline, 0.05);
+  CHECK(solid::elastic_energy(scene.state, scene.materials) == 0.0);
+  for (const Vec<2>& v : scene.state.particles.v) CHECK(v[1] == doctest::Approx(-9.81 * 0.05));
+  // A stretched body needs F: refused with the key.
+  CHECK_THROWS_WITH_AS(solid::load_solid_scene<2>(Config::parse(yaml, "<string>", {"bodies.0.stretch=[0.5, 1]"})),
+                       doctest::Contains("stretch"), InputError);
 }
