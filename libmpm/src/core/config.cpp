@@ -220,6 +220,31 @@ Config Config::load(const std::string& file, const std::vector<std::string>& ove
   return parse(text.str(), file, overrides);
 }
 
+namespace {
+//! yaml-cpp keeps every entry of a map with a repeated key and answers lookups with the first, so
+//! a scene that gives a key twice would run silently with one of the two values: refused here,
+//! naming the key path and both lines.
+void reject_duplicate_keys(const YAML::Node& node, const std::string& path, const std::string& file) {
+  const auto line = [](const YAML::Node& n) { return std::to_string(n.Mark().line + 1); };
+  if (node.IsMap()) {
+    std::map<std::string, YAML::Node> seen;
+    for (const auto& entry : node) {
+      const std::string key = entry.first.Scalar();
+      const std::string child = path.empty() ? key : path + "." + key;
+      if (const auto first = seen.find(key); first != seen.end())
+        throw InputError(file + ":" + line(entry.first) + ":" + std::to_string(entry.first.Mark().column + 1) +
+                         ": key '" + child + "' is given twice (first at line " + line(first->second) +
+                         "); give each key once");
+      seen.emplace(key, entry.first);
+      reject_duplicate_keys(entry.second, child, file);
+    }
+  } else if (node.IsSequence()) {
+    for (std::size_t i = 0; i < node.size(); ++i)
+      reject_duplicate_keys(node[i], path + "[" + std::to_string(i) + "]", file);
+  }
+}
+}  // namespace
+
 Config Config::parse(const std::string& yaml_text_in, const std::string& name,
                      const std::vector<std::string>& overrides) {
   auto shared = std::make_shared<Shared>();
@@ -234,6 +259,7 @@ Config Config::parse(const std::string& yaml_text_in, const std::string& name,
     throw InputError(shared->position("", shared->root) + ": expected a map of keys at the top level" +
                      got(shared->root));
   if (shared->root.IsNull()) shared->root = YAML::Node(YAML::NodeType::Map);
+  reject_duplicate_keys(shared->root, "", name);
   for (const std::string& assignment : overrides) shared->apply_override(assignment);
   return Config(shared, std::make_unique<YAML::Node>(shared->root), "");
 }

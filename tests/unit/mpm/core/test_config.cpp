@@ -244,3 +244,16 @@ TEST_CASE("parse_command_line fills the shared contract") {
   CHECK_FALSE(cl2.check);
   std::filesystem::remove(scene);
 }
+
+TEST_CASE("a key given twice is an error naming both lines, at any depth") {
+  // yaml-cpp answers a lookup with the first of two equal keys: without the check, appending
+  // `time: {end: 0.1}` to a scene would leave the run at the first time.end.
+  CHECK(input_error([] { mpm::Config::parse("time: {end: 1}\ngravity: [0, -9.81]\ntime: {end: 0.1}\n", "s.yaml"); }) ==
+        "s.yaml:3:1: key 'time' is given twice (first at line 1); give each key once");
+  CHECK(input_error([] { mpm::Config::parse("solid:\n  density: 1000\n  density: 2000\n", "s.yaml"); }) ==
+        "s.yaml:3:3: key 'solid.density' is given twice (first at line 2); give each key once");
+  CHECK(input_error([] { mpm::Config::parse("bodies:\n  - {shape: box, shape: sphere}\n", "s.yaml"); }) ==
+        "s.yaml:2:18: key 'bodies[0].shape' is given twice (first at line 2); give each key once");
+  // Overrides replace a key; they never add a second one.
+  CHECK_NOTHROW(mpm::Config::parse("time: {end: 1}\n", "s.yaml", {"time.end=2"}));
+}
