@@ -1,6 +1,7 @@
 #include <mpm/core/scene_settings.h>
 
 #include <cmath>
+#include <cstdio>
 #include <sstream>
 
 namespace mpm {
@@ -105,6 +106,14 @@ SceneSettings<dim> parse_scene_settings(const Config& scene, const std::optional
   const Config time = scene.child("time");
   s.end_time = time.number("end", Range::positive());
   s.frame_dt = time.number("frame_dt", 0.02, Range::positive());
+  // Frame numbers are int (file names, checkpoints): bound the count before it is computed, so a
+  // huge time.end / frame_dt is refused instead of overflowing into a run of no frames.
+  if (const double frames = std::ceil(s.end_time / s.frame_dt - 1e-9); !(frames <= kMaxFrames)) {
+    char count[32];
+    std::snprintf(count, sizeof count, "%.6g", frames);
+    time.fail("frame_dt", "time.end / time.frame_dt gives " + std::string(count) + " frames; at most " +
+                              std::to_string(kMaxFrames) + " (raise frame_dt or lower end)");
+  }
   s.cfl = time.number("cfl", 0.4, Range{0.0, 1.0, true, false});
   s.wave_cfl = time.number("wave_cfl", 0.5, Range{0.0, 1.0, true, false});
   s.max_dt = time.number("max_dt", 1e300, Range::positive());

@@ -38,8 +38,12 @@ struct SceneSettings {
   Vec<dim> gravity;                  //!< [m/s^2]
   OutputSettings output;
 
+  //! ceil(end_time / frame_dt), at most kMaxFrames (parse_scene_settings refuses more).
   int frame_count() const;
 };
+
+//! The most output frames a run may have: frame numbers are int in file names and checkpoints.
+inline constexpr int kMaxFrames = 10000000;
 
 //! The first position outside the domain box of `settings` (half-open [lo, hi) on periodic
 //! axes): why ("a particle at (1.0025,

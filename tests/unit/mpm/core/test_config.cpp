@@ -1,6 +1,7 @@
 #include <mpm/core/command_line.h>
 #include <mpm/core/config.h>
 #include <mpm/core/error.h>
+#include <mpm/core/scene_settings.h>
 
 #include <doctest/doctest.h>
 
@@ -256,4 +257,15 @@ TEST_CASE("a key given twice is an error naming both lines, at any depth") {
         "s.yaml:2:18: key 'bodies[0].shape' is given twice (first at line 2); give each key once");
   // Overrides replace a key; they never add a second one.
   CHECK_NOTHROW(mpm::Config::parse("time: {end: 1}\n", "s.yaml", {"time.end=2"}));
+}
+
+TEST_CASE("a frame count beyond the bound is refused, not overflowed") {
+  const std::string scene =
+      "dim: 2\ndomain: {lo: [0, 0], hi: [1, 1]}\ngrid: {dx: 0.1}\ntime: {end: 3.0e9, frame_dt: 1}\n";
+  const std::string why = input_error([&] { mpm::parse_scene_settings<2>(mpm::Config::parse(scene, "s.yaml")); });
+  CHECK(why.find("key 'time.frame_dt' = 1") != std::string::npos);
+  CHECK(why.find("gives 3e+09 frames") != std::string::npos);
+  CHECK(why.find("at most 10000000") != std::string::npos);
+  const auto ok = mpm::parse_scene_settings<2>(mpm::Config::parse(scene, "s.yaml", {"time.end=1.0e7"}));
+  CHECK(ok.frame_count() == 10000000);
 }
