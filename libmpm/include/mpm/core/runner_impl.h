@@ -6,6 +6,7 @@
 #include <mpm/core/advance.h>
 #include <mpm/core/error.h>
 #include <mpm/core/runner.h>
+#include <mpm/io/atomic_file.h>
 #include <mpm/io/checkpoint.h>
 #include <mpm/io/diagnostics_csv.h>
 #include <mpm/io/particle_output.h>
@@ -98,6 +99,8 @@ std::string Runner<dim, State>::scene_digest() const {
 
 template <int dim, class State>
 int Runner<dim, State>::open_output(State& state, Pipeline<State>& pipeline) {
+  // Half-written files of a run that was killed in this folder (io/atomic_file.h).
+  io::remove_stale_temporaries(out_);
   if (!cl_.restart) {
     std::filesystem::create_directories(out_);
     csv_.open(out_ / "diagnostics.csv", columns(state, pipeline));

@@ -5,6 +5,7 @@
 //! <path> once complete, so ParaView polling a running simulation, or a run killed mid-write,
 //! never sees a half-written file (rename within one file system is atomic on POSIX). The temp
 //! file is not fsync'ed: the guarantee covers a crashing or killed process, not a power loss.
+#include <cstddef>
 #include <filesystem>
 #include <string_view>
 
@@ -34,5 +35,10 @@ private:
 
 //! Writes `content` to `path` atomically; throws IoError naming the path and the reason.
 void write_file_atomically(const std::filesystem::path& path, std::string_view content);
+
+//! Removes the temporary files "<name>.tmp-<pid>" in `folder` (not its subfolders) that a killed
+//! process left behind: those whose process no longer runs. Files of this process and of live
+//! ones stay. Returns the number removed; a missing folder removes nothing.
+std::size_t remove_stale_temporaries(const std::filesystem::path& folder);
 
 }  // namespace mpm::io

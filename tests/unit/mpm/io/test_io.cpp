@@ -29,6 +29,7 @@
 #include <string>
 #include <vector>
 
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include "../hdf5_reading.h"
@@ -127,6 +128,28 @@ Picture read_png(const fs::path& path) {
 }
 
 }  // namespace
+
+TEST_CASE("the temporary files of a killed process are removed, those of live ones kept") {
+  const ScratchDir dir("stale");
+  // A child that has exited and been reaped: its PID names no process any more.
+  const pid_t child = ::fork();
+  REQUIRE(child >= 0);
+  if (child == 0) ::_exit(0);
+  int status = 0;
+  REQUIRE(::waitpid(child, &status, 0) == child);
+  const std::string dead = std::to_string(child), live = std::to_string(::getpid()),
+                    parent = std::to_string(::getppid());
+  write_text(dir / ("frame_0001.h5.tmp-" + dead), "half");
+  write_text(dir / ("summary.json.tmp-" + dead), "half");
+  write_text(dir / ("frame_0002.h5.tmp-" + live), "being written");
+  write_text(dir / ("preview_0001.png.tmp-" + parent), "being written");
+  write_text(dir / "notes.tmp-abc", "not ours");
+  write_text(dir / "frame_0001.h5", "complete");
+  CHECK(io::remove_stale_temporaries(dir.path()) == 2);
+  CHECK(dir.entries() == std::vector<std::string>{"frame_0001.h5", "frame_0002.h5.tmp-" + live, "notes.tmp-abc",
+                                                  "preview_0001.png.tmp-" + parent});
+  CHECK(io::remove_stale_temporaries(dir / "missing") == 0);
+}
 
 TEST_CASE("write_file_atomically replaces the file and leaves no temporary file") {
   const ScratchDir dir("atomic");
