@@ -14,8 +14,6 @@
 #include <mpm/core/stages/time_step_control.h>
 
 #include <algorithm>
-#include <cmath>
-#include <sstream>
 #include <tuple>
 
 namespace coupling {

@@ -14,8 +14,6 @@
 #include <mpm/geometry/seeding.h>
 
 #include <algorithm>
-#include <cmath>
-#include <sstream>
 
 namespace fluid {
 

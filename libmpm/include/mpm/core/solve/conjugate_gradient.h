@@ -45,10 +45,10 @@ SolveResult conjugate_gradient(Operator&& A, Preconditioner&& M, const Vector& b
   using T = typename Vector::value_type;
   const auto start = std::chrono::steady_clock::now();
   const std::size_t n = b.size();
-  MPM_ASSERT(n == 0 || std::isfinite(dot(b, b)));
   if (x.size() != n) x.assign(n, zero<T>());
   Vector r(n), z(n), d(n), Ad(n);
   const double b_norm = std::sqrt(dot(b, b));
+  MPM_ASSERT(std::isfinite(b_norm));
   if (b_norm == 0.0) std::fill(x.begin(), x.end(), zero<T>());  // the exact solution; no relative target exists
   apply(A, x, Ad);
   for (std::size_t i = 0; i < n; ++i) r[i] = b[i] - Ad[i];
