@@ -51,7 +51,7 @@ bool order_by_block(const std::vector<Eigen::Matrix<T, dim, 1>>& x, const Kernel
 
   // Keys in parallel; an invalid particle is reported after the loop, the one with the
   // lowest index so that the message does not depend on the thread count.
-  std::vector<int> key(n);
+  std::vector<BlockKey> key(n);
   std::atomic<std::size_t> first_bad{n};
   std::visit(
       [&](const auto& k) {
@@ -83,17 +83,25 @@ bool order_by_block(const std::vector<Eigen::Matrix<T, dim, 1>>& x, const Kernel
       },
       kernel);
 
-  // Counting sort by block id: O(n + table size), stable. The sorted keys are written in the
-  // same pass as the order (same target position, so no extra random access).
+  // Counting sort by the rank of the block key among the keys present: O(n + blocks log
+  // blocks), stable. The sorted keys are written in the same pass as the order (same target
+  // position, so no extra random access).
   const bool in_order = std::is_sorted(key.begin(), key.end());
   if (!in_order) {
-    std::vector<std::uint32_t> offset(grid.table_size() + 1, 0);
-    for (int k : key) ++offset[k + 1];
-    for (int b = 0; b < grid.table_size(); ++b) offset[b + 1] += offset[b];
+    BlockTable rank;
+    std::vector<BlockKey> present;
+    for (BlockKey k : key)
+      if (rank.insert(k, static_cast<int>(present.size())) == static_cast<int>(present.size())) present.push_back(k);
+    std::sort(present.begin(), present.end());
+    for (std::size_t r = 0; r < present.size(); ++r) rank.assign(present[r], static_cast<int>(r));
+    std::vector<std::uint32_t> offset(present.size() + 1, 0);
+    std::vector<std::uint32_t> key_rank(n);
+    for (std::size_t p = 0; p < n; ++p) ++offset[(key_rank[p] = rank.find(key[p])) + 1];
+    for (std::size_t r = 0; r < present.size(); ++r) offset[r + 1] += offset[r];
     order.resize(n);
-    std::vector<int> sorted_key(n);
+    std::vector<BlockKey> sorted_key(n);
     for (std::size_t p = 0; p < n; ++p) {
-      const std::uint32_t i = offset[key[p]]++;
+      const std::uint32_t i = offset[key_rank[p]]++;
       order[i] = static_cast<std::uint32_t>(p);
       sorted_key[i] = key[p];
     }
@@ -112,7 +120,7 @@ bool order_by_block(const std::vector<Eigen::Matrix<T, dim, 1>>& x, const Kernel
   buckets.begin.push_back(static_cast<std::uint32_t>(n));
 
   // Every bucket touches its own block and the +1 neighbours on each axis.
-  std::vector<int> blocks;
+  std::vector<BlockKey> blocks;
   blocks.reserve(buckets.block.size() * ParticleBuckets<dim>::colors);
   for (int b = 0; b < buckets.count(); ++b) {
     const IVec<dim> c = grid.block_coord(buckets.block[b]);

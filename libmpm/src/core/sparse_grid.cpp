@@ -3,7 +3,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 
 namespace mpm {
 
@@ -11,7 +10,6 @@ template <int dim>
 SparseGrid<dim>::SparseGrid(const Vec<dim>& lo, const Vec<dim>& hi, double dx, const std::array<bool, dim>& periodic)
     : dx_(dx), origin_(lo) {
   verify<InputError>(dx > 0.0 && std::isfinite(dx), "grid spacing dx must be > 0");
-  double blocks = 1.0;
   for (int a = 0; a < dim; ++a) {
     verify<InputError>(hi[a] > lo[a], "grid domain must have hi > lo on every axis");
     node_counts_[a] = static_cast<int>(std::ceil((hi[a] - lo[a]) / dx - 1e-9)) + 1;
@@ -25,20 +23,20 @@ SparseGrid<dim>::SparseGrid(const Vec<dim>& lo, const Vec<dim>& hi, double dx, c
       node_counts_[a] = period_[a] + 1 + 2 * periodic_margin;
     }
     block_counts_[a] = (node_counts_[a] + block_size - 1) / block_size + 1;
-    blocks *= block_counts_[a];
+    verify<InputError>(block_counts_[a] < (1 << std::min(key_bits, 30)),
+                       "grid too large: " + std::to_string(node_counts_[a]) + " nodes on axis " + std::to_string(a) +
+                           " (domain / dx); at most " + std::to_string(block_size << std::min(key_bits, 30)) +
+                           " in " + std::to_string(dim) + "D");
   }
-  verify<InputError>(blocks < std::numeric_limits<int>::max() / 2,
-                     "grid too large: " + std::to_string(blocks) + " blocks (domain / dx)");
-  slot_.assign(static_cast<std::size_t>(blocks), -1);
+  slot_.reset(0);
 }
 
 template <int dim>
-void SparseGrid<dim>::activate(const std::vector<int>& block_ids) {
-  for (int id : active_) slot_[id] = -1;
+void SparseGrid<dim>::activate(const std::vector<BlockKey>& block_ids) {
   active_ = block_ids;
   if (is_periodic()) {
     const IVec<dim> lo = periodic_lo(), hi = lo + period_;
-    for (int id : block_ids) {
+    for (BlockKey id : block_ids) {
       const IVec<dim> first = block_coord(id) * block_size;
       const IVec<dim> last = first + IVec<dim>::Constant(block_size - 1);
       bool ghost = false;
@@ -54,7 +52,8 @@ void SparseGrid<dim>::activate(const std::vector<int>& block_ids) {
     std::sort(active_.begin(), active_.end());
     active_.erase(std::unique(active_.begin(), active_.end()), active_.end());
   }
-  for (std::size_t s = 0; s < active_.size(); ++s) slot_[active_[s]] = static_cast<int>(s);
+  slot_.reset(active_.size());
+  for (std::size_t s = 0; s < active_.size(); ++s) slot_.insert(active_[s], static_cast<int>(s));
   const std::size_t n = active_.size() * nodes_per_block;
   mass.assign(n, 0.0);
   velocity.assign(n, Vec<dim>::Zero());
@@ -76,7 +75,7 @@ template <int dim>
 Index SparseGrid<dim>::node_index(const IVec<dim>& node) const {
   for (int a = 0; a < dim; ++a)
     if (node[a] < 0 || (node[a] >> block_bits) >= block_counts_[a]) return -1;
-  const int s = slot_[block_id(node)];
+  const int s = slot_.find(block_id(node));
   if (s < 0) return -1;
   int local = 0;
   for (int a = dim - 1; a >= 0; --a) local = (local << block_bits) | (node[a] & (block_size - 1));
@@ -86,11 +85,18 @@ Index SparseGrid<dim>::node_index(const IVec<dim>& node) const {
 template <int dim>
 std::vector<std::pair<std::string, std::size_t>> SparseGrid<dim>::memory_per_field() const {
   auto bytes = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
-  return {{"grid.block_table", slot_.capacity() * sizeof(int) + active_.capacity() * sizeof(int)},
+  return {{"grid.block_table", slot_.bytes() + active_.capacity() * sizeof(BlockKey)},
           {"grid.mass", bytes(mass)},
           {"grid.velocity", bytes(velocity)},
           {"grid.velocity_old", bytes(velocity_old)},
           {"grid.force", bytes(force)}};
+}
+
+template <int dim>
+std::size_t SparseGrid<dim>::memory_bytes() const {
+  std::size_t total = 0;
+  for (const auto& [name, bytes] : memory_per_field()) total += bytes;
+  return total;
 }
 
 template class SparseGrid<2>;

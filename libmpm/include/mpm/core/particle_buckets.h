@@ -29,7 +29,7 @@ struct ParticleBuckets {
   static constexpr int colors = 1 << dim;
   std::vector<std::uint32_t> particle;  //!< particle indices in bucket order
   std::vector<std::uint32_t> begin;     //!< bucket b holds particle[begin[b]] .. particle[begin[b+1] - 1]
-  std::vector<int> block;               //!< block id (dense table) of bucket b
+  std::vector<BlockKey> block;          //!< key of the block of bucket b (SparseGrid::block_id)
   std::array<std::vector<int>, colors> by_color;
 
   int count() const { return static_cast<int>(block.size()); }

@@ -1,10 +1,9 @@
 #pragma once
 //! A sparse background grid: nodes are grouped in blocks of B^dim (B = 4 in 3D, 8 in 2D, 64
-//! nodes either way) and only blocks touched by a particle stencil are allocated. A dense
-//! table of one int32 per block (1/64 of a node's worth) maps block coordinates to storage,
-//! so lookups are one load (SPGrid's idea without the virtual-memory tricks). The adaptive
-//! grid of a later stage is a stack of these, one per level with dx_n = dx_0 / 2^n
-//! (paper sec. 6.1).
+//! nodes either way) and only blocks touched by a particle stencil are allocated. A hash
+//! table (BlockTable) maps packed block coordinates to storage, so the memory held follows the
+//! allocated blocks, not the domain. The adaptive grid (mpm/adaptive/) is a stack of these, one
+//! per level with dx_n = dx_0 / 2^n (Gao et al. 2017, sec. 6.1).
 //!
 //! Node channels are structure-of-arrays over all allocated nodes: node n of block b is at
 //! b * nodes_per_block + n. Channels a scene does not use stay empty (lean scenes).
@@ -15,6 +14,7 @@
 //! (periodic_image) lies in [lo, hi). The allocated set is closed under images: activate() adds
 //! the block of the image of every allocated ghost node, so that the periodic stages
 //! (stages/periodic_boundary.h) can fold ghosts onto their images and fill them back.
+#include <mpm/core/block_table.h>
 #include <mpm/core/types.h>
 
 #include <array>
@@ -64,30 +64,35 @@ public:
     return node;
   }
 
-  //! Linear id of the block containing node `node` in the dense block table.
-  int block_id(const IVec<dim>& node) const {
-    int id = 0;
-    for (int a = dim - 1; a >= 0; --a) id = id * block_counts_[a] + (node[a] >> block_bits);
-    return id;
+  //! Bits per axis of a packed block key; the last axis is the most significant, so keys sort
+  //! like the blocks' lexicographic order (last axis slowest).
+  static constexpr int key_bits = 64 / dim;
+
+  //! Key of the block containing node `node` (node coordinates >= 0).
+  BlockKey block_id(const IVec<dim>& node) const {
+    BlockKey key = 0;
+    for (int a = dim - 1; a >= 0; --a) key = (key << key_bits) | static_cast<BlockKey>(node[a] >> block_bits);
+    return key;
   }
-  IVec<dim> block_coord(int id) const {
+  IVec<dim> block_coord(BlockKey key) const {
     IVec<dim> c;
     for (int a = 0; a < dim; ++a) {
-      c[a] = id % block_counts_[a];
-      id /= block_counts_[a];
+      c[a] = static_cast<int>(key & ((BlockKey{1} << key_bits) - 1));
+      key >>= key_bits;
     }
     return c;
   }
-  int table_size() const { return static_cast<int>(slot_.size()); }
 
-  //! Replaces the allocated set by the given block ids (sorted, unique), plus on a periodic
+  //! Replaces the allocated set by the given block keys (sorted, unique), plus on a periodic
   //! grid the blocks of the images of their ghost nodes, and zeroes mass and velocity; other
   //! channels are (re)allocated on request.
-  void activate(const std::vector<int>& block_ids);
-  //! Storage slot of block `id`, or -1 when it is not allocated.
-  int slot(int id) const { return slot_[id]; }
+  void activate(const std::vector<BlockKey>& block_ids);
+  //! Storage slot of block `key`, or -1 when it is not allocated.
+  int slot(BlockKey key) const { return slot_.find(key); }
   int block_count() const { return static_cast<int>(active_.size()); }
-  int active_block_id(int s) const { return active_[s]; }
+  BlockKey active_block_id(int s) const { return active_[s]; }
+  //! Bytes held by the block table and the node channels: proportional to the allocated blocks.
+  std::size_t memory_bytes() const;
   std::size_t node_storage() const { return mass.size(); }
 
   //! Integer coordinate and position of storage node k.
@@ -110,8 +115,8 @@ private:
   IVec<dim> node_counts_ = IVec<dim>::Zero();
   IVec<dim> block_counts_ = IVec<dim>::Zero();
   IVec<dim> period_ = IVec<dim>::Zero();
-  std::vector<int> slot_;    // dense table: block id -> storage slot or -1
-  std::vector<int> active_;  // storage slot -> block id
+  BlockTable slot_;               // block key -> storage slot
+  std::vector<BlockKey> active_;  // storage slot -> block key
 };
 
 }  // namespace mpm

@@ -124,7 +124,7 @@ constexpr std::array<int, SparseGrid<dim>::nodes_per_block> block_to_patch = [] 
 //! Calls fn(patch index, storage index) for every node of the 2^dim blocks under the patch of
 //! the bucket whose first block is `block`.
 template <int dim, class Fn>
-void for_each_patch_node(const SparseGrid<dim>& grid, int block, Fn&& fn) {
+void for_each_patch_node(const SparseGrid<dim>& grid, BlockKey block, Fn&& fn) {
   constexpr int B = SparseGrid<dim>::block_size;
   constexpr int W = patch_width<dim>;
   const IVec<dim> origin = grid.block_coord(block) * B;
@@ -147,7 +147,7 @@ template <int dim>
 struct PatchFrame {
   IVec<dim> origin;
   CellMap<dim> map;
-  PatchFrame(const SparseGrid<dim>& grid, int block)
+  PatchFrame(const SparseGrid<dim>& grid, BlockKey block)
       : origin(grid.block_coord(block) * SparseGrid<dim>::block_size), map(grid) {}
   template <class T>
   Eigen::Matrix<T, dim, 1> cells(const Eigen::Matrix<T, dim, 1>& x) const {

@@ -1,0 +1,80 @@
+#pragma once
+//! A hash table from block key to storage slot whose memory follows the allocated blocks, not
+//! the domain (SPGrid's aim, with open addressing instead of virtual memory): a grid whose
+//! finest level spans 2^13 cells per axis in 3D holds a few bytes per allocated block.
+//!
+//! Open addressing with linear probing on a power-of-two table kept at most half full; keys
+//! are never erased one by one (a grid replaces its whole allocated set), so no tombstones.
+#include <cstdint>
+#include <vector>
+
+namespace mpm {
+
+//! Packed block coordinates (see SparseGrid::block_id); ~0 is never a valid key.
+using BlockKey = std::uint64_t;
+
+class BlockTable {
+public:
+  //! Empties the table and sizes it for `count` keys.
+  void reset(std::size_t count) {
+    std::size_t capacity = 16;
+    while (capacity < 2 * count) capacity *= 2;
+    keys_.assign(capacity, kEmpty);
+    values_.assign(capacity, -1);
+    mask_ = capacity - 1;
+    size_ = 0;
+  }
+  //! Inserts (key, value) unless the key is present; returns the stored value.
+  int insert(BlockKey key, int value) {
+    if (2 * (size_ + 1) > keys_.size()) grow();
+    std::size_t i = home(key);
+    while (keys_[i] != kEmpty) {
+      if (keys_[i] == key) return values_[i];
+      i = (i + 1) & mask_;
+    }
+    keys_[i] = key;
+    values_[i] = value;
+    ++size_;
+    return value;
+  }
+  //! Overwrites the value of a present key (no effect when absent).
+  void assign(BlockKey key, int value) {
+    if (const std::size_t i = position(key); i != kNone) values_[i] = value;
+  }
+  //! The value stored for `key`, or -1.
+  int find(BlockKey key) const {
+    const std::size_t i = position(key);
+    return i == kNone ? -1 : values_[i];
+  }
+  std::size_t size() const { return size_; }
+  std::size_t bytes() const { return keys_.capacity() * sizeof(BlockKey) + values_.capacity() * sizeof(int); }
+
+private:
+  static constexpr BlockKey kEmpty = ~BlockKey{0};
+  static constexpr std::size_t kNone = ~std::size_t{0};
+
+  std::size_t home(BlockKey key) const {
+    return static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> 17) & mask_;  // Fibonacci hashing
+  }
+  std::size_t position(BlockKey key) const {
+    if (keys_.empty()) return kNone;
+    for (std::size_t i = home(key);; i = (i + 1) & mask_) {
+      if (keys_[i] == key) return i;
+      if (keys_[i] == kEmpty) return kNone;
+    }
+  }
+  void grow() {
+    std::vector<BlockKey> keys = std::move(keys_);
+    std::vector<int> values = std::move(values_);
+    reset(keys.empty() ? 8 : keys.size());
+    for (std::size_t i = 0; i < keys.size(); ++i)
+      if (keys[i] != kEmpty) insert(keys[i], values[i]);
+  }
+
+  std::vector<BlockKey> keys_;
+  std::vector<int> values_;
+  std::size_t mask_ = 0;
+  std::size_t size_ = 0;
+};
+
+}  // namespace mpm
