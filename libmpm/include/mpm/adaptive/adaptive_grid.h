@@ -1,0 +1,167 @@
+#pragma once
+//! The multi-level sparse grid of adaptive GIMP and its ghost nodes (Gao et al. 2017, sec. 6.1,
+//! eq. 15, Fig. 10).
+//!
+//! One SparseGrid per level n (dx_n = dx_0 / 2^n) over the whole domain; each holds
+//!  - the real nodes whose home is level n (constrained_basis.h), and
+//!  - ghost nodes: level-n nodes of particle stencils that are not real on level n (points
+//!    embedded in coarser leaves, or real nodes of another level).
+//! Every particle transfers with uniform GIMP weights on one level: the finest level of the
+//! leaves its box overlaps, where the constrained basis restricted to the box is exactly the
+//! level's multilinear interpolant. After P2G each ghost's sums are pushed to its real nodes
+//! with the embedding weights (w_ip = sum_k E_ik w_kp, eq. 15) and the ghost is cleared;
+//! before G2P each ghost is pulled back from them. Grid updates (forces, walls, colliders)
+//! then run on every level as on a uniform grid: ghosts hold no mass.
+//!
+//! prepare() allocates, per level, the blocks of the stencils of the particles that transfer
+//! there and the blocks of the real nodes their ghosts reach, and builds the ghost tables.
+//! Memory and time follow the allocated blocks, not the domain.
+#include <mpm/adaptive/cell_tree.h>
+#include <mpm/core/sparse_grid.h>
+
+#include <cstdint>
+#include <vector>
+
+namespace mpm::adaptive {
+
+//! Uniform GIMP weights along one axis for any particle half-size h (in cells of the level):
+//! w(r) = (H(r + h) - H(r - h)) / (2h), dw/dr = (N1(r + h) - N1(r - h)) / (2h) (Gao et al.
+//! 2017, eq. 5-6; H the antiderivative of the hat N1), on the nodes base .. base + count - 1,
+//! the nodes j with |xi - j| < 1 + h (at most ceil(2h) + 2): the quadratic B-spline stencil
+//! at h = 1/2, wider for a coarse particle transferring on a finer level.
+struct GimpAxis {
+  static constexpr int max_count = 2 * (1 << (max_levels - 1)) + 2;
+  int base = 0;
+  int count = 0;
+  double w[max_count];
+  double dw[max_count];  //!< dw/dr, per cell
+  void compute(double xi, double h);
+};
+
+//! A ghost's link to one real node: value_ghost += weight * value(level, index).
+struct GhostLink {
+  int level;
+  Index index;
+  double weight;
+};
+
+template <int dim>
+class AdaptiveGrid {
+public:
+  AdaptiveGrid() = default;
+  explicit AdaptiveGrid(CellTree<dim> tree);
+
+  const CellTree<dim>& tree() const { return tree_; }
+  //! The tree, for refinement; call prepare() before the next transfer.
+  CellTree<dim>& tree() { return tree_; }
+  int levels() const { return tree_.levels(); }
+  SparseGrid<dim>& level(int n) { return levels_[n]; }
+  const SparseGrid<dim>& level(int n) const { return levels_[n]; }
+
+  //! Side [m] of the GIMP box of a particle of type (level) q: dx_q, so that a particle on the
+  //! level of its type transfers with the quadratic B-spline (h = 1/2).
+  double particle_size(int type) const { return tree_.dx(type); }
+
+  //! Finds the transfer level of every particle (positions x, types `type`), allocates the
+  //! level grids and builds the ghost tables. Throws NumericalError naming `stage` for a
+  //! particle that is not finite or whose stencil leaves the grid.
+  void prepare(const std::vector<Vec<dim>>& x, const std::vector<std::uint16_t>& type,
+               const std::string& stage = "prepare");
+  std::size_t particle_count() const { return transfer_level_.size(); }
+  //! Transfer level of particle p (after prepare).
+  int transfer_level(std::size_t p) const { return transfer_level_[p]; }
+  //! Half-size of particle p's GIMP box in cells of its transfer level (after prepare).
+  double half_cells(std::size_t p) const { return half_cells_[p]; }
+
+  //! Calls fn(k, w, grad_w, x_k) for the level-n storage node k of every non-zero weight of a
+  //! particle at x that transfers on level n with half-size h cells: w = w_kp (uniform GIMP),
+  //! grad_w [1/m], x_k the node's position [m].
+  template <class Fn>
+  void for_each_weight(int n, double h, const Vec<dim>& x, Fn&& fn) const;
+
+  //! Ghosts of level n: storage index, first link (CSR), and the second moment of their
+  //! links R_k = sum_i E_ik (x_i - x_k)(x_i - x_k)^T [m^2] that APIC's D_p needs.
+  struct Ghosts {
+    std::vector<Index> node;
+    std::vector<std::uint32_t> begin{0};
+    std::vector<GhostLink> link;
+    std::vector<Mat<dim>> spread;
+    std::vector<int> of_node;  //!< per storage node: its ghost index, or -1
+    //! Q_k = sum_i E_ik v_i (x_i - x_k)^T [m^2/s], filled by pull_velocity for APIC's B_p.
+    std::vector<Mat<dim>> velocity_moment;
+  };
+  const Ghosts& ghosts(int n) const { return ghosts_[n]; }
+
+  //! Position [m] of storage node k of level n.
+  Vec<dim> node_position(int n, Index k) const { return levels_[n].node_position(static_cast<std::size_t>(k)); }
+
+  //! target(level, index) += sum over ghosts of weight * ghost value, then ghost value = 0, for
+  //! a channel given as one vector per level (forces: f_i = sum_k E_ik f_k).
+  template <class T>
+  void push(std::vector<std::vector<T>*> channel) const;
+  //! Pushes the ghosts' mass and APIC momentum to the real nodes: (m v)_i += E_ik ((m v)_k +
+  //! G_k (x_i - x_k)) with G_k = sum_p w_kp m_p C_p (`affine`, one per ghost), which makes the
+  //! momentum that of the real node's own position x_i (so P2G reproduces affine fields and
+  //! conserves angular momentum); mass and momentum of the ghosts are cleared.
+  void push_momentum(const std::vector<std::vector<Mat<dim>>>& affine);
+  //! Fills the ghosts' velocity (and velocity_old when `old`) and velocity moment Q_k from the
+  //! real nodes: after the grid update, before G2P.
+  void pull_velocity(bool old);
+
+  std::size_t memory_bytes() const;
+
+private:
+  CellTree<dim> tree_;
+  std::vector<SparseGrid<dim>> levels_;
+  std::vector<Ghosts> ghosts_;
+  std::vector<int> transfer_level_;
+  std::vector<double> half_cells_;
+};
+
+template <int dim>
+template <class Fn>
+void AdaptiveGrid<dim>::for_each_weight(int n, double h, const Vec<dim>& x, Fn&& fn) const {
+  const SparseGrid<dim>& g = levels_[n];
+  const double inv_dx = 1.0 / g.dx();
+  GimpAxis axis[dim];
+  for (int a = 0; a < dim; ++a) axis[a].compute((x[a] - g.origin()[a]) * inv_dx, h);
+  int offset[dim] = {};
+  while (true) {
+    double w = 1.0;
+    Vec<dim> grad = Vec<dim>::Constant(inv_dx);
+    IVec<dim> node;
+    for (int a = 0; a < dim; ++a) {
+      const int i = offset[a];
+      node[a] = axis[a].base + i;
+      w *= axis[a].w[i];
+      for (int b = 0; b < dim; ++b) grad[b] *= b == a ? axis[a].dw[i] : axis[a].w[i];
+    }
+    if (w != 0.0 || grad.squaredNorm() != 0.0) {
+      const Index k = g.node_index(node);
+      fn(k, w, grad, Vec<dim>(g.origin() + g.dx() * node.template cast<double>()));
+    }
+    int a = 0;
+    for (; a < dim; ++a) {
+      if (++offset[a] < axis[a].count) break;
+      offset[a] = 0;
+    }
+    if (a == dim) return;
+  }
+}
+
+template <int dim>
+template <class T>
+void AdaptiveGrid<dim>::push(std::vector<std::vector<T>*> channel) const {
+  for (int n = 0; n < levels(); ++n) {
+    const Ghosts& g = ghosts_[n];
+    std::vector<T>& from = *channel[n];
+    for (std::size_t j = 0; j < g.node.size(); ++j) {
+      T& value = from[static_cast<std::size_t>(g.node[j])];
+      for (std::uint32_t l = g.begin[j]; l < g.begin[j + 1]; ++l)
+        (*channel[g.link[l].level])[static_cast<std::size_t>(g.link[l].index)] += g.link[l].weight * value;
+      value = T(0 * value);
+    }
+  }
+}
+
+}  // namespace mpm::adaptive

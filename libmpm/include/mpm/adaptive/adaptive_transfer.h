@@ -1,0 +1,56 @@
+#pragma once
+//! Particle <-> grid transfers on the adaptive grid through ghost nodes (Gao et al. 2017,
+//! sec. 6.1, eq. 15), APIC (Jiang et al. 2015) or PIC/FLIP. Each particle transfers on its
+//! transfer level with uniform GIMP weights w_kp; the weights on the real nodes are
+//! w_ip = sum_k E_ik w_kp. With them, and with the real nodes' own positions x_i:
+//!
+//! P2G:  m_i = sum_p w_ip m_p,   (m v)_i = sum_p w_ip m_p (v_p + C_p (x_i - x_p))
+//! G2P:  v_p = sum_i w_ip v_i,   B_p = sum_i w_ip v_i (x_i - x_p)^T,
+//!       D_p = sum_i w_ip (x_i - x_p)(x_i - x_p)^T,  C_p = B_p D_p^-1
+//!
+//! D_p is the weights' own second moment (not dx^2/4: a particle near a level transition sees
+//! nodes of several spacings), so an affine velocity field passes P2G -> G2P unchanged and
+//! angular momentum is conserved. Preconditions: AdaptiveGrid::prepare for these particles.
+#include <mpm/adaptive/adaptive_grid.h>
+#include <mpm/core/particles.h>
+#include <mpm/core/transfer.h>
+
+namespace mpm::adaptive {
+
+//! Mass and momentum of the real nodes (ghosts pushed and cleared), then velocity = momentum /
+//! mass on every level (velocity_old kept for FLIP).
+template <int dim>
+void particles_to_grid(const Particles<dim>& particles, const TransferScheme& scheme, AdaptiveGrid<dim>& grid);
+
+//! force_i = - sum_p S_p grad w_ip on the real nodes (ghosts pushed), S_p = V_p^0 tau_p [N m].
+template <int dim>
+void stress_to_grid_forces(const std::vector<Mat<dim>>& weighted_stress, const Particles<dim>& particles,
+                           AdaptiveGrid<dim>& grid);
+
+//! Fills the ghosts from the real nodes after the grid update; G2P and velocity_gradient read them.
+template <int dim>
+void pull_velocities(AdaptiveGrid<dim>& grid, const TransferScheme& scheme);
+
+//! Updates v_p and C_p (APIC) or v_p (FLIP, C_p = 0) and advects x_p by dt with v^PIC.
+template <int dim>
+void grid_to_particles(Particles<dim>& particles, const TransferScheme& scheme, const AdaptiveGrid<dim>& grid,
+                       double dt);
+
+//! grad v_p = sum_i v_i (grad w_ip)^T [1/s].
+template <int dim>
+void velocity_gradient(const Particles<dim>& particles, const AdaptiveGrid<dim>& grid, std::vector<Mat<dim>>& grad_v);
+
+//! The weights of one particle on the real nodes: w_ip and grad w_ip [1/m] by (level, storage
+//! index), summed over its ghosts. For tests and diagnostics; the transfers never build it.
+template <int dim>
+struct RealWeight {
+  int level;
+  Index index;
+  double w;
+  Vec<dim> grad;
+};
+template <int dim>
+std::vector<RealWeight<dim>> real_weights(const AdaptiveGrid<dim>& grid, int level, double half_cells,
+                                          const Vec<dim>& x);
+
+}  // namespace mpm::adaptive

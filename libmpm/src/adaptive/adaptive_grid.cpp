@@ -1,0 +1,215 @@
+#include <mpm/adaptive/adaptive_grid.h>
+#include <mpm/adaptive/constrained_basis.h>
+#include <mpm/core/error.h>
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+namespace mpm::adaptive {
+
+namespace {
+double hat(double r) { return std::fmax(0.0, 1.0 - std::fabs(r)); }
+double hat_integral(double s) {  // H(s) = int_{-inf}^{s} N1
+  if (s <= -1.0) return 0.0;
+  if (s <= 0.0) return 0.5 * (1.0 + s) * (1.0 + s);
+  if (s <= 1.0) return 1.0 - 0.5 * (1.0 - s) * (1.0 - s);
+  return 1.0;
+}
+}  // namespace
+
+void GimpAxis::compute(double xi, double h) {
+  base = static_cast<int>(std::floor(xi - h - 1.0)) + 1;             // first node with |xi - j| < 1 + h
+  count = static_cast<int>(std::ceil(xi + h + 1.0)) - 1 - base + 1;  // through the last one
+  const double inv = 0.5 / h;
+  for (int k = 0; k < count; ++k) {
+    const double r = xi - (base + k);
+    w[k] = (hat_integral(r + h) - hat_integral(r - h)) * inv;
+    dw[k] = (hat(r + h) - hat(r - h)) * inv;
+  }
+}
+
+template <int dim>
+AdaptiveGrid<dim>::AdaptiveGrid(CellTree<dim> tree) : tree_(std::move(tree)) {
+  const Vec<dim> hi = tree_.origin() + tree_.dx(0) * tree_.base_cells().template cast<double>();
+  for (int n = 0; n < tree_.levels(); ++n) levels_.emplace_back(tree_.origin(), hi, tree_.dx(n));
+  ghosts_.resize(tree_.levels());
+}
+
+template <int dim>
+void AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vector<std::uint16_t>& type,
+                                const std::string& stage) {
+  MPM_VERIFY(x.size() == type.size(), InputError, "adaptive grid: one particle type per particle");
+  const int L = levels();
+  constexpr int B = SparseGrid<dim>::block_size;
+  transfer_level_.assign(x.size(), 0);
+  half_cells_.assign(x.size(), 0.5);
+  std::vector<std::vector<BlockKey>> stencil_blocks(L);
+
+  // Transfer level and stencil blocks of every particle.
+  for (std::size_t p = 0; p < x.size(); ++p) {
+    MPM_VERIFY(type[p] < L, InputError,
+               "stage '" + stage + "': particle " + std::to_string(p) + " has type " + std::to_string(type[p]) +
+                   ", outside the grid's levels [0, " + std::to_string(L - 1) + "]");
+    const double half = 0.5 * particle_size(type[p]);
+    const int n = x[p].allFinite() ? tree_.finest_level_in(x[p].array() - half, x[p].array() + half) : -1;
+    if (n < 0) {
+      std::ostringstream s;
+      s << "stage '" << stage << "': particle " << p << " at (" << x[p].transpose() << ") left the grid domain";
+      throw NumericalError(s.str());
+    }
+    transfer_level_[p] = n;
+    const SparseGrid<dim>& g = levels_[n];
+    const double h = half / g.dx();
+    half_cells_[p] = h;
+    IVec<dim> first, last;
+    for (int a = 0; a < dim; ++a) {
+      GimpAxis axis;
+      axis.compute((x[p][a] - g.origin()[a]) / g.dx(), h);
+      first[a] = axis.base;
+      last[a] = axis.base + axis.count - 1;
+      if (first[a] < 0 || last[a] >= g.node_counts()[a]) {
+        std::ostringstream s;
+        s << "stage '" << stage << "': the stencil of particle " << p << " at (" << x[p].transpose()
+          << ") leaves the grid (axis " << a << "); keep particles inside the walls";
+        throw NumericalError(s.str());
+      }
+      first[a] /= B;
+      last[a] /= B;
+    }
+    IVec<dim> b = first;
+    while (true) {
+      stencil_blocks[n].push_back(g.block_id(b * B));
+      int a = 0;
+      for (; a < dim; ++a) {
+        if (++b[a] <= last[a]) break;
+        b[a] = first[a];
+      }
+      if (a == dim) break;
+    }
+  }
+
+  // Status of every node of the stencil blocks: real on its level, or a ghost with links
+  // given by lattice point and home level until the grids are allocated.
+  struct PendingGhost {
+    IVec<dim> node;  // level coordinate
+    std::size_t first_link, end_link;
+  };
+  std::vector<std::vector<PendingGhost>> pending(L);
+  std::vector<NodeWeight<dim>> links;
+  std::vector<std::vector<BlockKey>> blocks = stencil_blocks;
+  for (int n = 0; n < L; ++n) {
+    std::vector<BlockKey>& own = stencil_blocks[n];
+    std::sort(own.begin(), own.end());
+    own.erase(std::unique(own.begin(), own.end()), own.end());
+    const SparseGrid<dim>& g = levels_[n];
+    const int s = tree_.scale(n);
+    for (BlockKey key : own) {
+      const IVec<dim> origin = g.block_coord(key) * B;
+      for (int local = 0; local < SparseGrid<dim>::nodes_per_block; ++local) {
+        IVec<dim> node;
+        for (int a = 0; a < dim; ++a) node[a] = origin[a] + ((local >> (a * SparseGrid<dim>::block_bits)) & (B - 1));
+        if ((node.array() >= g.node_counts().array()).any()) continue;  // padding beyond the domain
+        const IVec<dim> point = node * s;
+        if (home_level(tree_, point) == n) continue;  // a real node of this level
+        const std::size_t first_link = links.size();
+        embed(tree_, point, 1.0, links);
+        pending[n].push_back({node, first_link, links.size()});
+      }
+    }
+    blocks[n] = own;
+  }
+  for (const NodeWeight<dim>& link : links)
+    blocks[link.level].push_back(levels_[link.level].block_id(link.point / tree_.scale(link.level)));
+
+  for (int n = 0; n < L; ++n) {
+    std::sort(blocks[n].begin(), blocks[n].end());
+    blocks[n].erase(std::unique(blocks[n].begin(), blocks[n].end()), blocks[n].end());
+    levels_[n].activate(blocks[n]);
+  }
+
+  // Ghost tables in storage indices.
+  for (int n = 0; n < L; ++n) {
+    Ghosts& g = ghosts_[n];
+    g = Ghosts{};
+    g.of_node.assign(levels_[n].node_storage(), -1);
+    for (std::size_t j = 0; j < pending[n].size(); ++j) {
+      const PendingGhost& ghost = pending[n][j];
+      const Index k = levels_[n].node_index(ghost.node);
+      const Vec<dim> xk = tree_.position(ghost.node * tree_.scale(n));
+      Mat<dim> spread = Mat<dim>::Zero();
+      for (std::size_t l = ghost.first_link; l < ghost.end_link; ++l) {
+        const NodeWeight<dim>& link = links[l];
+        g.link.push_back(
+            {link.level, levels_[link.level].node_index(link.point / tree_.scale(link.level)), link.weight});
+        const Vec<dim> r = tree_.position(link.point) - xk;
+        spread.noalias() += link.weight * r * r.transpose();
+      }
+      g.of_node[static_cast<std::size_t>(k)] = static_cast<int>(g.node.size());
+      g.node.push_back(k);
+      g.begin.push_back(static_cast<std::uint32_t>(g.link.size()));
+      g.spread.push_back(spread);
+    }
+  }
+}
+
+template <int dim>
+void AdaptiveGrid<dim>::push_momentum(const std::vector<std::vector<Mat<dim>>>& affine) {
+  for (int n = 0; n < levels(); ++n) {
+    const Ghosts& g = ghosts_[n];
+    SparseGrid<dim>& from = levels_[n];
+    for (std::size_t j = 0; j < g.node.size(); ++j) {
+      const std::size_t k = static_cast<std::size_t>(g.node[j]);
+      const Vec<dim> xk = from.node_position(k);
+      for (std::uint32_t l = g.begin[j]; l < g.begin[j + 1]; ++l) {
+        const GhostLink& link = g.link[l];
+        SparseGrid<dim>& to = levels_[link.level];
+        const std::size_t i = static_cast<std::size_t>(link.index);
+        to.mass[i] += link.weight * from.mass[k];
+        to.velocity[i] += link.weight * (from.velocity[k] + affine[n][j] * (to.node_position(i) - xk));
+      }
+      from.mass[k] = 0.0;
+      from.velocity[k].setZero();
+    }
+  }
+}
+
+template <int dim>
+void AdaptiveGrid<dim>::pull_velocity(bool old) {
+  for (int n = 0; n < levels(); ++n) {
+    Ghosts& g = ghosts_[n];
+    SparseGrid<dim>& to = levels_[n];
+    g.velocity_moment.assign(g.node.size(), Mat<dim>::Zero());
+    for (std::size_t j = 0; j < g.node.size(); ++j) {
+      const std::size_t k = static_cast<std::size_t>(g.node[j]);
+      const Vec<dim> xk = to.node_position(k);
+      Vec<dim> v = Vec<dim>::Zero(), v_old = Vec<dim>::Zero();
+      for (std::uint32_t l = g.begin[j]; l < g.begin[j + 1]; ++l) {
+        const GhostLink& link = g.link[l];
+        const SparseGrid<dim>& from = levels_[link.level];
+        const std::size_t i = static_cast<std::size_t>(link.index);
+        v += link.weight * from.velocity[i];
+        if (old) v_old += link.weight * from.velocity_old[i];
+        g.velocity_moment[j].noalias() += link.weight * from.velocity[i] * (from.node_position(i) - xk).transpose();
+      }
+      to.velocity[k] = v;
+      if (old) to.velocity_old[k] = v_old;
+    }
+  }
+}
+
+template <int dim>
+std::size_t AdaptiveGrid<dim>::memory_bytes() const {
+  std::size_t bytes = tree_.memory_bytes() + transfer_level_.capacity() * sizeof(int);
+  for (const SparseGrid<dim>& g : levels_) bytes += g.memory_bytes();
+  for (const Ghosts& g : ghosts_)
+    bytes += g.node.capacity() * sizeof(Index) + g.begin.capacity() * sizeof(std::uint32_t) +
+             g.link.capacity() * sizeof(GhostLink) + g.spread.capacity() * sizeof(Mat<dim>) +
+             g.of_node.capacity() * sizeof(int);
+  return bytes;
+}
+
+template class AdaptiveGrid<2>;
+template class AdaptiveGrid<3>;
+
+}  // namespace mpm::adaptive

@@ -1,0 +1,160 @@
+#include <mpm/adaptive/adaptive_transfer.h>
+
+#include <mpm/core/error.h>
+
+#include <tbb/parallel_for.h>
+#include <Eigen/LU>
+
+#include <algorithm>
+#include <map>
+
+namespace mpm::adaptive {
+
+namespace {
+// fn(p, k, w, grad_w, x_k) over the stencil of every particle, serially (P2G scatters).
+template <int dim, class Fn>
+void scatter_all(const Particles<dim>& P, const AdaptiveGrid<dim>& grid, Fn&& fn) {
+  for (std::size_t p = 0; p < P.size(); ++p) {
+    const int n = grid.transfer_level(p);
+    grid.for_each_weight(
+        n, grid.half_cells(p), P.x[p],
+        [&](Index k, double w, const Vec<dim>& grad, const Vec<dim>& xk) { fn(p, n, k, w, grad, xk); });
+  }
+}
+
+template <int dim>
+std::vector<std::vector<Vec<dim>>*> per_level(AdaptiveGrid<dim>& grid, std::vector<Vec<dim>> SparseGrid<dim>::*field) {
+  std::vector<std::vector<Vec<dim>>*> v;
+  for (int n = 0; n < grid.levels(); ++n) v.push_back(&(grid.level(n).*field));
+  return v;
+}
+}  // namespace
+
+template <int dim>
+void particles_to_grid(const Particles<dim>& P, const TransferScheme& scheme, AdaptiveGrid<dim>& grid) {
+  MPM_ASSERT(grid.particle_count() == P.size());
+  const bool apic = scheme.type == TransferScheme::Type::apic;
+  std::vector<std::vector<Mat<dim>>> affine(grid.levels());
+  for (int n = 0; n < grid.levels(); ++n) {
+    SparseGrid<dim>& g = grid.level(n);
+    std::fill(g.mass.begin(), g.mass.end(), 0.0);
+    std::fill(g.velocity.begin(), g.velocity.end(), Vec<dim>::Zero());
+    affine[n].assign(grid.ghosts(n).node.size(), Mat<dim>::Zero());
+  }
+  scatter_all(P, grid, [&](std::size_t p, int n, Index k, double w, const Vec<dim>&, const Vec<dim>& xk) {
+    SparseGrid<dim>& g = grid.level(n);
+    const double wm = w * P.mass[p];
+    g.mass[k] += wm;
+    if (apic) {
+      g.velocity[k] += wm * (P.v[p] + P.C[p] * (xk - P.x[p]));
+      if (const int j = grid.ghosts(n).of_node[k]; j >= 0) affine[n][j] += wm * P.C[p];
+    } else {
+      g.velocity[k] += wm * P.v[p];
+    }
+  });
+  grid.push_momentum(affine);
+  for (int n = 0; n < grid.levels(); ++n) momentum_to_velocity(grid.level(n), scheme);
+}
+
+template <int dim>
+void stress_to_grid_forces(const std::vector<Mat<dim>>& S, const Particles<dim>& P, AdaptiveGrid<dim>& grid) {
+  MPM_ASSERT(grid.particle_count() == P.size());
+  for (int n = 0; n < grid.levels(); ++n) grid.level(n).force.assign(grid.level(n).node_storage(), Vec<dim>::Zero());
+  scatter_all(P, grid, [&](std::size_t p, int n, Index k, double, const Vec<dim>& grad, const Vec<dim>&) {
+    grid.level(n).force[k] -= S[p] * grad;
+  });
+  grid.push(per_level(grid, &SparseGrid<dim>::force));
+}
+
+template <int dim>
+void pull_velocities(AdaptiveGrid<dim>& grid, const TransferScheme& scheme) {
+  grid.pull_velocity(scheme.uses_old_velocity());
+}
+
+template <int dim>
+void grid_to_particles(Particles<dim>& P, const TransferScheme& scheme, const AdaptiveGrid<dim>& grid, double dt) {
+  MPM_ASSERT(grid.particle_count() == P.size());
+  const bool apic = scheme.type == TransferScheme::Type::apic;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.size(), 256), [&](const auto& range) {
+    for (std::size_t p = range.begin(); p != range.end(); ++p) {
+      const int n = grid.transfer_level(p);
+      const SparseGrid<dim>& g = grid.level(n);
+      const auto& ghosts = grid.ghosts(n);
+      const Vec<dim> xp = P.x[p];
+      Vec<dim> v_pic = Vec<dim>::Zero(), dv = Vec<dim>::Zero();
+      Mat<dim> B = Mat<dim>::Zero(), D = Mat<dim>::Zero();
+      grid.for_each_weight(n, grid.half_cells(p), xp, [&](Index k, double w, const Vec<dim>&, const Vec<dim>& xk) {
+        const Vec<dim>& vk = g.velocity[k];
+        v_pic += w * vk;
+        if (apic) {
+          const Vec<dim> r = xk - xp;
+          B.noalias() += w * vk * r.transpose();
+          D.noalias() += w * r * r.transpose();
+          if (const int j = ghosts.of_node[k]; j >= 0) {
+            B += w * ghosts.velocity_moment[j];
+            D += w * ghosts.spread[j];
+          }
+        } else {
+          dv += w * (vk - g.velocity_old[k]);
+        }
+      });
+      if (apic) {
+        P.v[p] = v_pic;
+        P.C[p] = B * D.inverse();
+      } else {
+        P.v[p] = scheme.flip_ratio * (P.v[p] + dv) + (1.0 - scheme.flip_ratio) * v_pic;
+        P.C[p].setZero();
+      }
+      P.x[p] += dt * v_pic;
+    }
+  });
+}
+
+template <int dim>
+void velocity_gradient(const Particles<dim>& P, const AdaptiveGrid<dim>& grid, std::vector<Mat<dim>>& grad_v) {
+  MPM_ASSERT(grid.particle_count() == P.size());
+  grad_v.resize(P.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.size(), 256), [&](const auto& range) {
+    for (std::size_t p = range.begin(); p != range.end(); ++p) {
+      const int n = grid.transfer_level(p);
+      const SparseGrid<dim>& g = grid.level(n);
+      Mat<dim> G = Mat<dim>::Zero();
+      grid.for_each_weight(n, grid.half_cells(p), P.x[p], [&](Index k, double, const Vec<dim>& grad, const Vec<dim>&) {
+        G.noalias() += g.velocity[k] * grad.transpose();
+      });
+      grad_v[p] = G;
+    }
+  });
+}
+
+template <int dim>
+std::vector<RealWeight<dim>> real_weights(const AdaptiveGrid<dim>& grid, int n, double h, const Vec<dim>& x) {
+  std::map<std::pair<int, Index>, RealWeight<dim>> sum;
+  auto add = [&](int level, Index index, double w, const Vec<dim>& grad) {
+    auto [it, inserted] = sum.try_emplace({level, index}, RealWeight<dim>{level, index, 0.0, Vec<dim>::Zero()});
+    it->second.w += w;
+    it->second.grad += grad;
+  };
+  const auto& ghosts = grid.ghosts(n);
+  grid.for_each_weight(n, h, x, [&](Index k, double w, const Vec<dim>& grad, const Vec<dim>&) {
+    const int j = ghosts.of_node[k];
+    if (j < 0) return add(n, k, w, grad);
+    for (std::uint32_t l = ghosts.begin[j]; l < ghosts.begin[j + 1]; ++l)
+      add(ghosts.link[l].level, ghosts.link[l].index, ghosts.link[l].weight * w, ghosts.link[l].weight * grad);
+  });
+  std::vector<RealWeight<dim>> out;
+  for (const auto& [key, rw] : sum) out.push_back(rw);
+  return out;
+}
+
+#define MPM_INSTANTIATE(dim)                                                                                    \
+  template void particles_to_grid(const Particles<dim>&, const TransferScheme&, AdaptiveGrid<dim>&);            \
+  template void stress_to_grid_forces(const std::vector<Mat<dim>>&, const Particles<dim>&, AdaptiveGrid<dim>&); \
+  template void pull_velocities(AdaptiveGrid<dim>&, const TransferScheme&);                                     \
+  template void grid_to_particles(Particles<dim>&, const TransferScheme&, const AdaptiveGrid<dim>&, double);    \
+  template void velocity_gradient(const Particles<dim>&, const AdaptiveGrid<dim>&, std::vector<Mat<dim>>&);     \
+  template std::vector<RealWeight<dim>> real_weights(const AdaptiveGrid<dim>&, int, double, const Vec<dim>&);
+MPM_INSTANTIATE(2)
+MPM_INSTANTIATE(3)
+
+}  // namespace mpm::adaptive

@@ -1,0 +1,205 @@
+#include <mpm/adaptive/cell_tree.h>
+#include <mpm/core/error.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+namespace mpm::adaptive {
+
+namespace {
+constexpr int kBits = 64 / 3;  // bits per axis of a packed cell key (enough for 2D and 3D)
+}
+
+template <int dim>
+BlockKey CellTree<dim>::key(const IVec<dim>& cell) {
+  BlockKey k = 0;
+  for (int a = dim - 1; a >= 0; --a) k = (k << kBits) | static_cast<BlockKey>(cell[a]);
+  return k;
+}
+
+template <int dim>
+CellTree<dim>::CellTree(const Vec<dim>& origin, const IVec<dim>& base_cells, double dx0, int levels)
+    : origin_(origin), base_cells_(base_cells), dx0_(dx0), levels_(levels) {
+  MPM_VERIFY(
+      levels >= 1 && levels <= max_levels, InputError,
+      "adaptive grid: levels = " + std::to_string(levels) + " is outside [1, " + std::to_string(max_levels) + "]");
+  MPM_VERIFY(dx0 > 0.0 && std::isfinite(dx0), InputError, "adaptive grid: the coarsest dx must be > 0");
+  for (int a = 0; a < dim; ++a)
+    MPM_VERIFY(base_cells[a] >= 1 && (static_cast<double>(base_cells[a]) * (1 << (levels - 1))) < (1 << kBits) / 2.0,
+               InputError,
+               "adaptive grid: " + std::to_string(base_cells[a]) + " coarse cells on axis " + std::to_string(a) +
+                   " with " + std::to_string(levels) + " levels exceed the " + std::to_string((1 << kBits) / 2) +
+                   " finest cells per axis that a tree can address");
+  refined_.resize(levels);
+  for (BlockTable& t : refined_) t.reset(0);
+}
+
+template <int dim>
+bool CellTree<dim>::is_refined(int level, const IVec<dim>& cell) const {
+  return refined_[level].find(key(cell)) >= 0;
+}
+
+template <int dim>
+bool CellTree<dim>::exists(int level, const IVec<dim>& cell) const {
+  if (level < 0 || level >= levels_) return false;
+  for (int a = 0; a < dim; ++a)
+    if (cell[a] < 0 || cell[a] >= base_cells_[a] << level) return false;
+  if (level == 0) return true;
+  IVec<dim> parent;
+  for (int a = 0; a < dim; ++a) parent[a] = cell[a] >> 1;
+  return is_refined(level - 1, parent);
+}
+
+template <int dim>
+void CellTree<dim>::refine(int level, const IVec<dim>& cell) {
+  MPM_VERIFY(level + 1 < levels_, InputError,
+             "adaptive grid: a level-" + std::to_string(level) + " cell cannot be refined: the tree has " +
+                 std::to_string(levels_) + " levels");
+  MPM_VERIFY(is_leaf(level, cell), InputError, "adaptive grid: only a leaf can be refined");
+  refined_[level].insert(key(cell), 1);
+}
+
+template <int dim>
+void CellTree<dim>::refine_where(const std::function<int(const Vec<dim>&, const Vec<dim>&)>& target_level,
+                                 const Vec<dim>& region_lo, const Vec<dim>& region_hi) {
+  std::function<void(int, const IVec<dim>&)> visit = [&](int level, const IVec<dim>& cell) {
+    if (!is_refined(level, cell)) {
+      if (level == finest()) return;
+      const Vec<dim> lo = origin_ + dx(level) * cell.template cast<double>();
+      const Vec<dim> hi = lo + Vec<dim>::Constant(dx(level));
+      if (target_level(lo, hi) <= level) return;
+      refine(level, cell);
+    }
+    for (int c = 0; c < (1 << dim); ++c) {
+      IVec<dim> child;
+      for (int a = 0; a < dim; ++a) child[a] = 2 * cell[a] + ((c >> a) & 1);
+      visit(level + 1, child);
+    }
+  };
+  for_each_base_cell(region_lo, region_hi, [&](const IVec<dim>& cell) { visit(0, cell); });
+}
+
+template <int dim>
+void CellTree<dim>::refine_where(const std::function<int(const Vec<dim>&, const Vec<dim>&)>& target_level) {
+  refine_where(target_level, origin_, origin_ + dx0_ * base_cells_.template cast<double>());
+}
+
+template <int dim>
+void CellTree<dim>::for_each_base_cell(const Vec<dim>& lo, const Vec<dim>& hi,
+                                       const std::function<void(const IVec<dim>&)>& fn) const {
+  IVec<dim> first, last;
+  for (int a = 0; a < dim; ++a) {
+    first[a] = std::max(0, static_cast<int>(std::floor(std::max(-1e9, (lo[a] - origin_[a]) / dx0_))));
+    last[a] = std::min(base_cells_[a] - 1, static_cast<int>(std::floor(std::min(1e9, (hi[a] - origin_[a]) / dx0_))));
+    if (first[a] > last[a]) return;
+  }
+  IVec<dim> cell = first;
+  while (true) {
+    fn(cell);
+    int a = 0;
+    for (; a < dim; ++a) {
+      if (++cell[a] <= last[a]) break;
+      cell[a] = first[a];
+    }
+    if (a == dim) return;
+  }
+}
+
+template <int dim>
+CellId<dim> CellTree<dim>::leaf_of(const IVec<dim>& f) const {
+  for (int a = 0; a < dim; ++a)
+    if (f[a] < 0 || f[a] >= base_cells_[a] << finest()) return {};
+  for (int level = 0; level < levels_; ++level) {
+    IVec<dim> cell;
+    for (int a = 0; a < dim; ++a) cell[a] = f[a] >> (finest() - level);
+    if (level == finest() || !is_refined(level, cell)) return {level, cell};
+  }
+  return {};
+}
+
+template <int dim>
+CellId<dim> CellTree<dim>::coarsest_leaf_at(const IVec<dim>& point) const {
+  CellId<dim> best;
+  for (int corner = 0; corner < (1 << dim); ++corner) {
+    IVec<dim> f = point;
+    for (int a = 0; a < dim; ++a) f[a] -= (corner >> a) & 1;
+    const CellId<dim> leaf = leaf_of(f);
+    if (leaf.level >= 0 && (best.level < 0 || leaf.level < best.level)) best = leaf;
+  }
+  return best;
+}
+
+template <int dim>
+CellId<dim> CellTree<dim>::leaf_at(const Vec<dim>& x) const {
+  const Vec<dim> f = (x - origin_) / dx(finest());
+  IVec<dim> cell;
+  for (int a = 0; a < dim; ++a) {
+    if (!(std::abs(f[a]) < 1e9)) return {};
+    cell[a] = static_cast<int>(std::floor(f[a]));
+  }
+  return leaf_of(cell);
+}
+
+template <int dim>
+int CellTree<dim>::finest_level_in(int level, const IVec<dim>& cell, const Vec<dim>& lo, const Vec<dim>& hi) const {
+  const Vec<dim> cell_lo = origin_ + dx(level) * cell.template cast<double>();
+  for (int a = 0; a < dim; ++a)
+    if (!(cell_lo[a] < hi[a] && cell_lo[a] + dx(level) > lo[a])) return -1;
+  if (!is_refined(level, cell)) return level;
+  int finest_found = -1;
+  for (int c = 0; c < (1 << dim) && finest_found < finest(); ++c) {
+    IVec<dim> child;
+    for (int a = 0; a < dim; ++a) child[a] = 2 * cell[a] + ((c >> a) & 1);
+    finest_found = std::max(finest_found, finest_level_in(level + 1, child, lo, hi));
+  }
+  return finest_found;
+}
+
+template <int dim>
+int CellTree<dim>::finest_level_in(const Vec<dim>& lo, const Vec<dim>& hi) const {
+  int finest_found = -1;
+  for_each_base_cell(lo, hi, [&](const IVec<dim>& cell) {
+    if (finest_found < finest()) finest_found = std::max(finest_found, finest_level_in(0, cell, lo, hi));
+  });
+  return finest_found;
+}
+
+template <int dim>
+void CellTree<dim>::visit_leaves(int level, const IVec<dim>& cell,
+                                 const std::function<void(int, const IVec<dim>&)>& fn) const {
+  if (!is_refined(level, cell)) {
+    fn(level, cell);
+    return;
+  }
+  for (int c = 0; c < (1 << dim); ++c) {
+    IVec<dim> child;
+    for (int a = 0; a < dim; ++a) child[a] = 2 * cell[a] + ((c >> a) & 1);
+    visit_leaves(level + 1, child, fn);
+  }
+}
+
+template <int dim>
+void CellTree<dim>::for_each_leaf(const std::function<void(int, const IVec<dim>&)>& fn) const {
+  for_each_base_cell(origin_, origin_ + dx0_ * base_cells_.template cast<double>(),
+                     [&](const IVec<dim>& cell) { visit_leaves(0, cell, fn); });
+}
+
+template <int dim>
+std::size_t CellTree<dim>::refined_count() const {
+  std::size_t n = 0;
+  for (const BlockTable& t : refined_) n += t.size();
+  return n;
+}
+
+template <int dim>
+std::size_t CellTree<dim>::memory_bytes() const {
+  std::size_t bytes = 0;
+  for (const BlockTable& t : refined_) bytes += t.bytes();
+  return bytes;
+}
+
+template class CellTree<2>;
+template class CellTree<3>;
+
+}  // namespace mpm::adaptive

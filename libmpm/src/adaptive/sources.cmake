@@ -1,0 +1,6 @@
+list(APPEND MPM_CORE_SOURCES
+  src/adaptive/cell_tree.cpp
+  src/adaptive/constrained_basis.cpp
+  src/adaptive/adaptive_grid.cpp
+  src/adaptive/adaptive_transfer.cpp
+)

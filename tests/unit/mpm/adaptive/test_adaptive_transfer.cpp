@@ -1,0 +1,267 @@
+// Transfers on the adaptive grid through ghost nodes, on random non-graded trees of 4 levels
+// with particles of every type:
+//  - P2G conserves mass and linear momentum to round-off across levels;
+//  - APIC P2G and G2P conserve angular momentum (particle angular momentum includes the affine
+//    part m_p (C_p D_p) : eps, Jiang et al. 2015), with D_p computed here from the weights;
+//  - an affine velocity field passes P2G -> G2P exactly, C_p included;
+//  - the internal forces of any stresses sum to zero, and their torque is zero for symmetric
+//    stresses (sum_i grad w_ip = 0, sum_i x_i grad w_ip^T = I);
+//  - a one-level tree reproduces the uniform grid's quadratic B-spline transfers;
+//  - the memory of a grid whose finest level spans 2^13 cells per axis in 3D follows the
+//    particles' blocks, not the domain.
+#include <mpm/adaptive/adaptive_transfer.h>
+#include <mpm/core/particle_buckets.h>
+
+#include <doctest/doctest.h>
+
+#include "../core/random_particles.h"
+#include "random_tree.h"
+
+#include <random>
+
+using namespace mpm;
+using namespace mpm::adaptive;
+
+namespace {
+
+// The axial vector of the antisymmetric part: sum_i w (x_i - x_p) x v_i for B = sum_i w v_i (x_i - x_p)^T.
+template <int dim>
+Eigen::Vector3d spin(const Mat<dim>& B) {
+  if constexpr (dim == 2)
+    return Eigen::Vector3d(0.0, 0.0, B(1, 0) - B(0, 1));
+  else
+    return Eigen::Vector3d(B(2, 1) - B(1, 2), B(0, 2) - B(2, 0), B(1, 0) - B(0, 1));
+}
+template <int dim>
+Eigen::Vector3d cross(const Vec<dim>& a, const Vec<dim>& b) {
+  return spin<dim>(Mat<dim>(b * a.transpose()));
+}
+
+// Particles of random types (levels) inside the domain of `tree`, with random v and C.
+template <int dim>
+Particles<dim> random_particles(const CellTree<dim>& tree, std::size_t n, unsigned seed,
+                                std::vector<std::uint16_t>& type) {
+  const double margin = 0.6 * tree.dx(0);
+  const Vec<dim> lo = tree.origin().array() + margin;
+  const Vec<dim> hi = (tree.origin() + tree.dx(0) * tree.base_cells().template cast<double>()).array() - margin;
+  Particles<dim> P = test::random_cloud<dim>(n, lo, hi, seed);
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<int> t(0, tree.finest());
+  type.resize(n);
+  for (auto& q : type) q = static_cast<std::uint16_t>(t(rng));
+  return P;
+}
+
+// Calls fn(level, storage index) for every real node with mass.
+template <int dim, class Fn>
+void for_each_massive_node(const AdaptiveGrid<dim>& grid, Fn&& fn) {
+  for (int n = 0; n < grid.levels(); ++n)
+    for (std::size_t k = 0; k < grid.level(n).node_storage(); ++k)
+      if (grid.level(n).mass[k] > 0.0) fn(n, k);
+}
+
+// D_p = sum_i w_ip (x_i - x_p)(x_i - x_p)^T from the weights on the real nodes.
+template <int dim>
+Mat<dim> inertia(const AdaptiveGrid<dim>& grid, std::size_t p, const Vec<dim>& x) {
+  Mat<dim> D = Mat<dim>::Zero();
+  for (const auto& rw : real_weights(grid, grid.transfer_level(p), grid.half_cells(p), x)) {
+    const Vec<dim> r = grid.node_position(rw.level, rw.index) - x;
+    D += rw.w * r * r.transpose();
+  }
+  return D;
+}
+
+template <int dim>
+void check_conservation(unsigned seed) {
+  AdaptiveGrid<dim> grid(test::random_tree<dim>(seed, 4, 3));
+  std::vector<std::uint16_t> type;
+  Particles<dim> P = random_particles(grid.tree(), dim == 2 ? 400 : 150, seed, type);
+  grid.prepare(P.x, type);
+  int transitions = 0;
+  for (std::size_t p = 0; p < P.size(); ++p) transitions += grid.transfer_level(p) != type[p];
+  CHECK(transitions > 0);
+  particles_to_grid(P, TransferScheme{}, grid);
+
+  // Mass and linear momentum on the real nodes; ghosts hold nothing.
+  double m_grid = 0.0;
+  Vec<dim> p_grid = Vec<dim>::Zero(), p_particles = Vec<dim>::Zero();
+  Eigen::Vector3d L_grid = Eigen::Vector3d::Zero(), L_particles = L_grid;
+  for_each_massive_node(grid, [&](int n, std::size_t k) {
+    CHECK(grid.ghosts(n).of_node[k] < 0);
+    const double m = grid.level(n).mass[k];
+    m_grid += m;
+    p_grid += m * grid.level(n).velocity[k];
+    L_grid += m * cross<dim>(grid.node_position(n, static_cast<Index>(k)), grid.level(n).velocity[k]);
+  });
+  for (std::size_t p = 0; p < P.size(); ++p) {
+    p_particles += P.mass[p] * P.v[p];
+    L_particles += P.mass[p] * (cross<dim>(P.x[p], P.v[p]) + spin<dim>(Mat<dim>(P.C[p] * inertia(grid, p, P.x[p]))));
+  }
+  CHECK(m_grid == doctest::Approx(P.total_mass()).epsilon(1e-13));
+  CHECK((p_grid - p_particles).norm() < 1e-12 * P.total_mass());
+  CHECK((L_grid - L_particles).norm() < 1e-12 * P.total_mass());
+
+  // G2P (dt = 0) from random grid velocities: angular momentum of the grid equals that of
+  // the particles, sum_p m_p (x_p x v_p + (C_p D_p) : eps).
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  L_grid.setZero();
+  for_each_massive_node(grid, [&](int n, std::size_t k) {
+    Vec<dim> v;
+    for (int a = 0; a < dim; ++a) v[a] = u(rng);
+    grid.level(n).velocity[k] = v;
+    L_grid += grid.level(n).mass[k] * cross<dim>(grid.node_position(n, static_cast<Index>(k)), v);
+  });
+  pull_velocities(grid, TransferScheme{});
+  grid_to_particles(P, TransferScheme{}, grid, 0.0);
+  L_particles.setZero();
+  for (std::size_t p = 0; p < P.size(); ++p)
+    L_particles += P.mass[p] * (cross<dim>(P.x[p], P.v[p]) + spin<dim>(Mat<dim>(P.C[p] * inertia(grid, p, P.x[p]))));
+  CHECK((L_grid - L_particles).norm() < 1e-12 * P.total_mass());
+}
+
+template <int dim>
+void check_affine(unsigned seed) {
+  AdaptiveGrid<dim> grid(test::random_tree<dim>(seed, 4, 3));
+  std::vector<std::uint16_t> type;
+  Particles<dim> P = random_particles(grid.tree(), dim == 2 ? 400 : 150, seed + 7, type);
+  const Vec<dim> a = Vec<dim>::LinSpaced(0.3, -0.2);
+  Mat<dim> B;
+  for (int i = 0; i < dim * dim; ++i) B.data()[i] = 0.1 * (i + 1) - 0.35;
+  for (std::size_t p = 0; p < P.size(); ++p) {
+    P.v[p] = a + B * P.x[p];
+    P.C[p] = B;
+  }
+  grid.prepare(P.x, type);
+  particles_to_grid(P, TransferScheme{}, grid);
+  double worst_grid = 0.0;
+  for_each_massive_node(grid, [&](int n, std::size_t k) {
+    const Vec<dim> x = grid.node_position(n, static_cast<Index>(k));
+    worst_grid = std::max(worst_grid, (grid.level(n).velocity[k] - (a + B * x)).norm());
+  });
+  CHECK(worst_grid < 1e-12);
+  for (auto& v : P.v) v.setZero();
+  for (auto& C : P.C) C.setZero();
+  pull_velocities(grid, TransferScheme{});
+  grid_to_particles(P, TransferScheme{}, grid, 0.0);
+  double worst_v = 0.0, worst_C = 0.0;
+  for (std::size_t p = 0; p < P.size(); ++p) {
+    worst_v = std::max(worst_v, (P.v[p] - (a + B * P.x[p])).norm());
+    worst_C = std::max(worst_C, (P.C[p] - B).norm());
+  }
+  CHECK(worst_v < 1e-12);
+  CHECK(worst_C < 1e-10);
+}
+
+template <int dim>
+void check_forces(unsigned seed) {
+  AdaptiveGrid<dim> grid(test::random_tree<dim>(seed, 4, 3));
+  std::vector<std::uint16_t> type;
+  Particles<dim> P = random_particles(grid.tree(), dim == 2 ? 300 : 100, seed + 11, type);
+  grid.prepare(P.x, type);
+  std::vector<Mat<dim>> S(P.size());
+  for (std::size_t p = 0; p < P.size(); ++p) S[p] = P.C[p] + P.C[p].transpose();  // symmetric
+  stress_to_grid_forces(S, P, grid);
+  Vec<dim> total = Vec<dim>::Zero();
+  Eigen::Vector3d torque = Eigen::Vector3d::Zero();
+  double scale = 0.0;
+  for (int n = 0; n < grid.levels(); ++n)
+    for (std::size_t k = 0; k < grid.level(n).node_storage(); ++k) {
+      const Vec<dim>& f = grid.level(n).force[k];
+      if (grid.ghosts(n).of_node[k] >= 0) CHECK(f.norm() == 0.0);
+      total += f;
+      torque += cross<dim>(grid.node_position(n, static_cast<Index>(k)), f);
+      scale = std::max(scale, f.norm());
+    }
+  REQUIRE(scale > 0.0);
+  CHECK(total.norm() < 1e-12 * scale);
+  CHECK(torque.norm() < 1e-12 * scale);
+}
+
+// One level: the adaptive transfer is the uniform quadratic B-spline transfer.
+template <int dim>
+void check_uniform_limit() {
+  const CellTree<dim> tree(Vec<dim>::Zero(), IVec<dim>::Constant(8), 0.125, 1);
+  AdaptiveGrid<dim> grid(tree);
+  Particles<dim> P = test::random_cloud<dim>(300, Vec<dim>::Constant(0.2), Vec<dim>::Constant(0.8), 3);
+  Particles<dim> Q = P;
+  grid.prepare(P.x, std::vector<std::uint16_t>(P.size(), 0));
+  particles_to_grid(P, TransferScheme{}, grid);
+
+  SparseGrid<dim> uniform(Vec<dim>::Zero(), Vec<dim>::Constant(1.0), 0.125);
+  ParticleBuckets<dim> buckets;
+  sort_into_buckets(Q, QuadraticBSpline{}, uniform, buckets);
+  mpm::particles_to_grid(Q, buckets, QuadraticBSpline{}, TransferScheme{}, uniform);
+  momentum_to_velocity(uniform, TransferScheme{});
+  double worst = 0.0;
+  for (std::size_t k = 0; k < uniform.node_storage(); ++k) {
+    const Index j = grid.level(0).node_index(uniform.node_coord(k));
+    if (j < 0) {
+      CHECK(uniform.mass[k] == 0.0);
+      continue;
+    }
+    worst = std::max(worst, std::abs(grid.level(0).mass[j] - uniform.mass[k]));
+    worst = std::max(worst, (grid.level(0).velocity[j] - uniform.velocity[k]).norm());
+  }
+  CHECK(worst < 1e-13);
+  pull_velocities(grid, TransferScheme{});
+  grid_to_particles(P, TransferScheme{}, grid, 0.01);
+  mpm::grid_to_particles(Q, buckets, QuadraticBSpline{}, TransferScheme{}, uniform, 0.01);
+  for (std::size_t p = 0; p < P.size(); ++p) {
+    const std::size_t q = static_cast<std::size_t>(std::find(Q.mass.begin(), Q.mass.end(), P.mass[p]) - Q.mass.begin());
+    REQUIRE(q < Q.size());
+    CHECK((P.v[p] - Q.v[q]).norm() < 1e-13);
+    CHECK((P.C[p] - Q.C[q]).norm() < 1e-10);
+    CHECK((P.x[p] - Q.x[q]).norm() < 1e-15);
+  }
+}
+
+}  // namespace
+
+TEST_CASE("adaptive P2G/G2P conserve mass, linear and angular momentum across levels") {
+  for (unsigned seed : {1u, 2u, 3u}) check_conservation<2>(seed);
+  for (unsigned seed : {4u, 5u}) check_conservation<3>(seed);
+}
+
+TEST_CASE("adaptive APIC reproduces an affine velocity field through P2G -> G2P") {
+  for (unsigned seed : {1u, 2u}) check_affine<2>(seed);
+  check_affine<3>(4u);
+}
+
+TEST_CASE("adaptive internal forces sum to zero with zero torque for symmetric stresses") {
+  for (unsigned seed : {1u, 2u}) check_forces<2>(seed);
+  check_forces<3>(4u);
+}
+
+TEST_CASE("a one-level adaptive grid reproduces the uniform quadratic transfers") {
+  check_uniform_limit<2>();
+  check_uniform_limit<3>();
+}
+
+TEST_CASE("a 3D grid spanning 2^13 finest cells per axis holds memory for the particles' blocks only") {
+  // 4 levels over 1024^3 coarse cells: the finest level has 8192 = 2^13 cells per axis. A
+  // dense block table alone would hold (8192 / 4)^3 * 4 bytes = 34 GB on that level.
+  CellTree<3> tree(Vec<3>::Zero(), IVec<3>::Constant(1024), 1.0 / 1024, 4);
+  const Vec<3> lo = Vec<3>::Constant(0.5), hi = Vec<3>::Constant(0.5 + 8.0 / 1024);
+  tree.refine_where(
+      [&](const Vec<3>& a, const Vec<3>& b) {
+        return (a.array() < hi.array()).all() && (b.array() > lo.array()).all() ? 3 : 0;
+      },
+      lo, hi);
+  AdaptiveGrid<3> grid(tree);
+  Particles<3> P = test::random_cloud<3>(2000, lo, hi, 9);
+  grid.prepare(P.x, std::vector<std::uint16_t>(P.size(), 3));
+  std::size_t blocks = 0;
+  for (int n = 0; n < grid.levels(); ++n) blocks += static_cast<std::size_t>(grid.level(n).block_count());
+  const std::size_t node_bytes = SparseGrid<3>::nodes_per_block * (sizeof(double) + sizeof(Vec<3>) + sizeof(int));
+  MESSAGE("allocated blocks: ", blocks, ", memory held: ", grid.memory_bytes(), " bytes");
+  CHECK(blocks > 0);
+  CHECK(blocks <= 5832);  // the particles span 64 finest cells per axis: at most (64 / 4 + 2)^3 blocks
+  // Per allocated block: its nodes' channels and ghost tables, and a bounded share of tables.
+  CHECK(grid.memory_bytes() < blocks * 4 * node_bytes + (1u << 20));
+  particles_to_grid(P, TransferScheme{}, grid);
+  double m = 0.0;
+  for (int n = 0; n < grid.levels(); ++n)
+    for (double mi : grid.level(n).mass) m += mi;
+  CHECK(m == doctest::Approx(P.total_mass()).epsilon(1e-13));
+}
