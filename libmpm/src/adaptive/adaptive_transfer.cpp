@@ -53,7 +53,11 @@ void particles_to_grid(const Particles<dim>& P, const TransferScheme& scheme, Ad
     }
   });
   grid.push_momentum(affine);
-  for (int n = 0; n < grid.levels(); ++n) momentum_to_velocity(grid.level(n), scheme);
+}
+
+template <int dim>
+void momentum_to_velocity(AdaptiveGrid<dim>& grid, const TransferScheme& scheme) {
+  for (int n = 0; n < grid.levels(); ++n) mpm::momentum_to_velocity(grid.level(n), scheme);
 }
 
 template <int dim>
@@ -149,6 +153,7 @@ std::vector<RealWeight<dim>> real_weights(const AdaptiveGrid<dim>& grid, int n, 
 
 #define MPM_INSTANTIATE(dim)                                                                                    \
   template void particles_to_grid(const Particles<dim>&, const TransferScheme&, AdaptiveGrid<dim>&);            \
+  template void momentum_to_velocity(AdaptiveGrid<dim>&, const TransferScheme&);                                \
   template void stress_to_grid_forces(const std::vector<Mat<dim>>&, const Particles<dim>&, AdaptiveGrid<dim>&); \
   template void pull_velocities(AdaptiveGrid<dim>&, const TransferScheme&);                                     \
   template void grid_to_particles(Particles<dim>&, const TransferScheme&, const AdaptiveGrid<dim>&, double);    \

@@ -3,4 +3,6 @@ list(APPEND MPM_CORE_SOURCES
   src/adaptive/constrained_basis.cpp
   src/adaptive/adaptive_grid.cpp
   src/adaptive/adaptive_transfer.cpp
+  src/adaptive/particle_levels.cpp
+  src/adaptive/refinement.cpp
 )

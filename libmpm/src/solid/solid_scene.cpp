@@ -1,4 +1,7 @@
+#include <mpm/adaptive/particle_levels.h>
+#include <mpm/adaptive/refinement.h>
 #include <mpm/core/error.h>
+#include <mpm/core/stages/ghost_velocities.h>
 #include <mpm/core/stages/grid_boundary.h>
 #include <mpm/core/stages/grid_to_particles.h>
 #include <mpm/core/stages/particles_to_grid.h>
@@ -63,8 +66,23 @@ void seed_body(SolidScene<dim>& scene, const Config& body) {
   const Vec<dim> stretch = body.vector<dim>("stretch", Vec<dim>::Ones());
   if (!(stretch.array().abs() > 0.0).all()) body.fail("stretch", "every component must be nonzero");
   const std::size_t first = scene.state.particles.size();
-  add_particles(scene, x, body_particles.volume / std::fabs(stretch.prod()), m, velocity, body.path());
   Particles<dim>& P = scene.state.particles;
+  if (scene.state.adaptive) {
+    // Seeded on the finest lattice; regrouped into coarser particles where the leaves are coarse.
+    const int k =
+        static_cast<int>(std::lround(std::pow(std::pow(scene.settings.dx, dim) / body_particles.volume, 1.0 / dim)));
+    const auto levelled =
+        adaptive::match_particles_to_leaves(scene.state.adaptive->tree(), x, body_particles.volume, k);
+    add_particles(scene, levelled.x, 1.0, m, velocity, body.path());
+    std::vector<std::uint16_t>& level = P.template channel<std::uint16_t>(adaptive::kParticleLevel);
+    for (std::size_t i = 0; i < levelled.x.size(); ++i) {
+      P.volume0[first + i] = levelled.volume[i] / std::fabs(stretch.prod());
+      P.mass[first + i] = scene.materials.at(m).density * P.volume0[first + i];
+      level[first + i] = levelled.level[i];
+    }
+  } else {
+    add_particles(scene, x, body_particles.volume / std::fabs(stretch.prod()), m, velocity, body.path());
+  }
   Vec<dim> centroid = Vec<dim>::Zero();
   for (const Vec<dim>& p : x) centroid += p / static_cast<double>(x.size());
   Eigen::Matrix<double, 3, 1> omega = Eigen::Matrix<double, 3, 1>::Zero();
@@ -104,10 +122,19 @@ void seed_bodies(SolidScene<dim>& solid, const Config& scene) {
 template <int dim>
 SolidScene<dim> load_solid_scene(const Config& scene) {
   SceneSettings<dim> settings = parse_scene_settings<dim>(scene);
+  const auto refinement = adaptive::parse_refinement<dim>(scene, settings);
+  if (refinement && !std::holds_alternative<QuadraticBSpline>(settings.kernel))
+    scene.fail("grid", "an adaptive grid (key adaptive) transfers with GIMP weights: use kernel: quadratic");
+  // Walls act on the nodes within two cells of the faces: of coarse cells on an adaptive grid.
+  const double wall_dx = refinement ? refinement->coarsest_dx(settings.dx) : settings.dx;
   auto colliders = geometry::parse_colliders<dim>(scene, settings.domain_lo, settings.domain_hi,
-                                                  wall_layer(settings.kernel, settings.dx));
+                                                  wall_layer(settings.kernel, wall_dx));
   const std::string solver = scene.choice("solver", "explicit", solid_solver_names());
   SolidScene<dim> s = make_solid_scene(std::move(settings), parse_materials<dim>(scene), std::move(colliders), solver);
+  if (refinement) {
+    s.state.adaptive.emplace(adaptive::build_tree(*refinement, s.settings, s.colliders));
+    adaptive::add_level_channel(s.state.particles, s.state.adaptive->tree());
+  }
   seed_bodies(s, scene);
   return s;
 }
@@ -121,6 +148,7 @@ Pipeline<MpmState<dim>> make_solid_pipeline(const SolidScene<dim>& scene) {
   p.add(std::make_unique<stages::ParticlesToGrid<dim>>());
   for (auto& stage : scene.solver->grid_update()) p.add(std::move(stage));
   p.add(std::make_unique<stages::GridBoundary<dim>>(scene.colliders));
+  if (scene.state.adaptive) p.add(std::make_unique<stages::GhostVelocities<dim>>());
   for (auto& stage : scene.solver->particle_update()) p.add(std::move(stage));
   p.add(std::make_unique<stages::GridToParticles<dim>>());
   return p;

@@ -17,10 +17,14 @@
 
 namespace mpm::adaptive {
 
-//! Mass and momentum of the real nodes (ghosts pushed and cleared), then velocity = momentum /
-//! mass on every level (velocity_old kept for FLIP).
+//! Mass and momentum (in `velocity`, as the uniform P2G) of the real nodes; ghosts pushed and
+//! cleared.
 template <int dim>
 void particles_to_grid(const Particles<dim>& particles, const TransferScheme& scheme, AdaptiveGrid<dim>& grid);
+
+//! velocity = momentum / mass on every level (velocity_old kept for FLIP).
+template <int dim>
+void momentum_to_velocity(AdaptiveGrid<dim>& grid, const TransferScheme& scheme);
 
 //! force_i = - sum_p S_p grad w_ip on the real nodes (ghosts pushed), S_p = V_p^0 tau_p [N m].
 template <int dim>

@@ -19,7 +19,7 @@
 namespace mpm::adaptive {
 
 //! The most levels a tree may have (dx_0 / dx_finest = 2^(max_levels - 1)).
-inline constexpr int max_levels = 8;
+inline constexpr int max_levels = 6;
 
 template <int dim>
 struct CellId {

@@ -206,10 +206,14 @@ void Runner<dim, State>::run(State& state, Pipeline<State>& pipeline) {
   memory_.clear();
   for (const PhaseRef<dim>& phase : phases(state)) {
     particle_count_ += phase.particles->size();
-    grid_nodes_ += phase.grid->node_storage();
     const std::string prefix = phase.name.empty() ? "" : phase.name + ".";
     for (const auto& [name, bytes] : phase.particles->memory_per_field()) memory_.emplace_back(prefix + name, bytes);
-    for (const auto& [name, bytes] : phase.grid->memory_per_field()) memory_.emplace_back(prefix + name, bytes);
+    for (std::size_t n = 0; n < phase.grids.size(); ++n) {
+      grid_nodes_ += phase.grids[n]->node_storage();
+      const std::string level = phase.grids.size() > 1 ? "level" + std::to_string(n) + "." : "";
+      for (const auto& [name, bytes] : phase.grids[n]->memory_per_field())
+        memory_.emplace_back(prefix + level + name, bytes);
+    }
   }
   std::cerr << "\n" << app_ << ": stages run, in order, with their total time\n" << stage_table_;
   std::cerr << "memory held per field (bytes)\n";

@@ -1,5 +1,7 @@
 #pragma once
-//! The state a single-phase MPM pipeline advances: one particle set on one sparse grid.
+//! The state a single-phase MPM pipeline advances: one particle set on one sparse grid, or on
+//! the levels of an adaptive grid (mpm/adaptive/) when the scene has the key `adaptive`.
+#include <mpm/adaptive/adaptive_grid.h>
 #include <mpm/core/kernels.h>
 #include <mpm/core/particle_buckets.h>
 #include <mpm/core/particles.h>
@@ -7,6 +9,7 @@
 #include <mpm/core/sparse_grid.h>
 #include <mpm/core/transfer.h>
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -15,7 +18,9 @@ namespace mpm {
 template <int dim>
 struct MpmState {
   Particles<dim> particles;
-  SparseGrid<dim> grid;
+  SparseGrid<dim> grid;  //!< the uniform grid (unused on an adaptive grid)
+  //! The adaptive grid, in place of `grid`; absent on a uniform scene, which builds none of it.
+  std::optional<adaptive::AdaptiveGrid<dim>> adaptive;
   ParticleBuckets<dim> buckets;
   Kernel kernel = QuadraticBSpline{};
   TransferScheme transfer;
@@ -38,6 +43,22 @@ MpmState<dim> initial_state(const SceneSettings<dim>& settings) {
   return s;
 }
 
+//! The grids that the grid stages update: the uniform grid, or every level of the adaptive one
+//! (State: MpmState<dim> or const MpmState<dim>).
+template <class State>
+auto grid_levels(State& s) {
+  std::vector<decltype(&s.grid)> levels;
+  if (!s.adaptive) levels.push_back(&s.grid);
+  for (int n = 0; s.adaptive && n < s.adaptive->levels(); ++n) levels.push_back(&s.adaptive->level(n));
+  return levels;
+}
+
+//! The finest grid spacing of the state [m]: the CFL limit of the time step.
+template <int dim>
+double finest_dx(const MpmState<dim>& s) {
+  return s.adaptive ? s.adaptive->tree().dx(s.adaptive->tree().finest()) : s.grid.dx();
+}
+
 //! A particle phase of a state, seen by code that treats every phase alike (the Runner's
 //! output, diagnostics and checkpoints). A single-phase state has one phase, unnamed (""); a
 //! state of several (libcoupling's CoupledState) names each one and supplies its own
@@ -46,7 +67,7 @@ template <int dim>
 struct PhaseRef {
   std::string name;
   Particles<dim>* particles = nullptr;
-  const SparseGrid<dim>* grid = nullptr;
+  std::vector<const SparseGrid<dim>*> grids;  //!< its grid, or the levels of its adaptive grid
   //! Drawn coloured by output.color_by in previews; false: drawn in a plain tint beneath the
   //! coloured phases (the fluid around the grains).
   bool coloured = true;
@@ -54,7 +75,7 @@ struct PhaseRef {
 
 template <int dim>
 std::vector<PhaseRef<dim>> phases(MpmState<dim>& s) {
-  return {{"", &s.particles, &s.grid, true}};
+  return {{"", &s.particles, grid_levels(std::as_const(s)), true}};
 }
 
 }  // namespace mpm

@@ -11,12 +11,14 @@ namespace mpm::stages {
 
 template <int dim>
 void GridBoundary<dim>::run(MpmState<dim>& s) {
-  SparseGrid<dim>& g = s.grid;
   const double t = s.time + s.dt;
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, g.node_storage(), 1024), [&](const auto& r) {
-    for (std::size_t k = r.begin(); k != r.end(); ++k)
-      if (g.mass[k] > 0.0) colliders_.project(g.node_position(k), t, g.velocity[k]);
-  });
+  for (SparseGrid<dim>* level : grid_levels(s)) {
+    SparseGrid<dim>& g = *level;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, g.node_storage(), 1024), [&](const auto& r) {
+      for (std::size_t k = r.begin(); k != r.end(); ++k)
+        if (g.mass[k] > 0.0) colliders_.project(g.node_position(k), t, g.velocity[k]);
+    });
+  }
 }
 
 template class GridBoundary<2>;

@@ -3,6 +3,7 @@
 //   FLIP:   v_p = a (v_p + sum_i w_ip (v_i - v_i^old)) + (1 - a) v_p^PIC
 //   x_p += dt v_p^PIC
 // Precondition: grid velocities after boundary conditions.
+#include <mpm/adaptive/adaptive_transfer.h>
 #include <mpm/core/finite_guard.h>
 #include <mpm/core/stages/grid_to_particles.h>
 
@@ -10,7 +11,10 @@ namespace mpm::stages {
 
 template <int dim>
 void GridToParticles<dim>::run(MpmState<dim>& s) {
-  grid_to_particles(s.particles, s.buckets, s.kernel, s.transfer, s.grid, s.dt);
+  if (s.adaptive)
+    adaptive::grid_to_particles(s.particles, s.transfer, *s.adaptive, s.dt);
+  else
+    grid_to_particles(s.particles, s.buckets, s.kernel, s.transfer, s.grid, s.dt);
   check_finite(s.particles.v, name(), "particle", "velocity");
 }
 

@@ -11,7 +11,11 @@ namespace mpm::stages {
 
 template <int dim>
 void GridVelocityUpdate<dim>::run(MpmState<dim>& s) {
-  SparseGrid<dim>& g = s.grid;
+  for (SparseGrid<dim>* level : grid_levels(s)) update(*level, s);
+}
+
+template <int dim>
+void GridVelocityUpdate<dim>::update(SparseGrid<dim>& g, const MpmState<dim>& s) const {
   momentum_to_velocity(g, s.transfer);
   const double dt = s.dt;
   const Vec<dim> dv_gravity = dt * s.gravity;

@@ -21,7 +21,7 @@ double TimeStepControl<dim>::stable_dt(const MpmState<dim>& s) const {
         return m;
       },
       [](double a, double b) { return std::max(a, b); });
-  const double dx = s.grid.dx();
+  const double dx = finest_dx(s);
   double dt = settings_.max_dt;
   if (max_speed2 > 0.0) dt = std::min(dt, settings_.cfl * dx / std::sqrt(max_speed2));
   if (settings_.wave_speed > 0.0) dt = std::min(dt, settings_.wave_cfl * dx / settings_.wave_speed);

@@ -3,6 +3,7 @@
 // with tau = P F^T the Kirchhoff stress of the elastic part (multiplicative plasticity keeps
 // all stress in F^E). The constitutive model is chosen per material by std::visit outside
 // the particle loop. Precondition: particles sorted into buckets (stage 'sort').
+#include <mpm/adaptive/adaptive_transfer.h>
 #include <mpm/core/finite_guard.h>
 #include <mpm/core/transfer.h>
 #include <mpm/solid/solid_channels.h>
@@ -49,7 +50,10 @@ void StressForces<dim>::run(MpmState<dim>& s) {
   }
   check_finite(weighted_stress_, name(), "particle", "Kirchhoff stress");
 
-  stress_to_grid_forces(weighted_stress_, P, s.buckets, s.kernel, s.grid);
+  if (s.adaptive)
+    adaptive::stress_to_grid_forces(weighted_stress_, P, *s.adaptive);
+  else
+    stress_to_grid_forces(weighted_stress_, P, s.buckets, s.kernel, s.grid);
 }
 
 template class StressForces<2>;

@@ -81,6 +81,7 @@ void check_conservation(unsigned seed) {
   for (std::size_t p = 0; p < P.size(); ++p) transitions += grid.transfer_level(p) != type[p];
   CHECK(transitions > 0);
   particles_to_grid(P, TransferScheme{}, grid);
+  adaptive::momentum_to_velocity(grid, TransferScheme{});
 
   // Mass and linear momentum on the real nodes; ghosts hold nothing.
   double m_grid = 0.0;
@@ -134,6 +135,7 @@ void check_affine(unsigned seed) {
   }
   grid.prepare(P.x, type);
   particles_to_grid(P, TransferScheme{}, grid);
+  adaptive::momentum_to_velocity(grid, TransferScheme{});
   double worst_grid = 0.0;
   for_each_massive_node(grid, [&](int n, std::size_t k) {
     const Vec<dim> x = grid.node_position(n, static_cast<Index>(k));
@@ -187,6 +189,7 @@ void check_uniform_limit() {
   Particles<dim> Q = P;
   grid.prepare(P.x, std::vector<std::uint16_t>(P.size(), 0));
   particles_to_grid(P, TransferScheme{}, grid);
+  adaptive::momentum_to_velocity(grid, TransferScheme{});
 
   SparseGrid<dim> uniform(Vec<dim>::Zero(), Vec<dim>::Constant(1.0), 0.125);
   ParticleBuckets<dim> buckets;
@@ -260,6 +263,7 @@ TEST_CASE("a 3D grid spanning 2^13 finest cells per axis holds memory for the pa
   // Per allocated block: its nodes' channels and ghost tables, and a bounded share of tables.
   CHECK(grid.memory_bytes() < blocks * 4 * node_bytes + (1u << 20));
   particles_to_grid(P, TransferScheme{}, grid);
+  adaptive::momentum_to_velocity(grid, TransferScheme{});
   double m = 0.0;
   for (int n = 0; n < grid.levels(); ++n)
     for (double mi : grid.level(n).mass) m += mi;

@@ -4,7 +4,8 @@
 
 namespace mpm::stages {
 
-//! Explicit grid update: v_i = (m v)_i / m_i + dt (f_i / m_i + g).
+//! Explicit grid update: v_i = (m v)_i / m_i + dt (f_i / m_i + g), on every level of an
+//! adaptive grid (its ghosts hold no mass).
 template <int dim>
 class GridVelocityUpdate final : public Stage<MpmState<dim>> {
 public:
@@ -19,6 +20,7 @@ public:
   void run(MpmState<dim>& s) override;
 
 private:
+  void update(SparseGrid<dim>& grid, const MpmState<dim>& s) const;
   bool with_forces_;
 };
 

@@ -1,0 +1,35 @@
+#pragma once
+//! Particle types matched to grid levels (Gao et al. 2017, sec. 7.1): a particle of type q
+//! stands for a sub-cell of a level-q cell and carries a GIMP box of side dx_q, so that on its
+//! own level it transfers with the quadratic B-spline. The type is the particle channel
+//! "level", written in every frame (ParaView colours particles by it) and in checkpoints.
+#include <mpm/adaptive/cell_tree.h>
+#include <mpm/core/particles.h>
+
+#include <cstdint>
+#include <vector>
+
+namespace mpm::adaptive {
+
+inline constexpr const char* kParticleLevel = "level";
+
+//! Declares the "level" channel (initial value: the finest level of `tree`) and returns it.
+template <int dim>
+std::vector<std::uint16_t>& add_level_channel(Particles<dim>& particles, const CellTree<dim>& tree);
+
+//! Particles seeded on the finest level's lattice, regrouped to match the leaves: wherever
+//! the full set of fine particles of a level-q sub-cell (spacing dx_q / k, k per axis per
+//! cell) is present and the leaf there is of level <= q, those particles become one particle
+//! of type q at their mean position with their summed volume; the others stay fine. Mass and
+//! volume are conserved exactly, and the body's surface keeps its fine particles.
+template <int dim>
+struct LevelledParticles {
+  std::vector<Vec<dim>> x;
+  std::vector<double> volume;
+  std::vector<std::uint16_t> level;
+};
+template <int dim>
+LevelledParticles<dim> match_particles_to_leaves(const CellTree<dim>& tree, const std::vector<Vec<dim>>& fine,
+                                                 double fine_volume, int points_per_axis);
+
+}  // namespace mpm::adaptive

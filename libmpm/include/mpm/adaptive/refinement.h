@@ -1,0 +1,49 @@
+#pragma once
+//! Static refinement of an adaptive scene (Gao et al. 2017, sec. 7.1), read from the scene's
+//! `adaptive` key:
+//!
+//!   adaptive:
+//!     levels: 3                  # [1, 6]; grid.dx is the finest spacing, dx_0 = dx 2^(levels-1)
+//!     refine:                    # regions refined to `level` (default: the finest)
+//!       - {box: {lo: [0.2, 0.1], hi: [0.5, 0.3]}, level: 2}
+//!       - {near_colliders: 0.02}   # cells within 0.02 m of a collider surface
+//!
+//! Without the key a scene is uniform and builds nothing of the adaptive grid.
+#include <mpm/adaptive/cell_tree.h>
+#include <mpm/core/config.h>
+#include <mpm/core/scene_settings.h>
+#include <mpm/geometry/collider.h>
+
+#include <optional>
+#include <vector>
+
+namespace mpm::adaptive {
+
+template <int dim>
+struct RefinementRegion {
+  enum class Kind { box, near_colliders } kind = Kind::box;
+  Vec<dim> lo = Vec<dim>::Zero(), hi = Vec<dim>::Zero();  //!< box [m]
+  double distance = 0.0;                                  //!< near_colliders: band width [m]
+  int level = 0;                                          //!< target level
+};
+
+template <int dim>
+struct RefinementSettings {
+  int levels = 1;
+  std::vector<RefinementRegion<dim>> regions;
+  //! Coarsest spacing dx_0 = dx 2^(levels-1) [m] for the finest spacing dx.
+  double coarsest_dx(double finest_dx) const { return finest_dx * static_cast<double>(1 << (levels - 1)); }
+};
+
+//! The `adaptive` key of `scene`, or nothing when absent. Fails through Config (file, line,
+//! key, value, accepted range) on levels out of range, boxes outside the domain or inverted,
+//! region levels out of range, a periodic domain.
+template <int dim>
+std::optional<RefinementSettings<dim>> parse_refinement(const Config& scene, const SceneSettings<dim>& settings);
+
+//! The tree over the scene's domain (rounded up to whole coarse cells), refined in every region.
+template <int dim>
+CellTree<dim> build_tree(const RefinementSettings<dim>& refinement, const SceneSettings<dim>& settings,
+                         const geometry::ColliderSet<dim>& colliders);
+
+}  // namespace mpm::adaptive

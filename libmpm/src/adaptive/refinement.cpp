@@ -1,0 +1,78 @@
+#include <mpm/adaptive/refinement.h>
+#include "../geometry/number_text.h"
+
+#include <cmath>
+
+namespace mpm::adaptive {
+
+template <int dim>
+std::optional<RefinementSettings<dim>> parse_refinement(const Config& scene, const SceneSettings<dim>& settings) {
+  const std::optional<Config> cfg = scene.optional_child("adaptive");
+  if (!cfg) return std::nullopt;
+  for (int a = 0; a < dim; ++a)
+    if (settings.periodic[a])
+      scene.fail("periodic", "an adaptive grid (key adaptive) needs a domain without periodic axes");
+  RefinementSettings<dim> r;
+  r.levels = cfg->integer("levels", 2, 1, max_levels);
+  for (const Config& entry : cfg->list("refine")) {
+    RefinementRegion<dim> region;
+    region.level = entry.integer("level", r.levels - 1, 0, r.levels - 1);
+    if (const std::optional<Config> box = entry.optional_child("box")) {
+      region.kind = RefinementRegion<dim>::Kind::box;
+      region.lo = box->vector<dim>("lo");
+      region.hi = box->vector<dim>("hi");
+      for (int a = 0; a < dim; ++a) {
+        if (!(region.lo[a] < region.hi[a])) box->fail("hi", "every component must exceed the one of lo");
+        if (region.lo[a] < settings.domain_lo[a] || region.lo[a] >= settings.domain_hi[a])
+          box->fail("lo", "the box must start inside the domain [" +
+                              geometry::detail::number_text(settings.domain_lo[a]) + ", " +
+                              geometry::detail::number_text(settings.domain_hi[a]) + ") on axis " + std::to_string(a));
+        if (region.hi[a] > settings.domain_hi[a])
+          box->fail("hi", "the box must end inside the domain (<= " +
+                              geometry::detail::number_text(settings.domain_hi[a]) + ") on axis " + std::to_string(a));
+      }
+    } else if (entry.has("near_colliders")) {
+      region.kind = RefinementRegion<dim>::Kind::near_colliders;
+      region.distance = entry.number("near_colliders", Range::positive());
+    } else {
+      entry.fail("box", "a refinement region is a box (box: {lo, hi}) or a band near_colliders: <distance>");
+    }
+    r.regions.push_back(region);
+  }
+  return r;
+}
+
+template <int dim>
+CellTree<dim> build_tree(const RefinementSettings<dim>& r, const SceneSettings<dim>& settings,
+                         const geometry::ColliderSet<dim>& colliders) {
+  const double dx0 = r.coarsest_dx(settings.dx);
+  IVec<dim> base;
+  for (int a = 0; a < dim; ++a)
+    base[a] = static_cast<int>(std::ceil((settings.domain_hi[a] - settings.domain_lo[a]) / dx0 - 1e-9));
+  CellTree<dim> tree(settings.domain_lo, base, dx0, r.levels);
+  tree.refine_where([&](const Vec<dim>& lo, const Vec<dim>& hi) {
+    int target = 0;
+    for (const RefinementRegion<dim>& region : r.regions) {
+      bool hit = false;
+      if (region.kind == RefinementRegion<dim>::Kind::box) {
+        hit = (lo.array() < region.hi.array()).all() && (hi.array() > region.lo.array()).all();
+      } else {
+        // The cell meets the band |phi| <= distance if its centre is within distance plus
+        // half its diagonal (phi is a distance).
+        const Vec<dim> centre = 0.5 * (lo + hi);
+        const double reach = region.distance + 0.5 * (hi - lo).norm();
+        for (const auto& c : colliders.colliders()) hit = hit || std::abs(c.phi(centre, 0.0)) <= reach;
+      }
+      if (hit) target = std::max(target, region.level);
+    }
+    return target;
+  });
+  return tree;
+}
+
+template std::optional<RefinementSettings<2>> parse_refinement(const Config&, const SceneSettings<2>&);
+template std::optional<RefinementSettings<3>> parse_refinement(const Config&, const SceneSettings<3>&);
+template CellTree<2> build_tree(const RefinementSettings<2>&, const SceneSettings<2>&, const geometry::ColliderSet<2>&);
+template CellTree<3> build_tree(const RefinementSettings<3>&, const SceneSettings<3>&, const geometry::ColliderSet<3>&);
+
+}  // namespace mpm::adaptive
