@@ -63,11 +63,11 @@ void AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
     const double h = half / g.dx();
     half_cells_[p] = h;
     IVec<dim> first, last;
+    GimpAxis axis[dim];
+    axis_weights(n, h, x[p], axis);
     for (int a = 0; a < dim; ++a) {
-      GimpAxis axis;
-      axis.compute((x[p][a] - g.origin()[a]) / g.dx(), h);
-      first[a] = axis.base;
-      last[a] = axis.base + axis.count - 1;
+      first[a] = axis[a].base;
+      last[a] = axis[a].base + axis[a].count - 1;
       if (first[a] < 0 || last[a] >= g.node_counts()[a]) {
         std::ostringstream s;
         s << "stage '" << stage << "': the stencil of particle " << p << " at (" << x[p].transpose()

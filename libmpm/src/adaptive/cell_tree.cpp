@@ -107,6 +107,15 @@ void CellTree<dim>::for_each_base_cell(const Vec<dim>& lo, const Vec<dim>& hi,
 }
 
 template <int dim>
+void CellTree<dim>::refine_to(const Vec<dim>& x, int level) {
+  CellId<dim> leaf = leaf_at(x);
+  while (leaf.level >= 0 && leaf.level < std::min(level, finest())) {
+    refine(leaf.level, leaf.cell);
+    leaf = leaf_at(x);
+  }
+}
+
+template <int dim>
 CellId<dim> CellTree<dim>::leaf_of(const IVec<dim>& f) const {
   for (int a = 0; a < dim; ++a)
     if (f[a] < 0 || f[a] >= base_cells_[a] << finest()) return {};

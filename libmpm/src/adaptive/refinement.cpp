@@ -39,6 +39,8 @@ std::optional<RefinementSettings<dim>> parse_refinement(const Config& scene, con
     }
     r.regions.push_back(region);
   }
+  r.surface_band = cfg->number("surface_band", 0.0, Range::non_negative());
+  r.follow_particles = cfg->flag("follow_particles", true);
   return r;
 }
 
@@ -70,6 +72,14 @@ CellTree<dim> build_tree(const RefinementSettings<dim>& r, const SceneSettings<d
   return tree;
 }
 
+template <int dim>
+void refine_around_particles(CellTree<dim>& tree, const std::vector<Vec<dim>>& x,
+                             const std::vector<std::uint16_t>& type) {
+  for (std::size_t p = 0; p < x.size(); ++p) tree.refine_to(x[p], type[p]);
+}
+
+template void refine_around_particles(CellTree<2>&, const std::vector<Vec<2>>&, const std::vector<std::uint16_t>&);
+template void refine_around_particles(CellTree<3>&, const std::vector<Vec<3>>&, const std::vector<std::uint16_t>&);
 template std::optional<RefinementSettings<2>> parse_refinement(const Config&, const SceneSettings<2>&);
 template std::optional<RefinementSettings<3>> parse_refinement(const Config&, const SceneSettings<3>&);
 template CellTree<2> build_tree(const RefinementSettings<2>&, const SceneSettings<2>&, const geometry::ColliderSet<2>&);

@@ -5,6 +5,7 @@
 #include <mpm/core/stages/grid_boundary.h>
 #include <mpm/core/stages/grid_to_particles.h>
 #include <mpm/core/stages/particles_to_grid.h>
+#include <mpm/core/stages/refine_grid.h>
 #include <mpm/core/stages/sort_particles.h>
 #include <mpm/core/stages/time_step_control.h>
 #include <mpm/geometry/body_config.h>
@@ -71,8 +72,9 @@ void seed_body(SolidScene<dim>& scene, const Config& body) {
     // Seeded on the finest lattice; regrouped into coarser particles where the leaves are coarse.
     const int k =
         static_cast<int>(std::lround(std::pow(std::pow(scene.settings.dx, dim) / body_particles.volume, 1.0 / dim)));
+    const int surface_steps = static_cast<int>(std::ceil(scene.refinement->surface_band * k / scene.settings.dx));
     const auto levelled =
-        adaptive::match_particles_to_leaves(scene.state.adaptive->tree(), x, body_particles.volume, k);
+        adaptive::match_particles_to_leaves(scene.state.adaptive->tree(), x, body_particles.volume, k, surface_steps);
     add_particles(scene, levelled.x, 1.0, m, velocity, body.path());
     std::vector<std::uint16_t>& level = P.template channel<std::uint16_t>(adaptive::kParticleLevel);
     for (std::size_t i = 0; i < levelled.x.size(); ++i) {
@@ -111,7 +113,7 @@ SolidScene<dim> make_solid_scene(SceneSettings<dim> settings, std::vector<Materi
   // stages read them, and a restart loads them into this particle set.
   std::shared_ptr<const SolidSolver<dim>> s = make_solid_solver<dim>(solver, materials);
   s->add_channels(state.particles);
-  return {std::move(settings), std::move(materials), std::move(colliders), std::move(s), std::move(state)};
+  return {std::move(settings), std::move(materials), std::move(colliders), std::move(s), std::move(state), {}};
 }
 
 template <int dim>
@@ -132,6 +134,7 @@ SolidScene<dim> load_solid_scene(const Config& scene) {
   const std::string solver = scene.choice("solver", "explicit", solid_solver_names());
   SolidScene<dim> s = make_solid_scene(std::move(settings), parse_materials<dim>(scene), std::move(colliders), solver);
   if (refinement) {
+    s.refinement = refinement;
     s.state.adaptive.emplace(adaptive::build_tree(*refinement, s.settings, s.colliders));
     adaptive::add_level_channel(s.state.particles, s.state.adaptive->tree());
   }
@@ -144,6 +147,9 @@ Pipeline<MpmState<dim>> make_solid_pipeline(const SolidScene<dim>& scene) {
   Pipeline<MpmState<dim>> p(particle_fields(scene.state.particles));
   p.add(std::make_unique<stages::TimeStepControl<dim>>(
       stages::time_step_settings(scene.settings, scene.solver->wave_speed())));
+  if (scene.refinement && scene.refinement->follow_particles)
+    p.add(std::make_unique<stages::RefineGrid<dim>>(
+        adaptive::build_tree(*scene.refinement, scene.settings, scene.colliders)));
   p.add(std::make_unique<stages::SortParticles<dim>>());
   p.add(std::make_unique<stages::ParticlesToGrid<dim>>());
   for (auto& stage : scene.solver->grid_update()) p.add(std::move(stage));

@@ -78,6 +78,12 @@ public:
   //! grad_w [1/m], x_k the node's position [m].
   template <class Fn>
   void for_each_weight(int n, double h, const Vec<dim>& x, Fn&& fn) const;
+  //! The 1D weights of every axis for that particle: prepare() and for_each_weight() share this
+  //! one expression, so they see the same stencil.
+  void axis_weights(int n, double h, const Vec<dim>& x, GimpAxis* axis) const {
+    const SparseGrid<dim>& g = levels_[n];
+    for (int a = 0; a < dim; ++a) axis[a].compute((x[a] - g.origin()[a]) / g.dx(), h);
+  }
 
   //! Ghosts of level n: storage index, first link (CSR), and the second moment of their
   //! links R_k = sum_i E_ik (x_i - x_k)(x_i - x_k)^T [m^2] that APIC's D_p needs.
@@ -124,7 +130,7 @@ void AdaptiveGrid<dim>::for_each_weight(int n, double h, const Vec<dim>& x, Fn&&
   const SparseGrid<dim>& g = levels_[n];
   const double inv_dx = 1.0 / g.dx();
   GimpAxis axis[dim];
-  for (int a = 0; a < dim; ++a) axis[a].compute((x[a] - g.origin()[a]) * inv_dx, h);
+  axis_weights(n, h, x, axis);
   int offset[dim] = {};
   while (true) {
     double w = 1.0;

@@ -52,6 +52,9 @@ public:
 
   //! Refines a leaf into its 2^dim children (leaves). Throws InputError at the finest level.
   void refine(int level, const IVec<dim>& cell);
+  //! Refines the cells that contain x [m] until the leaf there is of level >= `level` (clamped
+  //! to the finest); a position outside the domain is left alone.
+  void refine_to(const Vec<dim>& x, int level);
   //! Refines, top down, every leaf whose box [lo, hi] gets target_level(lo, hi) > its level
   //! (clamped to the finest level): static refinement near colliders or in user boxes.
   void refine_where(const std::function<int(const Vec<dim>& lo, const Vec<dim>& hi)>& target_level);

@@ -20,8 +20,10 @@ std::vector<std::uint16_t>& add_level_channel(Particles<dim>& particles, const C
 //! Particles seeded on the finest level's lattice, regrouped to match the leaves: wherever
 //! the full set of fine particles of a level-q sub-cell (spacing dx_q / k, k per axis per
 //! cell) is present and the leaf there is of level <= q, those particles become one particle
-//! of type q at their mean position with their summed volume; the others stay fine. Mass and
-//! volume are conserved exactly, and the body's surface keeps its fine particles.
+//! of type q at their mean position with their summed volume; the others stay fine, and so do
+//! the particles within `surface_steps` lattice steps (Manhattan distance) of an empty lattice
+//! site: the body's surface band (Gao et al. 2017, sec. 7.1: fine particles near the free
+//! surface, coarse ones inside). Mass and volume are conserved exactly.
 template <int dim>
 struct LevelledParticles {
   std::vector<Vec<dim>> x;
@@ -30,6 +32,11 @@ struct LevelledParticles {
 };
 template <int dim>
 LevelledParticles<dim> match_particles_to_leaves(const CellTree<dim>& tree, const std::vector<Vec<dim>>& fine,
-                                                 double fine_volume, int points_per_axis);
+                                                 double fine_volume, int points_per_axis, int surface_steps = 0);
+
+//! Manhattan distance, in lattice steps of spacing h [m], from each of the particles (on the
+//! lattice x = (i + 1/2) h) to the nearest lattice site that holds none: 1 on the surface.
+template <int dim>
+std::vector<int> lattice_surface_distance(const std::vector<Vec<dim>>& x, double h);
 
 }  // namespace mpm::adaptive

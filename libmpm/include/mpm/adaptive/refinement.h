@@ -7,6 +7,10 @@
 //!     refine:                    # regions refined to `level` (default: the finest)
 //!       - {box: {lo: [0.2, 0.1], hi: [0.5, 0.3]}, level: 2}
 //!       - {near_colliders: 0.02}   # cells within 0.02 m of a collider surface
+//!     surface_band: 0.02         # bodies keep their finest particles within 0.02 m of their
+//!                                #   surface; the others are regrouped to the leaves' levels
+//!     follow_particles: true     # every step, refine the cells that hold a particle of a finer
+//!                                #   type (the grid follows moving fine particles, sec. 7.1)
 //!
 //! Without the key a scene is uniform and builds nothing of the adaptive grid.
 #include <mpm/adaptive/cell_tree.h>
@@ -31,6 +35,8 @@ template <int dim>
 struct RefinementSettings {
   int levels = 1;
   std::vector<RefinementRegion<dim>> regions;
+  double surface_band = 0.0;  //!< [m]
+  bool follow_particles = true;
   //! Coarsest spacing dx_0 = dx 2^(levels-1) [m] for the finest spacing dx.
   double coarsest_dx(double finest_dx) const { return finest_dx * static_cast<double>(1 << (levels - 1)); }
 };
@@ -42,8 +48,15 @@ template <int dim>
 std::optional<RefinementSettings<dim>> parse_refinement(const Config& scene, const SceneSettings<dim>& settings);
 
 //! The tree over the scene's domain (rounded up to whole coarse cells), refined in every region.
+//! The type-driven refinement comes on top of it, every step (stage 'refine').
 template <int dim>
 CellTree<dim> build_tree(const RefinementSettings<dim>& refinement, const SceneSettings<dim>& settings,
                          const geometry::ColliderSet<dim>& colliders);
+
+//! Refines `tree` so that every particle (positions x, types `type`) lies in a leaf of at
+//! least its type's level.
+template <int dim>
+void refine_around_particles(CellTree<dim>& tree, const std::vector<Vec<dim>>& x,
+                             const std::vector<std::uint16_t>& type);
 
 }  // namespace mpm::adaptive

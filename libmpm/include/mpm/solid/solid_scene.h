@@ -5,6 +5,10 @@
 //!   -> g2p (and advection)
 //! which for the default explicit solver reads time_step -> sort -> p2g -> stress_forces ->
 //! grid_update -> boundary -> deformation -> plasticity (only when a material is plastic) -> g2p.
+//! A scene with the key `adaptive` runs on an adaptive grid (mpm/adaptive/): stage 'refine'
+//! before the sort (when the grid follows the particles) and 'ghost_velocities' after the
+//! boundary.
+#include <mpm/adaptive/refinement.h>
 #include <mpm/core/config.h>
 #include <mpm/core/pipeline.h>
 #include <mpm/core/scene_settings.h>
@@ -28,6 +32,8 @@ struct SolidScene {
   geometry::ColliderSet<dim> colliders;
   std::shared_ptr<const SolidSolver<dim>> solver;
   MpmState<dim> state;  //!< particles seeded (with the solver's channels), grid sized to the domain
+  //! The `adaptive` key: present when state.adaptive is (refinement.h).
+  std::optional<adaptive::RefinementSettings<dim>> refinement;
 };
 
 //! The "materials" list (at least one entry; names unique).

@@ -356,7 +356,7 @@ TEST_CASE("a pipeline whose stage reads particle.F is assembled only when the pa
   // Built by hand, without make_solid_scene (which declares the solid channels).
   const std::vector<Material<2>> materials = {parse_material<2>(material)};
   solid::SolidScene<2> scene{
-      settings, materials, {}, solid::make_solid_solver<2>("explicit", materials), initial_state(settings)};
+      settings, materials, {}, solid::make_solid_solver<2>("explicit", materials), initial_state(settings), {}};
   CHECK_FALSE(scene.state.particles.has_channel("F"));
   CHECK_THROWS_WITH_AS(solid::make_solid_pipeline(scene),
                        doctest::Contains("reads field 'particle.F' that no earlier stage writes"), InputError);
