@@ -6,6 +6,8 @@
 #include <cmath>
 #include <sstream>
 
+#include <tbb/parallel_for.h>
+
 namespace mpm::adaptive {
 
 namespace {
@@ -19,6 +21,18 @@ double hat_integral(double s) {  // H(s) = int_{-inf}^{s} N1
 }  // namespace
 
 void GimpAxis::compute(double xi, double h) {
+  if (h == 0.5) {  // the quadratic B-spline, the common case: a particle on its own level
+    base = static_cast<int>(std::floor(xi - 0.5));
+    count = 3;
+    const double f = xi - base, a = 1.5 - f, b = f - 1.0, c = f - 0.5;
+    w[0] = 0.5 * a * a;
+    w[1] = 0.75 - b * b;
+    w[2] = 0.5 * c * c;
+    dw[0] = -a;
+    dw[1] = -2.0 * b;
+    dw[2] = c;
+    return;
+  }
   base = static_cast<int>(std::floor(xi - h - 1.0)) + 1;             // first node with |xi - j| < 1 + h
   count = static_cast<int>(std::ceil(xi + h + 1.0)) - 1 - base + 1;  // through the last one
   const double inv = 0.5 / h;
@@ -46,19 +60,25 @@ void AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
   half_cells_.assign(x.size(), 0.5);
   std::vector<std::vector<BlockKey>> stencil_blocks(L);
 
-  // Transfer level and stencil blocks of every particle.
+  // Transfer level of every particle (in parallel: the tree walk is the cost), then the
+  // stencil blocks.
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 1024), [&](const auto& range) {
+    for (std::size_t p = range.begin(); p != range.end(); ++p) {
+      const double half = 0.5 * particle_size(std::min<int>(type[p], L - 1));
+      transfer_level_[p] = x[p].allFinite() ? tree_.finest_level_in(x[p].array() - half, x[p].array() + half) : -1;
+    }
+  });
   for (std::size_t p = 0; p < x.size(); ++p) {
     MPM_VERIFY(type[p] < L, InputError,
                "stage '" + stage + "': particle " + std::to_string(p) + " has type " + std::to_string(type[p]) +
                    ", outside the grid's levels [0, " + std::to_string(L - 1) + "]");
     const double half = 0.5 * particle_size(type[p]);
-    const int n = x[p].allFinite() ? tree_.finest_level_in(x[p].array() - half, x[p].array() + half) : -1;
+    const int n = transfer_level_[p];
     if (n < 0) {
       std::ostringstream s;
       s << "stage '" << stage << "': particle " << p << " at (" << x[p].transpose() << ") left the grid domain";
       throw NumericalError(s.str());
     }
-    transfer_level_[p] = n;
     const SparseGrid<dim>& g = levels_[n];
     const double h = half / g.dx();
     half_cells_[p] = h;
@@ -79,7 +99,8 @@ void AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
     }
     IVec<dim> b = first;
     while (true) {
-      stencil_blocks[n].push_back(g.block_id(b * B));
+      const BlockKey key = g.block_id(b * B);
+      if (stencil_blocks[n].empty() || stencil_blocks[n].back() != key) stencil_blocks[n].push_back(key);
       int a = 0;
       for (; a < dim; ++a) {
         if (++b[a] <= last[a]) break;

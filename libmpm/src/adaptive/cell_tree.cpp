@@ -129,14 +129,34 @@ CellId<dim> CellTree<dim>::leaf_of(const IVec<dim>& f) const {
 
 template <int dim>
 CellId<dim> CellTree<dim>::coarsest_leaf_at(const IVec<dim>& point) const {
-  CellId<dim> best;
+  // Level by level from the coarsest: the 2^dim finest cells around the point lie in at most
+  // 2^dim cells of each level; the first of them that is not refined is the coarsest leaf
+  // (all of them exist, since every coarser one was refined).
+  IVec<dim> around[1 << dim];
+  int count = 0;
   for (int corner = 0; corner < (1 << dim); ++corner) {
     IVec<dim> f = point;
-    for (int a = 0; a < dim; ++a) f[a] -= (corner >> a) & 1;
-    const CellId<dim> leaf = leaf_of(f);
-    if (leaf.level >= 0 && (best.level < 0 || leaf.level < best.level)) best = leaf;
+    bool inside = true;
+    for (int a = 0; a < dim; ++a) {
+      f[a] -= (corner >> a) & 1;
+      inside = inside && f[a] >= 0 && f[a] < base_cells_[a] << finest();
+    }
+    if (inside) around[count++] = f;
   }
-  return best;
+  for (int level = 0; level <= finest() && count > 0; ++level) {
+    IVec<dim> seen[1 << dim];
+    int distinct = 0;
+    for (int i = 0; i < count; ++i) {
+      IVec<dim> cell;
+      for (int a = 0; a < dim; ++a) cell[a] = around[i][a] >> (finest() - level);
+      bool repeated = false;
+      for (int j = 0; j < distinct && !repeated; ++j) repeated = seen[j] == cell;
+      if (repeated) continue;
+      seen[distinct++] = cell;
+      if (level == finest() || !is_refined(level, cell)) return {level, cell};
+    }
+  }
+  return {};
 }
 
 template <int dim>

@@ -77,9 +77,7 @@ Index SparseGrid<dim>::node_index(const IVec<dim>& node) const {
     if (node[a] < 0 || (node[a] >> block_bits) >= block_counts_[a]) return -1;
   const int s = slot_.find(block_id(node));
   if (s < 0) return -1;
-  int local = 0;
-  for (int a = dim - 1; a >= 0; --a) local = (local << block_bits) | (node[a] & (block_size - 1));
-  return static_cast<Index>(s) * nodes_per_block + local;
+  return static_cast<Index>(s) * nodes_per_block + local_index(node);
 }
 
 template <int dim>

@@ -17,6 +17,7 @@
 //! there and the blocks of the real nodes their ghosts reach, and builds the ghost tables.
 //! Memory and time follow the allocated blocks, not the domain.
 #include <mpm/adaptive/cell_tree.h>
+#include <mpm/core/error.h>
 #include <mpm/core/sparse_grid.h>
 
 #include <cstdint>
@@ -132,6 +133,8 @@ void AdaptiveGrid<dim>::for_each_weight(int n, double h, const Vec<dim>& x, Fn&&
   GimpAxis axis[dim];
   axis_weights(n, h, x, axis);
   int offset[dim] = {};
+  BlockKey last_block = ~BlockKey{0};
+  Index first_node = -1;  // storage index of node 0 of last_block
   while (true) {
     double w = 1.0;
     Vec<dim> grad = Vec<dim>::Constant(inv_dx);
@@ -143,7 +146,14 @@ void AdaptiveGrid<dim>::for_each_weight(int n, double h, const Vec<dim>& x, Fn&&
       for (int b = 0; b < dim; ++b) grad[b] *= b == a ? axis[a].dw[i] : axis[a].w[i];
     }
     if (w != 0.0 || grad.squaredNorm() != 0.0) {
-      const Index k = g.node_index(node);
+      // Consecutive stencil nodes mostly share a block: one table lookup per block.
+      if (const BlockKey block = g.block_id(node); block != last_block) {
+        last_block = block;
+        const int slot = g.slot(block);
+        first_node = slot < 0 ? -1 : static_cast<Index>(slot) * SparseGrid<dim>::nodes_per_block;
+      }
+      MPM_ASSERT(first_node >= 0);
+      const Index k = first_node + SparseGrid<dim>::local_index(node);
       fn(k, w, grad, Vec<dim>(g.origin() + g.dx() * node.template cast<double>()));
     }
     int a = 0;

@@ -100,6 +100,12 @@ public:
   Vec<dim> node_position(std::size_t k) const { return origin_ + dx_ * node_coord(k).template cast<double>(); }
   //! Storage index of integer node `node`, or -1 if its block is not allocated.
   Index node_index(const IVec<dim>& node) const;
+  //! Position of a node within its block's storage: node_index = slot * nodes_per_block + this.
+  static int local_index(const IVec<dim>& node) {
+    int local = 0;
+    for (int a = dim - 1; a >= 0; --a) local = (local << block_bits) | (node[a] & (block_size - 1));
+    return local;
+  }
 
   std::vector<std::pair<std::string, std::size_t>> memory_per_field() const;
 
