@@ -34,9 +34,10 @@ bodies:
 walls: {{contact: separate}}
 time: {{end: 0.05, frame_dt: 0.01}}
 {gravity_key}: [0, 0]
+{adaptive}
 """
 JELLO_DEFAULTS = dict(density=1000, youngs_modulus="1.0e5", poisson_ratio=0.3, lo="[0.6, 0.24]",
-                      hi="[0.8, 0.44]", gravity_key="gravity")
+                      hi="[0.8, 0.44]", gravity_key="gravity", adaptive="")
 
 COLUMN = """\
 dim: 2
@@ -140,6 +141,15 @@ CASES = [
                              "lies outside the domain (0, 0) - (1, 0.6)"]),
     case("body_below_domain_lo", "jello_collide", JELLO, JELLO_DEFAULTS, {"lo": "[0.6, -0.1]"},
          "lo: [0.6, -0.1]", ["key 'bodies[1].lo' = [0.6, -0.1]", "expected the body inside the domain"]),
+    case("adaptive_levels_out_of_range", "jello_collide", JELLO, JELLO_DEFAULTS,
+         {"adaptive": "adaptive: {levels: 9}"}, "levels: 9",
+         ["key 'adaptive.levels' = 9", "expected an integer in [1, 6]"]),
+    case("adaptive_region_outside_domain", "jello_collide", JELLO, JELLO_DEFAULTS,
+         {"adaptive": "adaptive: {levels: 2, refine: [{box: {lo: [0.5, 0.2], hi: [1.5, 0.4]}}]}"}, "hi: [1.5, 0.4]",
+         ["key 'adaptive.refine[0].box.hi' = [1.5, 0.4]", "the box must end inside the domain (<= 1) on axis 0"]),
+    case("adaptive_region_level", "jello_collide", JELLO, JELLO_DEFAULTS,
+         {"adaptive": "adaptive: {levels: 2, refine: [{box: {lo: [0.5, 0.2], hi: [0.6, 0.4]}, level: 3}]}"},
+         "level: 3", ["key 'adaptive.refine[0].level' = 3", "expected an integer in [0, 1]"]),
     case("mesh_missing", "goo_slits", GOO, {}, {"mesh": "missing_plate.obj"}, "missing_plate.obj",
          ["key 'colliders[0].file' = missing_plate.obj", "missing_plate.obj: cannot open the mesh file"]),
     case("mesh_garbage", "goo_slits", GOO, {}, {"mesh": "garbage.obj"}, "garbage.obj",

@@ -9,6 +9,8 @@ summary.json ("info": "stages", "memory_bytes.<field>"):
   fluid   a fluid-only scene (dam break) holds no particle.F / particle.plastic and runs no
           stress_forces, deformation or plasticity stage;
   elastic an elastic scene (jello_collide) runs no plasticity stage;
+  uniform a scene without the key `adaptive` builds nothing of the adaptive grid: no refine or
+          ghost_velocities stage, no particle.level, one grid; the adaptive jello has all three;
   openvdb none of these processes loads libopenvdb, while a scene with a level-set collider
           (goo_slits) does, through the plugin libmpm_openvdb.
 
@@ -170,6 +172,19 @@ def main():
     c.expect("elastic: no plasticity stage", "plasticity" not in stages(elastic), elastic["info"]["stages"])
     c.expect("elastic: stress_forces runs", "stress_forces" in stages(elastic), elastic["info"]["stages"])
     c.expect("dry: the plastic sand runs plasticity", "plasticity" in stages(solid), solid["info"]["stages"])
+
+    # Adaptive grids only where the scene asks for one.
+    def adaptive_parts(summary):
+        fields = [k for k in summary["info"] if k.startswith("memory_bytes.")]
+        return {"refine" in stages(summary), "ghost_velocities" in stages(summary),
+                "memory_bytes.particle.level" in fields, any(".level1." in k or k.startswith("memory_bytes.level")
+                                                               for k in fields)}
+    c.expect("uniform: the elastic scene builds nothing of the adaptive grid", adaptive_parts(elastic) == {False},
+             elastic["info"]["stages"])
+    adaptive, _ = run("adaptive", args.jello_collide, args.scenes / "jello_collide_adaptive.yaml", ["time.end=0.005"],
+                      args.work)
+    c.expect("adaptive: the adaptive jello refines, pulls ghosts, types its particles and holds level grids",
+             adaptive_parts(adaptive) == {True}, adaptive["info"]["stages"])
 
     # OpenVDB: loaded for the level-set collider of goo_slits only.
     _, level_set = run("level_set", args.goo_slits, args.scenes / "goo_slits.yaml",
