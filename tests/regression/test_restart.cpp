@@ -1,6 +1,7 @@
 // Restart: a run continued from a checkpoint reaches the same bits as the run that was never
-// interrupted, for a solid app (column collapse, one phase) and a coupled one (settling: fluid
-// and sediment, one checkpoint holding both). The run writes 10 frames with checkpoint_every
+// interrupted, for a solid app (column collapse, one phase), a solid on an adaptive grid (the
+// adaptive jello: the tree is rebuilt from the particles' levels every step) and a coupled one
+// (settling: fluid and sediment, one checkpoint holding both). The run writes 10 frames with checkpoint_every
 // = 4; a copy of its output folder loses every file written after frame 4 (as if the run had
 // died there) and is continued with --restart checkpoint_0004.h5. Then every particle channel
 // of every phase of the later checkpoints (mpm::io::load_checkpoint into particles that declare
@@ -43,6 +44,7 @@ struct RestartCase {
   std::string app, scene, sets;
   double frame_dt;
   std::vector<std::string> phases, solid_phases, series, final_results;
+  bool adaptive = false;  //!< solid particles carry their level (channel "level")
 };
 
 const RestartCase kColumnCollapse{COLUMN_COLLAPSE_APP,
@@ -53,6 +55,11 @@ const RestartCase kColumnCollapse{COLUMN_COLLAPSE_APP,
                                   {""},
                                   {"particles"},
                                   {"runout", "final_height", "normalized_runout"}};
+#ifdef JELLO_COLLIDE_APP
+// Every result of jello_collide compares the end with the start of the run: none is final-only.
+const RestartCase kJelloAdaptive{
+    JELLO_COLLIDE_APP, "jello_collide_adaptive.yaml", "", 0.004, {""}, {""}, {"particles"}, {}, true};
+#endif
 #ifdef SETTLING_APP
 // Discrete grains (no sediment material): no phase is solid.
 const RestartCase kSettling{SETTLING_APP,
@@ -89,7 +96,8 @@ std::vector<std::string> split(const std::string& line) {
   return fields;
 }
 
-void check_checkpoints_equal(const fs::path& a, const fs::path& b, const std::string& phase, bool solid) {
+void check_checkpoints_equal(const fs::path& a, const fs::path& b, const std::string& phase, bool solid,
+                             bool adaptive) {
   INFO(a.filename().string() << " phase '" << phase << "'");
   mpm::io::CheckpointHeader ha, hb;
   mpm::Particles<2> pa, pb;
@@ -97,6 +105,8 @@ void check_checkpoints_equal(const fs::path& a, const fs::path& b, const std::st
     mpm::solid::add_solid_channels(pa);
     mpm::solid::add_solid_channels(pb);
   }
+  if (adaptive)
+    for (mpm::Particles<2>* p : {&pa, &pb}) p->add_channel<std::uint16_t>("level", 0, mpm::ChannelUse{true, true, ""});
   mpm::io::load_checkpoint<2>(a, ha, pa, phase);
   mpm::io::load_checkpoint<2>(b, hb, pb, phase);
   CHECK(ha.frame == hb.frame);
@@ -190,7 +200,7 @@ void check_particle_state(const RestartCase& c, const fs::path& full, const fs::
     for (const std::string& phase : c.phases) {
       const bool solid = std::find(c.solid_phases.begin(), c.solid_phases.end(), phase) != c.solid_phases.end();
       check_checkpoints_equal(full / numbered("checkpoint", frame, ".h5"),
-                              restarted / numbered("checkpoint", frame, ".h5"), phase, solid);
+                              restarted / numbered("checkpoint", frame, ".h5"), phase, solid, c.adaptive);
     }
   for (const std::string& series : c.series) {
     for (int frame = kCheckpointEvery + 1; frame <= kFrames; ++frame) {
@@ -260,6 +270,9 @@ void check_restart(const RestartCase& c, const std::string& name) {
 
 TEST_CASE("a run continued from a checkpoint is bit-identical to the uninterrupted run") {
   SUBCASE("solid: column collapse") { check_restart(kColumnCollapse, "column_collapse"); }
+#ifdef JELLO_COLLIDE_APP
+  SUBCASE("solid on an adaptive grid: jello collide") { check_restart(kJelloAdaptive, "jello_adaptive"); }
+#endif
 #ifdef SETTLING_APP
   SUBCASE("coupled: settling column (fluid and sediment)") { check_restart(kSettling, "settling"); }
 #endif
