@@ -48,6 +48,7 @@ AdaptiveGrid<dim>::AdaptiveGrid(CellTree<dim> tree) : tree_(std::move(tree)) {
   const Vec<dim> hi = tree_.origin() + tree_.dx(0) * tree_.base_cells().template cast<double>();
   for (int n = 0; n < tree_.levels(); ++n) levels_.emplace_back(tree_.origin(), hi, tree_.dx(n));
   ghosts_.resize(tree_.levels());
+  regular_.resize(tree_.levels());
 }
 
 template <int dim>
@@ -58,10 +59,13 @@ void AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
   constexpr int B = SparseGrid<dim>::block_size;
   transfer_level_.assign(x.size(), 0);
   half_cells_.assign(x.size(), 0.5);
-  std::vector<std::vector<BlockKey>> stencil_blocks(L);
+  std::vector<std::vector<BlockKey>> own_blocks(L);
+  // Particles on their own level (h = 1/2, the quadratic B-spline) go in buckets for the
+  // uniform loops; the others (irregular) take the general path.
+  std::vector<std::vector<std::pair<BlockKey, std::uint32_t>>> bucketed(L);
+  irregular_.clear();
 
-  // Transfer level of every particle (in parallel: the tree walk is the cost), then the
-  // stencil blocks.
+  // Transfer level of every particle (in parallel: the tree walk is the cost).
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 1024), [&](const auto& range) {
     for (std::size_t p = range.begin(); p != range.end(); ++p) {
       const double half = 0.5 * particle_size(std::min<int>(type[p], L - 1));
@@ -97,10 +101,17 @@ void AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
       first[a] /= B;
       last[a] /= B;
     }
+    if (h == 0.5) {
+      IVec<dim> base;
+      for (int a = 0; a < dim; ++a) base[a] = axis[a].base;
+      bucketed[n].emplace_back(g.block_id(base), static_cast<std::uint32_t>(p));
+    } else {
+      irregular_.push_back(static_cast<std::uint32_t>(p));
+    }
     IVec<dim> b = first;
     while (true) {
       const BlockKey key = g.block_id(b * B);
-      if (stencil_blocks[n].empty() || stencil_blocks[n].back() != key) stencil_blocks[n].push_back(key);
+      if (own_blocks[n].empty() || own_blocks[n].back() != key) own_blocks[n].push_back(key);
       int a = 0;
       for (; a < dim; ++a) {
         if (++b[a] <= last[a]) break;
@@ -109,18 +120,37 @@ void AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
       if (a == dim) break;
     }
   }
+  // A bucket's patch covers its block and the +1 neighbours on every axis: allocated, though
+  // only the stencil blocks (own_blocks) need the nodes' status.
+  std::vector<std::vector<BlockKey>> blocks(L);
+  for (int n = 0; n < L; ++n) {
+    std::sort(bucketed[n].begin(), bucketed[n].end());
+    for (std::size_t i = 0; i < bucketed[n].size(); ++i) {
+      if (i > 0 && bucketed[n][i].first == bucketed[n][i - 1].first) continue;
+      const IVec<dim> c = levels_[n].block_coord(bucketed[n][i].first);
+      for (int corner = 0; corner < (1 << dim); ++corner) {
+        IVec<dim> nb = c;
+        for (int a = 0; a < dim; ++a) nb[a] += (corner >> a) & 1;
+        blocks[n].push_back(levels_[n].block_id(nb * B));
+      }
+    }
+  }
 
-  // Status of every node of the stencil blocks: real on its level, or a ghost with links
-  // given by lattice point and home level until the grids are allocated.
+  // Status of every node of the stencil blocks: real on its level, or a ghost with links given
+  // by lattice point and home level until the grids are allocated. A ghost that is not simply
+  // a real node of another level (one link of weight 1) is an embedded ghost: its bit is set
+  // in its block's mask.
   struct PendingGhost {
     IVec<dim> node;  // level coordinate
     std::size_t first_link, end_link;
   };
   std::vector<std::vector<PendingGhost>> pending(L);
   std::vector<NodeWeight<dim>> links;
-  std::vector<std::vector<BlockKey>> blocks = stencil_blocks;
+  static_assert(SparseGrid<dim>::nodes_per_block == 64, "one 64-bit mask per block");
+  std::vector<BlockTable> mask_of(L);
+  std::vector<std::vector<std::uint64_t>> masks(L);
   for (int n = 0; n < L; ++n) {
-    std::vector<BlockKey>& own = stencil_blocks[n];
+    std::vector<BlockKey>& own = own_blocks[n];
     std::sort(own.begin(), own.end());
     own.erase(std::unique(own.begin(), own.end()), own.end());
     const SparseGrid<dim>& g = levels_[n];
@@ -136,12 +166,54 @@ void AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
         const std::size_t first_link = links.size();
         embed(tree_, point, 1.0, links);
         pending[n].push_back({node, first_link, links.size()});
+        if (links.size() - first_link > 1 || links[first_link].point != point) {
+          const int m = mask_of[n].insert(key, static_cast<int>(masks[n].size()));
+          if (m == static_cast<int>(masks[n].size())) masks[n].push_back(0);
+          masks[n][static_cast<std::size_t>(m)] |= std::uint64_t{1} << SparseGrid<dim>::local_index(node);
+        }
       }
     }
-    blocks[n] = own;
+    blocks[n].insert(blocks[n].end(), own.begin(), own.end());
   }
   for (const NodeWeight<dim>& link : links)
     blocks[link.level].push_back(levels_[link.level].block_id(link.point / tree_.scale(link.level)));
+
+  // A particle whose stencil holds an embedded ghost goes the general way (the uniform loops
+  // know nothing of APIC's correction there); the others stay in the buckets.
+  for (int n = 0; n < L; ++n) {
+    const SparseGrid<dim>& g = levels_[n];
+    auto embedded = [&](const IVec<dim>& node) {
+      const int m = mask_of[n].find(g.block_id(node));
+      return m >= 0 && (masks[n][static_cast<std::size_t>(m)] >> SparseGrid<dim>::local_index(node)) & 1;
+    };
+    ParticleBuckets<dim>& b = regular_[n];
+    b = ParticleBuckets<dim>{};
+    for (const auto& [block, p] : bucketed[n]) {
+      GimpAxis axis[dim];
+      axis_weights(n, 0.5, x[p], axis);
+      bool regular = true;
+      for (int i = 0; i < ipow(3, dim) && regular; ++i) {
+        IVec<dim> node;
+        for (int a = 0, r = i; a < dim; ++a, r /= 3) node[a] = axis[a].base + r % 3;
+        regular = !embedded(node);
+      }
+      if (!regular) {
+        irregular_.push_back(p);
+        continue;
+      }
+      if (b.block.empty() || b.block.back() != block) {
+        const IVec<dim> c = g.block_coord(block);
+        int color = 0;
+        for (int a = 0; a < dim; ++a) color |= (c[a] & 1) << a;
+        b.by_color[color].push_back(b.count());
+        b.block.push_back(block);
+        b.begin.push_back(static_cast<std::uint32_t>(b.particle.size()));
+      }
+      b.particle.push_back(p);
+    }
+    b.begin.push_back(static_cast<std::uint32_t>(b.particle.size()));
+  }
+  std::sort(irregular_.begin(), irregular_.end());
 
   for (int n = 0; n < L; ++n) {
     std::sort(blocks[n].begin(), blocks[n].end());

@@ -11,10 +11,11 @@
 namespace mpm::adaptive {
 
 namespace {
-// fn(p, k, w, grad_w, x_k) over the stencil of every particle, serially (P2G scatters).
+// fn(p, n, k, w, grad_w, x_k) over the stencil of every irregular particle, serially (P2G
+// scatters); the regular ones go through the uniform loops of transfer.h.
 template <int dim, class Fn>
-void scatter_all(const Particles<dim>& P, const AdaptiveGrid<dim>& grid, Fn&& fn) {
-  for (std::size_t p = 0; p < P.size(); ++p) {
+void scatter_irregular(const Particles<dim>& P, const AdaptiveGrid<dim>& grid, Fn&& fn) {
+  for (const std::uint32_t p : grid.irregular()) {
     const int n = grid.transfer_level(p);
     grid.for_each_weight(
         n, grid.half_cells(p), P.x[p],
@@ -36,12 +37,10 @@ void particles_to_grid(const Particles<dim>& P, const TransferScheme& scheme, Ad
   const bool apic = scheme.type == TransferScheme::Type::apic;
   std::vector<std::vector<Mat<dim>>> affine(grid.levels());
   for (int n = 0; n < grid.levels(); ++n) {
-    SparseGrid<dim>& g = grid.level(n);
-    std::fill(g.mass.begin(), g.mass.end(), 0.0);
-    std::fill(g.velocity.begin(), g.velocity.end(), Vec<dim>::Zero());
+    mpm::particles_to_grid(P, grid.regular(n), QuadraticBSpline{}, scheme, grid.level(n));  // zeroes first
     affine[n].assign(grid.ghosts(n).node.size(), Mat<dim>::Zero());
   }
-  scatter_all(P, grid, [&](std::size_t p, int n, Index k, double w, const Vec<dim>&, const Vec<dim>& xk) {
+  scatter_irregular(P, grid, [&](std::size_t p, int n, Index k, double w, const Vec<dim>&, const Vec<dim>& xk) {
     SparseGrid<dim>& g = grid.level(n);
     const double wm = w * P.mass[p];
     g.mass[k] += wm;
@@ -63,8 +62,9 @@ void momentum_to_velocity(AdaptiveGrid<dim>& grid, const TransferScheme& scheme)
 template <int dim>
 void stress_to_grid_forces(const std::vector<Mat<dim>>& S, const Particles<dim>& P, AdaptiveGrid<dim>& grid) {
   MPM_ASSERT(grid.particle_count() == P.size());
-  for (int n = 0; n < grid.levels(); ++n) grid.level(n).force.assign(grid.level(n).node_storage(), Vec<dim>::Zero());
-  scatter_all(P, grid, [&](std::size_t p, int n, Index k, double, const Vec<dim>& grad, const Vec<dim>&) {
+  for (int n = 0; n < grid.levels(); ++n)  // zeroes first
+    mpm::stress_to_grid_forces(S, P, grid.regular(n), QuadraticBSpline{}, grid.level(n));
+  scatter_irregular(P, grid, [&](std::size_t p, int n, Index k, double, const Vec<dim>& grad, const Vec<dim>&) {
     grid.level(n).force[k] -= S[p] * grad;
   });
   grid.push(per_level(grid, &SparseGrid<dim>::force));
@@ -79,8 +79,12 @@ template <int dim>
 void grid_to_particles(Particles<dim>& P, const TransferScheme& scheme, const AdaptiveGrid<dim>& grid, double dt) {
   MPM_ASSERT(grid.particle_count() == P.size());
   const bool apic = scheme.type == TransferScheme::Type::apic;
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.size(), 256), [&](const auto& range) {
-    for (std::size_t p = range.begin(); p != range.end(); ++p) {
+  for (int n = 0; n < grid.levels(); ++n)
+    mpm::grid_to_particles(P, grid.regular(n), QuadraticBSpline{}, scheme, grid.level(n), dt);
+  const std::vector<std::uint32_t>& irregular = grid.irregular();
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, irregular.size(), 256), [&](const auto& range) {
+    for (std::size_t i = range.begin(); i != range.end(); ++i) {
+      const std::size_t p = irregular[i];
       const int n = grid.transfer_level(p);
       const SparseGrid<dim>& g = grid.level(n);
       const auto& ghosts = grid.ghosts(n);
@@ -118,8 +122,12 @@ template <int dim>
 void velocity_gradient(const Particles<dim>& P, const AdaptiveGrid<dim>& grid, std::vector<Mat<dim>>& grad_v) {
   MPM_ASSERT(grid.particle_count() == P.size());
   grad_v.resize(P.size());
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.size(), 256), [&](const auto& range) {
-    for (std::size_t p = range.begin(); p != range.end(); ++p) {
+  for (int n = 0; n < grid.levels(); ++n)
+    mpm::velocity_gradient(P, grid.regular(n), QuadraticBSpline{}, grid.level(n), grad_v);
+  const std::vector<std::uint32_t>& irregular = grid.irregular();
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, irregular.size(), 256), [&](const auto& range) {
+    for (std::size_t i = range.begin(); i != range.end(); ++i) {
+      const std::size_t p = irregular[i];
       const int n = grid.transfer_level(p);
       const SparseGrid<dim>& g = grid.level(n);
       Mat<dim> G = Mat<dim>::Zero();

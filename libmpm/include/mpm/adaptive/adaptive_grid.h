@@ -18,6 +18,7 @@
 //! Memory and time follow the allocated blocks, not the domain.
 #include <mpm/adaptive/cell_tree.h>
 #include <mpm/core/error.h>
+#include <mpm/core/particle_buckets.h>
 #include <mpm/core/sparse_grid.h>
 
 #include <cstdint>
@@ -69,6 +70,12 @@ public:
   void prepare(const std::vector<Vec<dim>>& x, const std::vector<std::uint16_t>& type,
                const std::string& stage = "prepare");
   std::size_t particle_count() const { return transfer_level_.size(); }
+  //! The particles that transfer on level n as on a uniform grid: on their own level (the
+  //! quadratic B-spline) and with no embedded ghost in their bucket's patch. The uniform loops
+  //! (transfer.h) serve them, in parallel.
+  const ParticleBuckets<dim>& regular(int n) const { return regular_[n]; }
+  //! The other particles, by index: they take the general path (for_each_weight).
+  const std::vector<std::uint32_t>& irregular() const { return irregular_; }
   //! Transfer level of particle p (after prepare).
   int transfer_level(std::size_t p) const { return transfer_level_[p]; }
   //! Half-size of particle p's GIMP box in cells of its transfer level (after prepare).
@@ -83,7 +90,8 @@ public:
   //! one expression, so they see the same stencil.
   void axis_weights(int n, double h, const Vec<dim>& x, GimpAxis* axis) const {
     const SparseGrid<dim>& g = levels_[n];
-    for (int a = 0; a < dim; ++a) axis[a].compute((x[a] - g.origin()[a]) / g.dx(), h);
+    const double inv_dx = 1.0 / g.dx();  // CellMap's expression: the uniform loops' stencil
+    for (int a = 0; a < dim; ++a) axis[a].compute((x[a] - g.origin()[a]) * inv_dx, h);
   }
 
   //! Ghosts of level n: storage index, first link (CSR), and the second moment of their
@@ -123,6 +131,8 @@ private:
   std::vector<Ghosts> ghosts_;
   std::vector<int> transfer_level_;
   std::vector<double> half_cells_;
+  std::vector<ParticleBuckets<dim>> regular_;
+  std::vector<std::uint32_t> irregular_;
 };
 
 template <int dim>
