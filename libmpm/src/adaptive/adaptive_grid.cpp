@@ -20,6 +20,27 @@ double hat_integral(double s) {  // H(s) = int_{-inf}^{s} N1
 }
 }  // namespace
 
+namespace {
+// Stable sort of (block, particle) pairs by block: a counting sort by the rank of the blocks
+// present, O(n + blocks log blocks) (the pairs come in particle order).
+void sort_by_block(std::vector<std::pair<BlockKey, std::uint32_t>>& pairs) {
+  if (std::is_sorted(pairs.begin(), pairs.end())) return;
+  BlockTable rank;
+  std::vector<BlockKey> present;
+  for (const auto& [key, p] : pairs)
+    if (rank.insert(key, static_cast<int>(present.size())) == static_cast<int>(present.size())) present.push_back(key);
+  std::sort(present.begin(), present.end());
+  for (std::size_t r = 0; r < present.size(); ++r) rank.assign(present[r], static_cast<int>(r));
+  std::vector<std::uint32_t> offset(present.size() + 1, 0);
+  std::vector<int> pair_rank(pairs.size());
+  for (std::size_t i = 0; i < pairs.size(); ++i) ++offset[(pair_rank[i] = rank.find(pairs[i].first)) + 1];
+  for (std::size_t r = 0; r < present.size(); ++r) offset[r + 1] += offset[r];
+  std::vector<std::pair<BlockKey, std::uint32_t>> sorted(pairs.size());
+  for (std::size_t i = 0; i < pairs.size(); ++i) sorted[offset[pair_rank[i]]++] = pairs[i];
+  pairs.swap(sorted);
+}
+}  // namespace
+
 void GimpAxis::compute(double xi, double h) {
   if (h == 0.5) {  // the quadratic B-spline, the common case: a particle on its own level
     base = static_cast<int>(std::floor(xi - 0.5));
@@ -101,13 +122,13 @@ void AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
       first[a] /= B;
       last[a] /= B;
     }
-    if (h == 0.5) {
+    if (h == 0.5) {  // its stencil lies in its bucket's patch, whose blocks are added below
       IVec<dim> base;
       for (int a = 0; a < dim; ++a) base[a] = axis[a].base;
       bucketed[n].emplace_back(g.block_id(base), static_cast<std::uint32_t>(p));
-    } else {
-      irregular_.push_back(static_cast<std::uint32_t>(p));
+      continue;
     }
+    irregular_.push_back(static_cast<std::uint32_t>(p));
     IVec<dim> b = first;
     while (true) {
       const BlockKey key = g.block_id(b * B);
@@ -120,18 +141,17 @@ void AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
       if (a == dim) break;
     }
   }
-  // A bucket's patch covers its block and the +1 neighbours on every axis: allocated, though
-  // only the stencil blocks (own_blocks) need the nodes' status.
+  // A bucket's patch covers its block and the +1 neighbours on every axis.
   std::vector<std::vector<BlockKey>> blocks(L);
   for (int n = 0; n < L; ++n) {
-    std::sort(bucketed[n].begin(), bucketed[n].end());
+    sort_by_block(bucketed[n]);
     for (std::size_t i = 0; i < bucketed[n].size(); ++i) {
       if (i > 0 && bucketed[n][i].first == bucketed[n][i - 1].first) continue;
       const IVec<dim> c = levels_[n].block_coord(bucketed[n][i].first);
       for (int corner = 0; corner < (1 << dim); ++corner) {
         IVec<dim> nb = c;
         for (int a = 0; a < dim; ++a) nb[a] += (corner >> a) & 1;
-        blocks[n].push_back(levels_[n].block_id(nb * B));
+        own_blocks[n].push_back(levels_[n].block_id(nb * B));
       }
     }
   }
@@ -139,23 +159,23 @@ void AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
   // Status of every node of the stencil blocks: real on its level, or a ghost with links given
   // by lattice point and home level until the grids are allocated. A ghost that is not simply
   // a real node of another level (one link of weight 1) is an embedded ghost: its bit is set
-  // in its block's mask.
-  struct PendingGhost {
-    IVec<dim> node;  // level coordinate
-    std::size_t first_link, end_link;
-  };
-  std::vector<std::vector<PendingGhost>> pending(L);
-  std::vector<NodeWeight<dim>> links;
-  static_assert(SparseGrid<dim>::nodes_per_block == 64, "one 64-bit mask per block");
-  std::vector<BlockTable> mask_of(L);
-  std::vector<std::vector<std::uint64_t>> masks(L);
+  // in its block's mask. The statuses depend on the tree only: they are kept per block while
+  // the tree stays the same (a static refinement: always), and computed for new blocks.
+  if (!(tree_ == status_tree_)) {
+    status_tree_ = tree_;
+    status_.assign(L, LevelStatus{});
+  }
   for (int n = 0; n < L; ++n) {
     std::vector<BlockKey>& own = own_blocks[n];
     std::sort(own.begin(), own.end());
     own.erase(std::unique(own.begin(), own.end()), own.end());
     const SparseGrid<dim>& g = levels_[n];
+    LevelStatus& status = status_[n];
     const int s = tree_.scale(n);
     for (BlockKey key : own) {
+      if (status.index.find(key) >= 0) continue;
+      status.index.insert(key, static_cast<int>(status.blocks.size()));
+      BlockStatus block{static_cast<std::uint32_t>(status.ghosts.size()), 0, 0};
       const IVec<dim> origin = g.block_coord(key) * B;
       for (int local = 0; local < SparseGrid<dim>::nodes_per_block; ++local) {
         IVec<dim> node;
@@ -163,36 +183,58 @@ void AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
         if ((node.array() >= g.node_counts().array()).any()) continue;  // padding beyond the domain
         const IVec<dim> point = node * s;
         if (home_level(tree_, point) == n) continue;  // a real node of this level
-        const std::size_t first_link = links.size();
-        embed(tree_, point, 1.0, links);
-        pending[n].push_back({node, first_link, links.size()});
-        if (links.size() - first_link > 1 || links[first_link].point != point) {
-          const int m = mask_of[n].insert(key, static_cast<int>(masks[n].size()));
-          if (m == static_cast<int>(masks[n].size())) masks[n].push_back(0);
-          masks[n][static_cast<std::size_t>(m)] |= std::uint64_t{1} << SparseGrid<dim>::local_index(node);
-        }
+        const std::size_t first_link = status.links.size();
+        embed(tree_, point, 1.0, status.links);
+        status.ghosts.push_back({node, first_link, status.links.size()});
+        if (status.links.size() - first_link > 1 || status.links[first_link].point != point)
+          block.embedded |= std::uint64_t{1} << SparseGrid<dim>::local_index(node);
       }
+      block.end_ghost = static_cast<std::uint32_t>(status.ghosts.size());
+      status.blocks.push_back(block);
     }
     blocks[n].insert(blocks[n].end(), own.begin(), own.end());
+    for (BlockKey key : own) {
+      const BlockStatus& block = status.blocks[static_cast<std::size_t>(status.index.find(key))];
+      for (std::uint32_t j = block.first_ghost; j < block.end_ghost; ++j)
+        for (std::size_t l = status.ghosts[j].first_link; l < status.ghosts[j].end_link; ++l)
+          blocks[status.links[l].level].push_back(
+              levels_[status.links[l].level].block_id(status.links[l].point / tree_.scale(status.links[l].level)));
+    }
   }
-  for (const NodeWeight<dim>& link : links)
-    blocks[link.level].push_back(levels_[link.level].block_id(link.point / tree_.scale(link.level)));
 
   // A particle whose stencil holds an embedded ghost goes the general way (the uniform loops
   // know nothing of APIC's correction there); the others stay in the buckets.
   for (int n = 0; n < L; ++n) {
     const SparseGrid<dim>& g = levels_[n];
     auto embedded = [&](const IVec<dim>& node) {
-      const int m = mask_of[n].find(g.block_id(node));
-      return m >= 0 && (masks[n][static_cast<std::size_t>(m)] >> SparseGrid<dim>::local_index(node)) & 1;
+      const int m = status_[n].index.find(g.block_id(node));
+      return m >= 0 &&
+             (status_[n].blocks[static_cast<std::size_t>(m)].embedded >> SparseGrid<dim>::local_index(node)) & 1;
+    };
+    // Whether the patch of a block holds an embedded ghost: else its particles need no check.
+    auto patch_embedded = [&](BlockKey block) {
+      const IVec<dim> c = g.block_coord(block);
+      for (int corner = 0; corner < (1 << dim); ++corner) {
+        IVec<dim> nb = c;
+        for (int a = 0; a < dim; ++a) nb[a] += (corner >> a) & 1;
+        const int m = status_[n].index.find(g.block_id(nb * B));
+        if (m >= 0 && status_[n].blocks[static_cast<std::size_t>(m)].embedded) return true;
+      }
+      return false;
     };
     ParticleBuckets<dim>& b = regular_[n];
     b = ParticleBuckets<dim>{};
+    BlockKey checked = ~BlockKey{0};
+    bool check_nodes = false;
     for (const auto& [block, p] : bucketed[n]) {
+      if (block != checked) {
+        checked = block;
+        check_nodes = patch_embedded(block);
+      }
       GimpAxis axis[dim];
-      axis_weights(n, 0.5, x[p], axis);
+      if (check_nodes) axis_weights(n, 0.5, x[p], axis);
       bool regular = true;
-      for (int i = 0; i < ipow(3, dim) && regular; ++i) {
+      for (int i = 0; i < ipow(3, dim) && regular && check_nodes; ++i) {
         IVec<dim> node;
         for (int a = 0, r = i; a < dim; ++a, r /= 3) node[a] = axis[a].base + r % 3;
         regular = !embedded(node);
@@ -226,22 +268,26 @@ void AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
     Ghosts& g = ghosts_[n];
     g = Ghosts{};
     g.of_node.assign(levels_[n].node_storage(), -1);
-    for (std::size_t j = 0; j < pending[n].size(); ++j) {
-      const PendingGhost& ghost = pending[n][j];
-      const Index k = levels_[n].node_index(ghost.node);
-      const Vec<dim> xk = tree_.position(ghost.node * tree_.scale(n));
-      Mat<dim> spread = Mat<dim>::Zero();
-      for (std::size_t l = ghost.first_link; l < ghost.end_link; ++l) {
-        const NodeWeight<dim>& link = links[l];
-        g.link.push_back(
-            {link.level, levels_[link.level].node_index(link.point / tree_.scale(link.level)), link.weight});
-        const Vec<dim> r = tree_.position(link.point) - xk;
-        spread.noalias() += link.weight * r * r.transpose();
+    const LevelStatus& status = status_[n];
+    for (BlockKey key : own_blocks[n]) {
+      const BlockStatus& block = status.blocks[static_cast<std::size_t>(status.index.find(key))];
+      for (std::uint32_t j = block.first_ghost; j < block.end_ghost; ++j) {
+        const PendingGhost& ghost = status.ghosts[j];
+        const Index k = levels_[n].node_index(ghost.node);
+        const Vec<dim> xk = tree_.position(ghost.node * tree_.scale(n));
+        Mat<dim> spread = Mat<dim>::Zero();
+        for (std::size_t l = ghost.first_link; l < ghost.end_link; ++l) {
+          const NodeWeight<dim>& link = status.links[l];
+          g.link.push_back(
+              {link.level, levels_[link.level].node_index(link.point / tree_.scale(link.level)), link.weight});
+          const Vec<dim> r = tree_.position(link.point) - xk;
+          spread.noalias() += link.weight * r * r.transpose();
+        }
+        g.of_node[static_cast<std::size_t>(k)] = static_cast<int>(g.node.size());
+        g.node.push_back(k);
+        g.begin.push_back(static_cast<std::uint32_t>(g.link.size()));
+        g.spread.push_back(spread);
       }
-      g.of_node[static_cast<std::size_t>(k)] = static_cast<int>(g.node.size());
-      g.node.push_back(k);
-      g.begin.push_back(static_cast<std::uint32_t>(g.link.size()));
-      g.spread.push_back(spread);
     }
   }
 }

@@ -86,27 +86,6 @@ void CellTree<dim>::refine_where(const std::function<int(const Vec<dim>&, const 
 }
 
 template <int dim>
-void CellTree<dim>::for_each_base_cell(const Vec<dim>& lo, const Vec<dim>& hi,
-                                       const std::function<void(const IVec<dim>&)>& fn) const {
-  IVec<dim> first, last;
-  for (int a = 0; a < dim; ++a) {
-    first[a] = std::max(0, static_cast<int>(std::floor(std::max(-1e9, (lo[a] - origin_[a]) / dx0_))));
-    last[a] = std::min(base_cells_[a] - 1, static_cast<int>(std::floor(std::min(1e9, (hi[a] - origin_[a]) / dx0_))));
-    if (first[a] > last[a]) return;
-  }
-  IVec<dim> cell = first;
-  while (true) {
-    fn(cell);
-    int a = 0;
-    for (; a < dim; ++a) {
-      if (++cell[a] <= last[a]) break;
-      cell[a] = first[a];
-    }
-    if (a == dim) return;
-  }
-}
-
-template <int dim>
 void CellTree<dim>::refine_to(const Vec<dim>& x, int level) {
   CellId<dim> leaf = leaf_at(x);
   while (leaf.level >= 0 && leaf.level < std::min(level, finest())) {
@@ -219,6 +198,19 @@ std::size_t CellTree<dim>::refined_count() const {
   std::size_t n = 0;
   for (const BlockTable& t : refined_) n += t.size();
   return n;
+}
+
+template <int dim>
+bool CellTree<dim>::operator==(const CellTree& other) const {
+  if (origin_ != other.origin_ || base_cells_ != other.base_cells_ || dx0_ != other.dx0_ || levels_ != other.levels_)
+    return false;
+  for (int l = 0; l < levels_; ++l) {
+    if (refined_[l].size() != other.refined_[l].size()) return false;
+    bool same = true;
+    refined_[l].for_each([&](BlockKey key, int) { same = same && other.refined_[l].find(key) >= 0; });
+    if (!same) return false;
+  }
+  return true;
 }
 
 template <int dim>

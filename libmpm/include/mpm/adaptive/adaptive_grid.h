@@ -17,6 +17,7 @@
 //! there and the blocks of the real nodes their ghosts reach, and builds the ghost tables.
 //! Memory and time follow the allocated blocks, not the domain.
 #include <mpm/adaptive/cell_tree.h>
+#include <mpm/adaptive/constrained_basis.h>
 #include <mpm/core/error.h>
 #include <mpm/core/particle_buckets.h>
 #include <mpm/core/sparse_grid.h>
@@ -133,6 +134,24 @@ private:
   std::vector<double> half_cells_;
   std::vector<ParticleBuckets<dim>> regular_;
   std::vector<std::uint32_t> irregular_;
+
+  // Node statuses per block, kept while the tree stays status_tree_ (prepare()).
+  struct PendingGhost {
+    IVec<dim> node;  // level coordinate
+    std::size_t first_link, end_link;
+  };
+  struct BlockStatus {
+    std::uint32_t first_ghost, end_ghost;
+    std::uint64_t embedded;  // bit l: node l of the block is an embedded ghost
+  };
+  struct LevelStatus {
+    BlockTable index;  // block key -> blocks[]
+    std::vector<BlockStatus> blocks;
+    std::vector<PendingGhost> ghosts;
+    std::vector<NodeWeight<dim>> links;
+  };
+  CellTree<dim> status_tree_;
+  std::vector<LevelStatus> status_;
 };
 
 template <int dim>

@@ -13,6 +13,8 @@
 #include <mpm/core/block_table.h>
 #include <mpm/core/types.h>
 
+#include <algorithm>
+#include <cmath>
 #include <functional>
 #include <vector>
 
@@ -75,13 +77,32 @@ public:
   //! Calls fn(level, cell) for every leaf, coarse to fine (level-0 leaves in lexicographic order).
   void for_each_leaf(const std::function<void(int, const IVec<dim>&)>& fn) const;
   std::size_t refined_count() const;
+  //! Same domain, levels and refined cells.
+  bool operator==(const CellTree& other) const;
   std::size_t memory_bytes() const;
 
 private:
   static BlockKey key(const IVec<dim>& cell);
   //! Calls fn(cell) for the level-0 cells of the domain that overlap the box [lo, hi].
-  void for_each_base_cell(const Vec<dim>& lo, const Vec<dim>& hi,
-                          const std::function<void(const IVec<dim>&)>& fn) const;
+  template <class Fn>
+  void for_each_base_cell(const Vec<dim>& lo, const Vec<dim>& hi, Fn&& fn) const {
+    IVec<dim> first, last;
+    for (int a = 0; a < dim; ++a) {
+      first[a] = std::max(0, static_cast<int>(std::floor(std::max(-1e9, (lo[a] - origin_[a]) / dx0_))));
+      last[a] = std::min(base_cells_[a] - 1, static_cast<int>(std::floor(std::min(1e9, (hi[a] - origin_[a]) / dx0_))));
+      if (first[a] > last[a]) return;
+    }
+    IVec<dim> cell = first;
+    while (true) {
+      fn(cell);
+      int a = 0;
+      for (; a < dim; ++a) {
+        if (++cell[a] <= last[a]) break;
+        cell[a] = first[a];
+      }
+      if (a == dim) return;
+    }
+  }
   void visit_leaves(int level, const IVec<dim>& cell, const std::function<void(int, const IVec<dim>&)>& fn) const;
   int finest_level_in(int level, const IVec<dim>& cell, const Vec<dim>& lo, const Vec<dim>& hi) const;
 

@@ -47,6 +47,12 @@ public:
     return i == kNone ? -1 : values_[i];
   }
   std::size_t size() const { return size_; }
+  //! Calls fn(key, value) for every entry, in table order.
+  template <class Fn>
+  void for_each(Fn&& fn) const {
+    for (std::size_t i = 0; i < keys_.size(); ++i)
+      if (keys_[i] != kEmpty) fn(keys_[i], values_[i]);
+  }
   std::size_t bytes() const { return keys_.capacity() * sizeof(BlockKey) + values_.capacity() * sizeof(int); }
 
 private:
