@@ -126,7 +126,7 @@ SceneSettings<dim> parse_scene_settings(const Config& scene, const std::optional
   if (auto out = scene.optional_child("output")) {
     s.output.particles = out->flag("particles", true);
     s.output.png = out->flag("png", true);
-    s.output.color_by = out->choice("color_by", "speed", {"speed", "material", "J", "plastic", "height"});
+    s.output.color_by = out->choice("color_by", "speed", {"speed", "material", "J", "plastic", "height", "level"});
     s.output.png_width = out->integer("png_width", 640, 16, 8192);
     s.output.checkpoint_every = out->integer("checkpoint_every", 0, 0, 1000000);
   }

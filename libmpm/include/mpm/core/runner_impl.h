@@ -7,6 +7,7 @@
 #include <mpm/core/error.h>
 #include <mpm/core/runner.h>
 #include <mpm/io/atomic_file.h>
+#include <mpm/io/cell_output.h>
 #include <mpm/io/checkpoint.h>
 #include <mpm/io/diagnostics_csv.h>
 #include <mpm/io/particle_output.h>
@@ -231,6 +232,11 @@ void Runner<dim, State>::write_frame(State& state, int frame) {
       io::write_particles(out_ / io::particle_file_name(frame, stem), *phase.particles, state.time, frame);
       io::write_time_series_xdmf(out_, frames_written_, stem);
     }
+    if constexpr (requires { state.adaptive; })  // the leaves of an adaptive grid (io/cell_output.h)
+      if (state.adaptive) {
+        io::write_cells(out_ / io::particle_file_name(frame, "cells"), state.adaptive->tree(), state.time, frame);
+        io::write_cells_time_series<dim>(out_, frames_written_);
+      }
   }
   if (settings_.output.png) {
     io::PreviewOptions o;

@@ -3,6 +3,7 @@
 // bit-exactly is compared bit by bit.
 #include <mpm/core/error.h>
 #include <mpm/io/atomic_file.h>
+#include <mpm/io/cell_output.h>
 #include <mpm/io/checkpoint.h>
 #include <mpm/io/diagnostics_csv.h>
 #include <mpm/io/particle_output.h>
@@ -149,6 +150,34 @@ TEST_CASE("the temporary files of a killed process are removed, those of live on
   CHECK(dir.entries() == std::vector<std::string>{"frame_0001.h5", "frame_0002.h5.tmp-" + live, "notes.tmp-abc",
                                                   "preview_0001.png.tmp-" + parent});
   CHECK(io::remove_stale_temporaries(dir / "missing") == 0);
+}
+
+TEST_CASE("the leaves of an adaptive grid are written as cells with their level, and a time series") {
+  ScratchDir dir("cells");
+  adaptive::CellTree<2> tree(Vec<2>::Zero(), IVec<2>(2, 1), 1.0, 3);
+  tree.refine(0, IVec<2>(1, 0));
+  tree.refine(1, IVec<2>(3, 1));  // leaves: 1 of level 0, 3 of level 1, 4 of level 2
+  io::write_cells(dir.path() / "cells_0000.h5", tree, 0.5, 0);
+  io::write_cells_time_series<2>(dir.path(), {{0, 0.5}});
+  const hid_t file = H5Fopen((dir.path() / "cells_0000.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  REQUIRE(file >= 0);
+  const auto level = read_dataset<std::int32_t>(file, "level", H5T_NATIVE_INT32);
+  CHECK(level == std::vector<std::int32_t>{0, 1, 1, 1, 2, 2, 2, 2});
+  CHECK(dataset_shape(file, "cells") == std::vector<hsize_t>{8, 4});
+  const auto points = read_dataset<double>(file, "points", H5T_NATIVE_DOUBLE);
+  // The area of the quadrilaterals (shoelace) adds up to the domain's: the leaves tile it.
+  double area = 0.0;
+  for (std::size_t c = 0; c < 8; ++c)
+    for (int k = 0; k < 4; ++k) {
+      const double* a = &points[(4 * c + k) * 3];
+      const double* b = &points[(4 * c + (k + 1) % 4) * 3];
+      area += 0.5 * (a[0] * b[1] - b[0] * a[1]);
+    }
+  CHECK(area == doctest::Approx(2.0));
+  H5Fclose(file);
+  const std::string series = read_text(dir.path() / "cells.xdmf");
+  CHECK(series.find("TopologyType=\"Quadrilateral\" NumberOfElements=\"8\"") != std::string::npos);
+  CHECK(series.find("cells_0000.h5:/level") != std::string::npos);
 }
 
 TEST_CASE("write_file_atomically replaces the file and leaves no temporary file") {
