@@ -1,6 +1,7 @@
 #include <mpm/adaptive/adaptive_grid.h>
 #include <mpm/adaptive/constrained_basis.h>
 #include <mpm/core/error.h>
+#include <mpm/core/kernels.h>
 
 #include <algorithm>
 #include <cmath>
@@ -11,47 +12,22 @@
 namespace mpm::adaptive {
 
 namespace {
-double hat(double r) { return std::fmax(0.0, 1.0 - std::fabs(r)); }
-double hat_integral(double s) {  // H(s) = int_{-inf}^{s} N1
-  if (s <= -1.0) return 0.0;
-  if (s <= 0.0) return 0.5 * (1.0 + s) * (1.0 + s);
-  if (s <= 1.0) return 1.0 - 0.5 * (1.0 - s) * (1.0 - s);
-  return 1.0;
-}
-}  // namespace
-
-namespace {
-// Stable sort of (block, particle) pairs by block: a counting sort by the rank of the blocks
-// present, O(n + blocks log blocks) (the pairs come in particle order).
+// Stable sort of (block, particle) pairs by block (the pairs come in particle order).
 void sort_by_block(std::vector<std::pair<BlockKey, std::uint32_t>>& pairs) {
   if (std::is_sorted(pairs.begin(), pairs.end())) return;
-  BlockTable rank;
-  std::vector<BlockKey> present;
-  for (const auto& [key, p] : pairs)
-    if (rank.insert(key, static_cast<int>(present.size())) == static_cast<int>(present.size())) present.push_back(key);
-  std::sort(present.begin(), present.end());
-  for (std::size_t r = 0; r < present.size(); ++r) rank.assign(present[r], static_cast<int>(r));
-  std::vector<std::uint32_t> offset(present.size() + 1, 0);
-  std::vector<int> pair_rank(pairs.size());
-  for (std::size_t i = 0; i < pairs.size(); ++i) ++offset[(pair_rank[i] = rank.find(pairs[i].first)) + 1];
-  for (std::size_t r = 0; r < present.size(); ++r) offset[r + 1] += offset[r];
+  std::vector<BlockKey> keys(pairs.size());
+  for (std::size_t i = 0; i < pairs.size(); ++i) keys[i] = pairs[i].first;
   std::vector<std::pair<BlockKey, std::uint32_t>> sorted(pairs.size());
-  for (std::size_t i = 0; i < pairs.size(); ++i) sorted[offset[pair_rank[i]]++] = pairs[i];
+  const std::vector<std::uint32_t> order = stable_key_order(keys);
+  for (std::size_t i = 0; i < pairs.size(); ++i) sorted[i] = pairs[order[i]];
   pairs.swap(sorted);
 }
 }  // namespace
 
 void GimpAxis::compute(double xi, double h) {
   if (h == 0.5) {  // the quadratic B-spline, the common case: a particle on its own level
-    base = static_cast<int>(std::floor(xi - 0.5));
-    count = 3;
-    const double f = xi - base, a = 1.5 - f, b = f - 1.0, c = f - 0.5;
-    w[0] = 0.5 * a * a;
-    w[1] = 0.75 - b * b;
-    w[2] = 0.5 * c * c;
-    dw[0] = -a;
-    dw[1] = -2.0 * b;
-    dw[2] = c;
+    QuadraticBSpline{}(xi, base, w, dw);
+    count = QuadraticBSpline::support;
     return;
   }
   base = static_cast<int>(std::floor(xi - h - 1.0)) + 1;             // first node with |xi - j| < 1 + h
@@ -59,8 +35,8 @@ void GimpAxis::compute(double xi, double h) {
   const double inv = 0.5 / h;
   for (int k = 0; k < count; ++k) {
     const double r = xi - (base + k);
-    w[k] = (hat_integral(r + h) - hat_integral(r - h)) * inv;
-    dw[k] = (hat(r + h) - hat(r - h)) * inv;
+    w[k] = (UGimp::hat_integral(r + h) - UGimp::hat_integral(r - h)) * inv;
+    dw[k] = (UGimp::hat(r + h) - UGimp::hat(r - h)) * inv;
   }
 }
 

@@ -23,6 +23,15 @@ void scatter_irregular(const Particles<dim>& P, const AdaptiveGrid<dim>& grid, F
   }
 }
 
+// fn(p, n) for every irregular particle p (transfer level n), in parallel (G2P-like gathers).
+template <int dim, class Fn>
+void gather_irregular(const AdaptiveGrid<dim>& grid, Fn&& fn) {
+  const std::vector<std::uint32_t>& irregular = grid.irregular();
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, irregular.size(), 256), [&](const auto& range) {
+    for (std::size_t i = range.begin(); i != range.end(); ++i) fn(irregular[i], grid.transfer_level(irregular[i]));
+  });
+}
+
 template <int dim>
 std::vector<std::vector<Vec<dim>>*> per_level(AdaptiveGrid<dim>& grid, std::vector<Vec<dim>> SparseGrid<dim>::*field) {
   std::vector<std::vector<Vec<dim>>*> v;
@@ -81,40 +90,35 @@ void grid_to_particles(Particles<dim>& P, const TransferScheme& scheme, const Ad
   const bool apic = scheme.type == TransferScheme::Type::apic;
   for (int n = 0; n < grid.levels(); ++n)
     mpm::grid_to_particles(P, grid.regular(n), QuadraticBSpline{}, scheme, grid.level(n), dt);
-  const std::vector<std::uint32_t>& irregular = grid.irregular();
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, irregular.size(), 256), [&](const auto& range) {
-    for (std::size_t i = range.begin(); i != range.end(); ++i) {
-      const std::size_t p = irregular[i];
-      const int n = grid.transfer_level(p);
-      const SparseGrid<dim>& g = grid.level(n);
-      const auto& ghosts = grid.ghosts(n);
-      const Vec<dim> xp = P.x[p];
-      Vec<dim> v_pic = Vec<dim>::Zero(), dv = Vec<dim>::Zero();
-      Mat<dim> B = Mat<dim>::Zero(), D = Mat<dim>::Zero();
-      grid.for_each_weight(n, grid.half_cells(p), xp, [&](Index k, double w, const Vec<dim>&, const Vec<dim>& xk) {
-        const Vec<dim>& vk = g.velocity[k];
-        v_pic += w * vk;
-        if (apic) {
-          const Vec<dim> r = xk - xp;
-          B.noalias() += w * vk * r.transpose();
-          D.noalias() += w * r * r.transpose();
-          if (const int j = ghosts.of_node[k]; j >= 0) {
-            B += w * ghosts.velocity_moment[j];
-            D += w * ghosts.spread[j];
-          }
-        } else {
-          dv += w * (vk - g.velocity_old[k]);
-        }
-      });
+  gather_irregular(grid, [&](std::size_t p, int n) {
+    const SparseGrid<dim>& g = grid.level(n);
+    const auto& ghosts = grid.ghosts(n);
+    const Vec<dim> xp = P.x[p];
+    Vec<dim> v_pic = Vec<dim>::Zero(), dv = Vec<dim>::Zero();
+    Mat<dim> B = Mat<dim>::Zero(), D = Mat<dim>::Zero();
+    grid.for_each_weight(n, grid.half_cells(p), xp, [&](Index k, double w, const Vec<dim>&, const Vec<dim>& xk) {
+      const Vec<dim>& vk = g.velocity[k];
+      v_pic += w * vk;
       if (apic) {
-        P.v[p] = v_pic;
-        P.C[p] = B * D.inverse();
+        const Vec<dim> r = xk - xp;
+        B.noalias() += w * vk * r.transpose();
+        D.noalias() += w * r * r.transpose();
+        if (const int j = ghosts.of_node[k]; j >= 0) {
+          B += w * ghosts.velocity_moment[j];
+          D += w * ghosts.spread[j];
+        }
       } else {
-        P.v[p] = scheme.flip_ratio * (P.v[p] + dv) + (1.0 - scheme.flip_ratio) * v_pic;
-        P.C[p].setZero();
+        dv += w * (vk - g.velocity_old[k]);
       }
-      P.x[p] += dt * v_pic;
+    });
+    if (apic) {
+      P.v[p] = v_pic;
+      P.C[p] = B * D.inverse();
+    } else {
+      P.v[p] = scheme.flip_ratio * (P.v[p] + dv) + (1.0 - scheme.flip_ratio) * v_pic;
+      P.C[p].setZero();
     }
+    P.x[p] += dt * v_pic;
   });
 }
 
@@ -124,18 +128,13 @@ void velocity_gradient(const Particles<dim>& P, const AdaptiveGrid<dim>& grid, s
   grad_v.resize(P.size());
   for (int n = 0; n < grid.levels(); ++n)
     mpm::velocity_gradient(P, grid.regular(n), QuadraticBSpline{}, grid.level(n), grad_v);
-  const std::vector<std::uint32_t>& irregular = grid.irregular();
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, irregular.size(), 256), [&](const auto& range) {
-    for (std::size_t i = range.begin(); i != range.end(); ++i) {
-      const std::size_t p = irregular[i];
-      const int n = grid.transfer_level(p);
-      const SparseGrid<dim>& g = grid.level(n);
-      Mat<dim> G = Mat<dim>::Zero();
-      grid.for_each_weight(n, grid.half_cells(p), P.x[p], [&](Index k, double, const Vec<dim>& grad, const Vec<dim>&) {
-        G.noalias() += g.velocity[k] * grad.transpose();
-      });
-      grad_v[p] = G;
-    }
+  gather_irregular(grid, [&](std::size_t p, int n) {
+    const SparseGrid<dim>& g = grid.level(n);
+    Mat<dim> G = Mat<dim>::Zero();
+    grid.for_each_weight(n, grid.half_cells(p), P.x[p], [&](Index k, double, const Vec<dim>& grad, const Vec<dim>&) {
+      G.noalias() += g.velocity[k] * grad.transpose();
+    });
+    grad_v[p] = G;
   });
 }
 

@@ -83,28 +83,13 @@ bool order_by_block(const std::vector<Eigen::Matrix<T, dim, 1>>& x, const Kernel
       },
       kernel);
 
-  // Counting sort by the rank of the block key among the keys present: O(n + blocks log
-  // blocks), stable. The sorted keys are written in the same pass as the order (same target
-  // position, so no extra random access).
+  // Stable sort by block key (a counting sort by rank, block_table.h). The sorted keys are
+  // gathered once, in the order's sequence.
   const bool in_order = std::is_sorted(key.begin(), key.end());
   if (!in_order) {
-    BlockTable rank;
-    std::vector<BlockKey> present;
-    for (BlockKey k : key)
-      if (rank.insert(k, static_cast<int>(present.size())) == static_cast<int>(present.size())) present.push_back(k);
-    std::sort(present.begin(), present.end());
-    for (std::size_t r = 0; r < present.size(); ++r) rank.assign(present[r], static_cast<int>(r));
-    std::vector<std::uint32_t> offset(present.size() + 1, 0);
-    std::vector<std::uint32_t> key_rank(n);
-    for (std::size_t p = 0; p < n; ++p) ++offset[(key_rank[p] = rank.find(key[p])) + 1];
-    for (std::size_t r = 0; r < present.size(); ++r) offset[r + 1] += offset[r];
-    order.resize(n);
+    order = stable_key_order(key);
     std::vector<BlockKey> sorted_key(n);
-    for (std::size_t p = 0; p < n; ++p) {
-      const std::uint32_t i = offset[key_rank[p]]++;
-      order[i] = static_cast<std::uint32_t>(p);
-      sorted_key[i] = key[p];
-    }
+    for (std::size_t i = 0; i < n; ++i) sorted_key[i] = key[order[i]];
     key.swap(sorted_key);
   }
 

@@ -5,6 +5,7 @@
 //!
 //! Open addressing with linear probing on a power-of-two table kept at most half full; keys
 //! are never erased one by one (a grid replaces its whole allocated set), so no tombstones.
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -82,5 +83,25 @@ private:
   std::size_t mask_ = 0;
   std::size_t size_ = 0;
 };
+
+//! The stable order that sorts `keys`: the sorted sequence holds keys[order[0]], keys[order[1]],
+//! ... A counting sort by the rank of the keys present, O(n + k log k) for k distinct keys
+//! (blocks are few against particles).
+inline std::vector<std::uint32_t> stable_key_order(const std::vector<BlockKey>& keys) {
+  BlockTable rank;
+  std::vector<BlockKey> present;
+  for (BlockKey k : keys)
+    if (rank.insert(k, static_cast<int>(present.size())) == static_cast<int>(present.size())) present.push_back(k);
+  std::sort(present.begin(), present.end());
+  for (std::size_t r = 0; r < present.size(); ++r) rank.assign(present[r], static_cast<int>(r));
+  std::vector<std::uint32_t> offset(present.size() + 1, 0);
+  std::vector<std::uint32_t> key_rank(keys.size());
+  for (std::size_t i = 0; i < keys.size(); ++i)
+    ++offset[(key_rank[i] = static_cast<std::uint32_t>(rank.find(keys[i]))) + 1];
+  for (std::size_t r = 0; r < present.size(); ++r) offset[r + 1] += offset[r];
+  std::vector<std::uint32_t> order(keys.size());
+  for (std::size_t i = 0; i < keys.size(); ++i) order[offset[key_rank[i]]++] = static_cast<std::uint32_t>(i);
+  return order;
+}
 
 }  // namespace mpm
