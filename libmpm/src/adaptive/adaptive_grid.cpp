@@ -12,6 +12,8 @@
 namespace mpm::adaptive {
 
 namespace {
+const Eigen::IOFormat kList(Eigen::FullPrecision, Eigen::DontAlignCols, ", ", ", ");
+
 // Stable sort of (block, particle) pairs by block (the pairs come in particle order).
 void sort_by_block(std::vector<std::pair<BlockKey, std::uint32_t>>& pairs) {
   if (std::is_sorted(pairs.begin(), pairs.end())) return;
@@ -77,7 +79,10 @@ void AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
     const int n = transfer_level_[p];
     if (n < 0) {
       std::ostringstream s;
-      s << "stage '" << stage << "': particle " << p << " at (" << x[p].transpose() << ") left the grid domain";
+      s.precision(9);
+      s << "stage '" << stage << "': particle " << p << (x[p].allFinite() ? " at (" : " has a non-finite position (")
+        << x[p].transpose().format(kList) << ")"
+        << (x[p].allFinite() ? " left the grid domain; keep particles inside the walls" : "");
       throw NumericalError(s.str());
     }
     const SparseGrid<dim>& g = levels_[n];
@@ -91,7 +96,8 @@ void AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
       last[a] = axis[a].base + axis[a].count - 1;
       if (first[a] < 0 || last[a] >= g.node_counts()[a]) {
         std::ostringstream s;
-        s << "stage '" << stage << "': the stencil of particle " << p << " at (" << x[p].transpose()
+        s.precision(9);
+        s << "stage '" << stage << "': the stencil of particle " << p << " at (" << x[p].transpose().format(kList)
           << ") leaves the grid (axis " << a << "); keep particles inside the walls";
         throw NumericalError(s.str());
       }
@@ -317,10 +323,17 @@ template <int dim>
 std::size_t AdaptiveGrid<dim>::memory_bytes() const {
   std::size_t bytes = tree_.memory_bytes() + transfer_level_.capacity() * sizeof(int);
   for (const SparseGrid<dim>& g : levels_) bytes += g.memory_bytes();
+  bytes += half_cells_.capacity() * sizeof(double) + irregular_.capacity() * sizeof(std::uint32_t);
   for (const Ghosts& g : ghosts_)
     bytes += g.node.capacity() * sizeof(Index) + g.begin.capacity() * sizeof(std::uint32_t) +
              g.link.capacity() * sizeof(GhostLink) + g.spread.capacity() * sizeof(Mat<dim>) +
-             g.of_node.capacity() * sizeof(int);
+             g.of_node.capacity() * sizeof(int) + g.velocity_moment.capacity() * sizeof(Mat<dim>);
+  for (const ParticleBuckets<dim>& b : regular_)
+    bytes += b.particle.capacity() * sizeof(std::uint32_t) + b.begin.capacity() * sizeof(std::uint32_t) +
+             b.block.capacity() * sizeof(BlockKey);
+  for (const LevelStatus& s : status_)
+    bytes += s.index.bytes() + s.blocks.capacity() * sizeof(BlockStatus) + s.ghosts.capacity() * sizeof(PendingGhost) +
+             s.links.capacity() * sizeof(NodeWeight<dim>);
   return bytes;
 }
 

@@ -56,7 +56,12 @@ void CellTree<dim>::refine(int level, const IVec<dim>& cell) {
   MPM_VERIFY(level + 1 < levels_, InputError,
              "adaptive grid: a level-" + std::to_string(level) + " cell cannot be refined: the tree has " +
                  std::to_string(levels_) + " levels");
-  MPM_VERIFY(is_leaf(level, cell), InputError, "adaptive grid: only a leaf can be refined");
+  if (!is_leaf(level, cell)) {
+    std::string where;
+    for (int a = 0; a < dim; ++a) where += (a ? ", " : "") + std::to_string(cell[a]);
+    throw InputError("adaptive grid: level-" + std::to_string(level) + " cell (" + where +
+                     ") is not a leaf and cannot be refined");
+  }
   refined_[level].insert(key(cell), 1);
 }
 

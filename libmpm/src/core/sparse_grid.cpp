@@ -25,7 +25,8 @@ SparseGrid<dim>::SparseGrid(const Vec<dim>& lo, const Vec<dim>& hi, double dx, c
     block_counts_[a] = (node_counts_[a] + block_size - 1) / block_size + 1;
     verify<InputError>(block_counts_[a] < (1 << std::min(key_bits, 30)),
                        "grid too large: " + std::to_string(node_counts_[a]) + " nodes on axis " + std::to_string(a) +
-                           " (domain / dx); at most " + std::to_string(block_size << std::min(key_bits, 30)) + " in " +
+                           " (domain / dx); at most " +
+                           std::to_string(static_cast<long long>(block_size) << std::min(key_bits, 30)) + " in " +
                            std::to_string(dim) + "D");
   }
   slot_.reset(0);

@@ -181,7 +181,7 @@ void AdaptiveGrid<dim>::for_each_weight(int n, double h, const Vec<dim>& x, Fn&&
         const int slot = g.slot(block);
         first_node = slot < 0 ? -1 : static_cast<Index>(slot) * SparseGrid<dim>::nodes_per_block;
       }
-      MPM_ASSERT(first_node >= 0);
+      MPM_VERIFY(first_node >= 0, Error, "adaptive grid: a stencil reaches a block that prepare() did not allocate");
       const Index k = first_node + SparseGrid<dim>::local_index(node);
       fn(k, w, grad, Vec<dim>(g.origin() + g.dx() * node.template cast<double>()));
     }

@@ -19,10 +19,12 @@ public:
   //! Empties the table and sizes it for `count` keys.
   void reset(std::size_t count) {
     std::size_t capacity = 16;
-    while (capacity < 2 * count) capacity *= 2;
+    int bits = 4;
+    for (; capacity < 2 * count; capacity *= 2) ++bits;
     keys_.assign(capacity, kEmpty);
     values_.assign(capacity, -1);
     mask_ = capacity - 1;
+    shift_ = 64 - bits;
     size_ = 0;
   }
   //! Inserts (key, value) unless the key is present; returns the stored value.
@@ -60,9 +62,9 @@ private:
   static constexpr BlockKey kEmpty = ~BlockKey{0};
   static constexpr std::size_t kNone = ~std::size_t{0};
 
-  std::size_t home(BlockKey key) const {
-    return static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> 17) & mask_;  // Fibonacci hashing
-  }
+  //! Fibonacci hashing: the top bits of the product, which every bit of the key reaches (the
+  //! last axis sits in the key's high bits).
+  std::size_t home(BlockKey key) const { return static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> shift_); }
   std::size_t position(BlockKey key) const {
     if (keys_.empty()) return kNone;
     for (std::size_t i = home(key);; i = (i + 1) & mask_) {
@@ -81,6 +83,7 @@ private:
   std::vector<BlockKey> keys_;
   std::vector<int> values_;
   std::size_t mask_ = 0;
+  int shift_ = 63;
   std::size_t size_ = 0;
 };
 

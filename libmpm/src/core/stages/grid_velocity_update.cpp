@@ -31,7 +31,8 @@ void GridVelocityUpdate<dim>::update(SparseGrid<dim>& g, const MpmState<dim>& s)
       const IVec<dim> node = g.node_coord(k);
       std::string where;
       for (int a = 0; a < dim; ++a) where += (a ? ", " : "") + std::to_string(node[a]);
-      throw NumericalError("stage '" + name() + "': grid node (" + where + ") has non-finite velocity (mass " +
+      throw NumericalError("stage '" + name() + "': grid node (" + where +
+                           ") of the grid with dx = " + std::to_string(g.dx()) + " m has non-finite velocity (mass " +
                            std::to_string(g.mass[k]) + " kg)");
     }
 }
