@@ -43,7 +43,9 @@ void GimpAxis::compute(double xi, double h) {
 }
 
 template <int dim>
-AdaptiveGrid<dim>::AdaptiveGrid(CellTree<dim> tree) : tree_(std::move(tree)) {
+AdaptiveGrid<dim>::AdaptiveGrid(CellTree<dim> tree, int points_per_axis)
+    : tree_(std::move(tree)), points_per_axis_(points_per_axis) {
+  MPM_VERIFY(points_per_axis >= 1, InputError, "adaptive grid: at least one particle per axis per cell");
   const Vec<dim> hi = tree_.origin() + tree_.dx(0) * tree_.base_cells().template cast<double>();
   for (int n = 0; n < tree_.levels(); ++n) levels_.emplace_back(tree_.origin(), hi, tree_.dx(n));
   ghosts_.resize(tree_.levels());
@@ -88,6 +90,13 @@ void AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
     const SparseGrid<dim>& g = levels_[n];
     const double h = half / g.dx();
     half_cells_[p] = h;
+    if (n == type[p]) {  // on its own level: regular_kernel(), whose stencil holds the general one
+      const IVec<dim> base = uniform_base(n, x[p]);
+      if ((base.array() >= 0).all() && (base.array() + 2 < g.node_counts().array()).all()) {
+        bucketed[n].emplace_back(g.block_id(base), static_cast<std::uint32_t>(p));
+        continue;
+      }
+    }
     IVec<dim> first, last;
     GimpAxis axis[dim];
     axis_weights(n, h, x[p], axis);
@@ -103,12 +112,6 @@ void AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
       }
       first[a] /= B;
       last[a] /= B;
-    }
-    if (h == 0.5) {  // its stencil lies in its bucket's patch, whose blocks are added below
-      IVec<dim> base;
-      for (int a = 0; a < dim; ++a) base[a] = axis[a].base;
-      bucketed[n].emplace_back(g.block_id(base), static_cast<std::uint32_t>(p));
-      continue;
     }
     irregular_.push_back(static_cast<std::uint32_t>(p));
     IVec<dim> b = first;
@@ -213,12 +216,11 @@ void AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
         checked = block;
         check_nodes = patch_embedded(block);
       }
-      GimpAxis axis[dim];
-      if (check_nodes) axis_weights(n, 0.5, x[p], axis);
+      const IVec<dim> base = check_nodes ? uniform_base(n, x[p]) : IVec<dim>::Zero();
       bool regular = true;
       for (int i = 0; i < ipow(3, dim) && regular && check_nodes; ++i) {
         IVec<dim> node;
-        for (int a = 0, r = i; a < dim; ++a, r /= 3) node[a] = axis[a].base + r % 3;
+        for (int a = 0, r = i; a < dim; ++a, r /= 3) node[a] = base[a] + r % 3;
         regular = !embedded(node);
       }
       if (!regular) {

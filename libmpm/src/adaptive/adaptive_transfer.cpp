@@ -46,7 +46,7 @@ void particles_to_grid(const Particles<dim>& P, const TransferScheme& scheme, Ad
   const bool apic = scheme.type == TransferScheme::Type::apic;
   std::vector<std::vector<Mat<dim>>> affine(grid.levels());
   for (int n = 0; n < grid.levels(); ++n) {
-    mpm::particles_to_grid(P, grid.regular(n), QuadraticBSpline{}, scheme, grid.level(n));  // zeroes first
+    mpm::particles_to_grid(P, grid.regular(n), grid.regular_kernel(), scheme, grid.level(n));  // zeroes first
     affine[n].assign(grid.ghosts(n).node.size(), Mat<dim>::Zero());
   }
   scatter_irregular(P, grid, [&](std::size_t p, int n, Index k, double w, const Vec<dim>&, const Vec<dim>& xk) {
@@ -72,7 +72,7 @@ template <int dim>
 void stress_to_grid_forces(const std::vector<Mat<dim>>& S, const Particles<dim>& P, AdaptiveGrid<dim>& grid) {
   MPM_ASSERT(grid.particle_count() == P.size());
   for (int n = 0; n < grid.levels(); ++n)  // zeroes first
-    mpm::stress_to_grid_forces(S, P, grid.regular(n), QuadraticBSpline{}, grid.level(n));
+    mpm::stress_to_grid_forces(S, P, grid.regular(n), grid.regular_kernel(), grid.level(n));
   scatter_irregular(P, grid, [&](std::size_t p, int n, Index k, double, const Vec<dim>& grad, const Vec<dim>&) {
     grid.level(n).force[k] -= S[p] * grad;
   });
@@ -89,7 +89,7 @@ void grid_to_particles(Particles<dim>& P, const TransferScheme& scheme, const Ad
   MPM_ASSERT(grid.particle_count() == P.size());
   const bool apic = scheme.type == TransferScheme::Type::apic;
   for (int n = 0; n < grid.levels(); ++n)
-    mpm::grid_to_particles(P, grid.regular(n), QuadraticBSpline{}, scheme, grid.level(n), dt);
+    mpm::grid_to_particles(P, grid.regular(n), grid.regular_kernel(), scheme, grid.level(n), dt);
   gather_irregular(grid, [&](std::size_t p, int n) {
     const SparseGrid<dim>& g = grid.level(n);
     const auto& ghosts = grid.ghosts(n);
@@ -127,7 +127,7 @@ void velocity_gradient(const Particles<dim>& P, const AdaptiveGrid<dim>& grid, s
   MPM_ASSERT(grid.particle_count() == P.size());
   grad_v.resize(P.size());
   for (int n = 0; n < grid.levels(); ++n)
-    mpm::velocity_gradient(P, grid.regular(n), QuadraticBSpline{}, grid.level(n), grad_v);
+    mpm::velocity_gradient(P, grid.regular(n), grid.regular_kernel(), grid.level(n), grad_v);
   gather_irregular(grid, [&](std::size_t p, int n) {
     const SparseGrid<dim>& g = grid.level(n);
     Mat<dim> G = Mat<dim>::Zero();

@@ -51,8 +51,35 @@ void add_particles(SolidScene<dim>& scene, const std::vector<Vec<dim>>& position
   if (const OutsideDomain outside = first_outside_domain(scene.settings, positions); !outside.why.empty())
     throw InputError(where + ": " + outside.why);
   Particles<dim>& P = scene.state.particles;
-  const double mass = scene.materials.at(m).density * volume;
-  for (const Vec<dim>& x : positions) P.push_back(x, velocity, mass, volume, m);
+  const double density = scene.materials.at(m).density;
+  if (!scene.state.adaptive) {
+    for (const Vec<dim>& x : positions) P.push_back(x, velocity, density * volume, volume, m);
+    return;
+  }
+  // On the finest lattice (k points per axis per cell); regrouped into coarser particles where
+  // the leaves are coarse, but for the surface band.
+  const int k = static_cast<int>(std::lround(std::pow(std::pow(scene.settings.dx, dim) / volume, 1.0 / dim)));
+  if (k != scene.state.adaptive->points_per_axis())
+    throw InputError(where + ": on an adaptive grid every body is seeded with particles_per_cell = " +
+                     std::to_string(ipow(scene.state.adaptive->points_per_axis(), dim)) + " (" +
+                     std::to_string(scene.state.adaptive->points_per_axis()) + " per axis), so that the particles' " +
+                     "boxes tile the body across levels");
+  const int surface_steps = static_cast<int>(std::ceil(scene.refinement->surface_band * k / scene.settings.dx));
+  const auto levelled =
+      adaptive::match_particles_to_leaves(scene.state.adaptive->tree(), positions, volume, k, surface_steps);
+  std::vector<std::uint16_t>& level = P.template channel<std::uint16_t>(adaptive::kParticleLevel);
+  for (std::size_t i = 0; i < levelled.x.size(); ++i) {
+    P.push_back(levelled.x[i], velocity, density * levelled.volume[i], levelled.volume[i], m);
+    level.back() = levelled.level[i];
+  }
+}
+
+template <int dim>
+void make_adaptive(SolidScene<dim>& scene, const adaptive::RefinementSettings<dim>& refinement) {
+  MPM_VERIFY(scene.state.particles.size() == 0, InputError, "a scene becomes adaptive before it is seeded");
+  scene.refinement = refinement;
+  scene.state.adaptive.emplace(adaptive::build_tree(refinement, scene.settings, scene.colliders));
+  adaptive::add_level_channel(scene.state.particles, scene.state.adaptive->tree());
 }
 
 namespace {
@@ -68,22 +95,10 @@ void seed_body(SolidScene<dim>& scene, const Config& body) {
   if (!(stretch.array().abs() > 0.0).all()) body.fail("stretch", "every component must be nonzero");
   const std::size_t first = scene.state.particles.size();
   Particles<dim>& P = scene.state.particles;
-  if (scene.state.adaptive) {
-    // Seeded on the finest lattice; regrouped into coarser particles where the leaves are coarse.
-    const int k =
-        static_cast<int>(std::lround(std::pow(std::pow(scene.settings.dx, dim) / body_particles.volume, 1.0 / dim)));
-    const int surface_steps = static_cast<int>(std::ceil(scene.refinement->surface_band * k / scene.settings.dx));
-    const auto levelled =
-        adaptive::match_particles_to_leaves(scene.state.adaptive->tree(), x, body_particles.volume, k, surface_steps);
-    add_particles(scene, levelled.x, 1.0, m, velocity, body.path());
-    std::vector<std::uint16_t>& level = P.template channel<std::uint16_t>(adaptive::kParticleLevel);
-    for (std::size_t i = 0; i < levelled.x.size(); ++i) {
-      P.volume0[first + i] = levelled.volume[i] / std::fabs(stretch.prod());
-      P.mass[first + i] = scene.materials.at(m).density * P.volume0[first + i];
-      level[first + i] = levelled.level[i];
-    }
-  } else {
-    add_particles(scene, x, body_particles.volume / std::fabs(stretch.prod()), m, velocity, body.path());
+  add_particles(scene, x, body_particles.volume, m, velocity, body.path());
+  for (std::size_t p = first; p < P.size(); ++p) {  // the rest state of a stretched body
+    P.volume0[p] /= std::fabs(stretch.prod());
+    P.mass[p] = scene.materials.at(m).density * P.volume0[p];
   }
   Vec<dim> centroid = Vec<dim>::Zero();
   for (const Vec<dim>& p : x) centroid += p / static_cast<double>(x.size());
@@ -133,11 +148,7 @@ SolidScene<dim> load_solid_scene(const Config& scene) {
                                                   wall_layer(settings.kernel, wall_dx));
   const std::string solver = scene.choice("solver", "explicit", solid_solver_names());
   SolidScene<dim> s = make_solid_scene(std::move(settings), parse_materials<dim>(scene), std::move(colliders), solver);
-  if (refinement) {
-    s.refinement = refinement;
-    s.state.adaptive.emplace(adaptive::build_tree(*refinement, s.settings, s.colliders));
-    adaptive::add_level_channel(s.state.particles, s.state.adaptive->tree());
-  }
+  if (refinement) make_adaptive(s, *refinement);
   seed_bodies(s, scene);
   return s;
 }
@@ -178,6 +189,7 @@ double elastic_energy(const MpmState<dim>& state, const std::vector<Material<dim
                               const std::string&);                                                                    \
   template SolidScene<dim> make_solid_scene(SceneSettings<dim>, std::vector<Material<dim>>,                           \
                                             geometry::ColliderSet<dim>, const std::string&);                          \
+  template void make_adaptive(SolidScene<dim>&, const adaptive::RefinementSettings<dim>&);                            \
   template void seed_bodies(SolidScene<dim>&, const Config&);                                                         \
   template SolidScene<dim> load_solid_scene<dim>(const Config&);                                                      \
   template Pipeline<MpmState<dim>> make_solid_pipeline(const SolidScene<dim>&);                                       \

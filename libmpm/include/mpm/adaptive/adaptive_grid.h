@@ -19,6 +19,7 @@
 #include <mpm/adaptive/cell_tree.h>
 #include <mpm/adaptive/constrained_basis.h>
 #include <mpm/core/error.h>
+#include <mpm/core/kernels.h>
 #include <mpm/core/particle_buckets.h>
 #include <mpm/core/sparse_grid.h>
 
@@ -52,7 +53,8 @@ template <int dim>
 class AdaptiveGrid {
 public:
   AdaptiveGrid() = default;
-  explicit AdaptiveGrid(CellTree<dim> tree);
+  //! `points_per_axis` k: particles are seeded k per axis per cell of their level.
+  explicit AdaptiveGrid(CellTree<dim> tree, int points_per_axis = 2);
 
   const CellTree<dim>& tree() const { return tree_; }
   //! The tree, for refinement; call prepare() before the next transfer.
@@ -61,9 +63,19 @@ public:
   SparseGrid<dim>& level(int n) { return levels_[n]; }
   const SparseGrid<dim>& level(int n) const { return levels_[n]; }
 
-  //! Side [m] of the GIMP box of a particle of type (level) q: dx_q, so that a particle on the
-  //! level of its type transfers with the quadratic B-spline (h = 1/2).
-  double particle_size(int type) const { return tree_.dx(type); }
+  //! Side [m] of the GIMP box of a particle of type (level) q: its own sub-cell, dx_q / k. The
+  //! boxes tile the body across levels (a coarse particle's box is the union of the fine ones
+  //! it was merged from), so the particles are a consistent quadrature everywhere: with boxes
+  //! of one cell (dx_q, the quadratic B-spline) they would overlap unevenly at a level jump, a
+  //! first-order error (test_vibrating_bar measures both).
+  double particle_size(int type) const { return tree_.dx(type) / points_per_axis_; }
+  int points_per_axis() const { return points_per_axis_; }
+  //! The uniform weights of a particle on its own level: uGIMP with h = 1 / (2k) (the quadratic
+  //! B-spline for k = 1). The regular particles transfer with them.
+  Kernel regular_kernel() const {
+    if (points_per_axis_ == 1) return QuadraticBSpline{};
+    return UGimp{0.5 / points_per_axis_};
+  }
 
   //! Finds the transfer level of every particle (positions x, types `type`), allocates the
   //! level grids and builds the ghost tables. Throws NumericalError naming `stage` for a
@@ -71,8 +83,8 @@ public:
   void prepare(const std::vector<Vec<dim>>& x, const std::vector<std::uint16_t>& type,
                const std::string& stage = "prepare");
   std::size_t particle_count() const { return transfer_level_.size(); }
-  //! The particles that transfer on level n as on a uniform grid: on their own level (the
-  //! quadratic B-spline) and with no embedded ghost in their bucket's patch. The uniform loops
+  //! The particles that transfer on level n as on a uniform grid: on their own level
+  //! (regular_kernel()) and with no embedded ghost in their stencil. The uniform loops
   //! (transfer.h) serve them, in parallel.
   const ParticleBuckets<dim>& regular(int n) const { return regular_[n]; }
   //! The other particles, by index: they take the general path (for_each_weight).
@@ -87,6 +99,15 @@ public:
   //! grad_w [1/m], x_k the node's position [m].
   template <class Fn>
   void for_each_weight(int n, double h, const Vec<dim>& x, Fn&& fn) const;
+  //! First node of the 3^dim stencil of regular_kernel() at x on level n: the expression of
+  //! the uniform loops (CellMap, then floor(xi - 1/2)).
+  IVec<dim> uniform_base(int n, const Vec<dim>& x) const {
+    const SparseGrid<dim>& g = levels_[n];
+    const double inv_dx = 1.0 / g.dx();
+    IVec<dim> base;
+    for (int a = 0; a < dim; ++a) base[a] = static_cast<int>(std::floor((x[a] - g.origin()[a]) * inv_dx - 0.5));
+    return base;
+  }
   //! The 1D weights of every axis for that particle: prepare() and for_each_weight() share this
   //! one expression, so they see the same stencil.
   void axis_weights(int n, double h, const Vec<dim>& x, GimpAxis* axis) const {
@@ -128,6 +149,7 @@ public:
 
 private:
   CellTree<dim> tree_;
+  int points_per_axis_ = 2;
   std::vector<SparseGrid<dim>> levels_;
   std::vector<Ghosts> ghosts_;
   std::vector<int> transfer_level_;

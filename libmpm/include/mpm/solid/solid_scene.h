@@ -46,7 +46,9 @@ std::uint16_t material_index(const std::vector<Material<dim>>& materials, const 
                              const std::string& key);
 
 //! Appends particles at `positions`, each of volume `volume` [m^dim] of material `m`, moving
-//! with `velocity`. Every particle must lie inside the domain (InputError naming `where`).
+//! with `velocity`. Every particle must lie inside the domain (InputError naming `where`). On an
+//! adaptive scene the positions are the finest seeding lattice (geometry/seeding.h), and the
+//! particles are regrouped to the leaves' levels (adaptive::match_particles_to_leaves).
 template <int dim>
 void add_particles(SolidScene<dim>& scene, const std::vector<Vec<dim>>& positions, double volume, std::uint16_t m,
                    const Vec<dim>& velocity, const std::string& where);
@@ -56,6 +58,11 @@ void add_particles(SolidScene<dim>& scene, const std::vector<Vec<dim>>& position
 template <int dim>
 SolidScene<dim> make_solid_scene(SceneSettings<dim> settings, std::vector<Material<dim>> materials,
                                  geometry::ColliderSet<dim> colliders, const std::string& solver = "explicit");
+
+//! Makes an unseeded scene adaptive: its AdaptiveGrid from `refinement`, the particle channel
+//! "level" (mpm/adaptive/). load_solid_scene does it for the key `adaptive`.
+template <int dim>
+void make_adaptive(SolidScene<dim>& scene, const adaptive::RefinementSettings<dim>& refinement);
 
 //! Seeds the optional "bodies" list of `scene` (box, sphere or mesh shapes).
 template <int dim>

@@ -180,11 +180,11 @@ void check_forces(unsigned seed) {
   CHECK(torque.norm() < 1e-12 * scale);
 }
 
-// One level: the adaptive transfer is the uniform quadratic B-spline transfer.
+// One level, boxes of one cell: the adaptive transfer is the uniform quadratic B-spline transfer.
 template <int dim>
 void check_uniform_limit() {
   const CellTree<dim> tree(Vec<dim>::Zero(), IVec<dim>::Constant(8), 0.125, 1);
-  AdaptiveGrid<dim> grid(tree);
+  AdaptiveGrid<dim> grid(tree, 1);  // one particle per axis per cell: boxes of dx
   Particles<dim> P = test::random_cloud<dim>(300, Vec<dim>::Constant(0.2), Vec<dim>::Constant(0.8), 3);
   Particles<dim> Q = P;
   grid.prepare(P.x, std::vector<std::uint16_t>(P.size(), 0));
