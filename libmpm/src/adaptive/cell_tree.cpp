@@ -199,13 +199,6 @@ void CellTree<dim>::for_each_leaf(const std::function<void(int, const IVec<dim>&
 }
 
 template <int dim>
-std::size_t CellTree<dim>::refined_count() const {
-  std::size_t n = 0;
-  for (const BlockTable& t : refined_) n += t.size();
-  return n;
-}
-
-template <int dim>
 bool CellTree<dim>::operator==(const CellTree& other) const {
   if (origin_ != other.origin_ || base_cells_ != other.base_cells_ || dx0_ != other.dx0_ || levels_ != other.levels_)
     return false;

@@ -76,7 +76,6 @@ public:
 
   //! Calls fn(level, cell) for every leaf, coarse to fine (level-0 leaves in lexicographic order).
   void for_each_leaf(const std::function<void(int, const IVec<dim>&)>& fn) const;
-  std::size_t refined_count() const;
   //! Same domain, levels and refined cells.
   bool operator==(const CellTree& other) const;
   std::size_t memory_bytes() const;
