@@ -3,21 +3,28 @@
 //
 //   column_collapse data/scenes/column_collapse.yaml
 //   column_collapse data/scenes/column_collapse.yaml --set column.aspect_ratio=4 --out out/a4
+//   column_collapse data/scenes/column_collapse_adaptive.yaml   (key adaptive: fine particles
+//                                                                and cells along the free surface)
 //
+// profile.csv: the final deposit height per dx-wide slab.
 // summary.json: runout L_inf (deposit front distance from the back wall), final_height,
-// normalized_runout (L_inf - L0)/L0, duration (time until the kinetic energy falls below
-// 1e-6 of its peak), runout_law_error |normalized - law| / law. --check compares normalized_runout with the 2D runout law of Lube et
-// al. 2005 (PRE 72, 041301): 1.2 a for a < 2.3, 1.9 a^(2/3) above, within +-50 % (the spread
-// between published experiments; data/reference/lube2005.md).
+// normalized_runout (L_inf - L0)/L0, duration (time until the kinetic energy falls below 1e-6
+// of its peak), runout_law_error |normalized - law| / law, particles (the final count).
+// --check compares normalized_runout with the 2D runout law of Lube et al. 2005 (PRE 72,
+// 041301): 1.2 a for a < 2.3, 1.9 a^(2/3) above, within +-50 % (the spread between published
+// experiments; data/reference/lube2005.md).
 #include <mpm/core/app.h>
 #include <mpm/core/runner.h>
 #include <mpm/geometry/body_config.h>
 #include <mpm/geometry/collider_config.h>
 #include <mpm/geometry/seeding.h>
+#include <mpm/io/atomic_file.h>
 #include <mpm/solid/solid_scene.h>
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
+#include <string>
 
 using namespace mpm;
 
@@ -26,22 +33,38 @@ namespace {
 double lube_runout_law(double a) { return a < 2.3 ? 1.2 * a : 1.9 * std::cbrt(a * a); }
 
 //! The deposit front [m]: the far edge of the contiguous run of dx-wide slabs, from the back
-//! wall, that each hold at least half a layer of particles (`layer` particles). Grains that
-//! broke away ahead of the deposit are not part of the runout, as in the experiments.
+//! wall, that each hold at least half a layer of material (`layer` [m^dim] of initial
+//! volume). Grains that broke away ahead of the deposit are not part of the runout, as in the
+//! experiments.
 template <int dim>
 double deposit_front(const Particles<dim>& P, double dx, double layer) {
-  std::vector<int> count;
-  for (const Vec<dim>& x : P.x) {
-    const auto slab = static_cast<std::size_t>(std::max(0.0, x[0] / dx));
-    if (slab >= count.size()) count.resize(slab + 1, 0);
-    ++count[slab];
+  std::vector<double> volume;
+  for (std::size_t p = 0; p < P.size(); ++p) {
+    const auto slab = static_cast<std::size_t>(std::max(0.0, P.x[p][0] / dx));
+    if (slab >= volume.size()) volume.resize(slab + 1, 0.0);
+    volume[slab] += P.volume0[p];
   }
   std::size_t slab = 0;
-  while (slab < count.size() && count[slab] >= 0.5 * layer) ++slab;
+  while (slab < volume.size() && volume[slab] >= 0.5 * layer) ++slab;
   double front = 0.0;
   for (const Vec<dim>& x : P.x)
     if (x[0] < slab * dx) front = std::max(front, x[0]);
   return front;
+}
+
+//! The deposit's top per dx-wide slab from the back wall, "x,height" rows [m].
+template <int dim>
+std::string height_profile(const Particles<dim>& P, double dx) {
+  std::vector<double> top;
+  for (const Vec<dim>& x : P.x) {
+    const auto slab = static_cast<std::size_t>(std::max(0.0, x[0] / dx));
+    if (slab >= top.size()) top.resize(slab + 1, 0.0);
+    top[slab] = std::max(top[slab], x[1]);
+  }
+  std::string csv = "x,height\n";
+  for (std::size_t i = 0; i < top.size(); ++i)
+    csv += std::to_string((static_cast<double>(i) + 0.5) * dx) + "," + std::to_string(top[i]) + "\n";
+  return csv;
 }
 
 template <int dim>
@@ -55,7 +78,10 @@ int run(const CommandLine& cl, const Config& scene) {
   const double length =
       column.number("domain_length", L0 * (1.0 + 1.5 * lube_runout_law(a)) + 4 * dx, Range{L0, 1e308, true, false});
   const double depth = dim == 3 ? column.number("depth", L0, Range::positive()) : 0.0;
-  const double layer = wall_layer(parse_kernel(scene), dx);  // walls at x = 0, y = 0, z = 0
+  // Walls at x = 0, y = 0, z = 0; on an adaptive grid they act on coarse nodes (dx 2^(levels-1)).
+  const std::optional<Config> adaptive_key = scene.optional_child("adaptive");
+  const int levels = adaptive_key ? adaptive_key->integer("levels", 2, 1, adaptive::max_levels) : 1;
+  const double layer = wall_layer(parse_kernel(scene), dx * (1 << (levels - 1)));
   DerivedDomain<dim> domain{Vec<dim>::Constant(-layer), Vec<dim>::Zero(), dx};
   domain.hi[0] = length + layer;
   domain.hi[1] = H0 + 2 * layer;
@@ -66,6 +92,8 @@ int run(const CommandLine& cl, const Config& scene) {
   std::vector<Material<dim>> sand = {parse_material<dim>(scene.child("material"))};
   auto colliders = geometry::parse_colliders<dim>(scene, domain.lo, domain.hi, layer);
   solid::SolidScene<dim> solid = solid::make_solid_scene(settings, sand, colliders);
+  if (const auto refinement = adaptive::parse_refinement<dim>(scene, settings))
+    solid::make_adaptive(solid, *refinement);
   const int ppc = geometry::particles_per_cell<dim>(column);
   Vec<dim> hi = Vec<dim>::Zero();
   hi[0] = L0;
@@ -92,7 +120,8 @@ int run(const CommandLine& cl, const Config& scene) {
   }
   const int k = geometry::lattice_points_per_axis<dim>(ppc);
   const double row = dim == 2 ? k : k * k * depth / dx;  // particles per lattice row of a slab
-  const double runout = deposit_front(solid.state.particles, dx, row);
+  const double runout = deposit_front(solid.state.particles, dx, row * geometry::particle_volume<dim>(dx, ppc));
+  io::write_file_atomically(runner.out_dir() / "profile.csv", height_profile(solid.state.particles, dx));
   double height = 0.0;
   for (const Vec<dim>& x : solid.state.particles.x) height = std::max(height, x[1]);
   const double normalized = (runout - L0) / L0;
@@ -101,6 +130,7 @@ int run(const CommandLine& cl, const Config& scene) {
                         {"normalized_runout", normalized},
                         {"duration", duration},
                         {"at_rest", at_rest ? 1.0 : 0.0},
+                        {"particles", static_cast<double>(solid.state.particles.size())},
                         {"runout_law_lube2005", lube_runout_law(a)},
                         {"runout_law_error", std::fabs(normalized - lube_runout_law(a)) / lube_runout_law(a)}});
   if (cl.check) {

@@ -1,6 +1,7 @@
 // Restart: a run continued from a checkpoint reaches the same bits as the run that was never
 // interrupted, for a solid app (column collapse, one phase), a solid on an adaptive grid (the
-// adaptive jello: the tree is rebuilt from the particles' levels every step) and a coupled one
+// adaptive jello: the tree is rebuilt from the particles' levels every step; the adaptive
+// column collapse: particles split and merge every step) and a coupled one
 // (settling: fluid and sediment, one checkpoint holding both). The run writes 10 frames with checkpoint_every
 // = 4; a copy of its output folder loses every file written after frame 4 (as if the run had
 // died there) and is continued with --restart checkpoint_0004.h5. Then every particle channel
@@ -55,6 +56,17 @@ const RestartCase kColumnCollapse{COLUMN_COLLAPSE_APP,
                                   {""},
                                   {"particles"},
                                   {"runout", "final_height", "normalized_runout"}};
+// Resampling splits and merges particles every step (random split rotations hashed from the
+// step): the restarted run must split and merge the same particles.
+const RestartCase kColumnAdaptive{COLUMN_COLLAPSE_APP,
+                                  "column_collapse_adaptive.yaml",
+                                  "--set column.cells_per_width=20",
+                                  0.02,
+                                  {""},
+                                  {""},
+                                  {"particles"},
+                                  {"runout", "final_height", "normalized_runout"},
+                                  true};
 #ifdef JELLO_COLLIDE_APP
 // Every result of jello_collide compares the end with the start of the run: none is final-only.
 const RestartCase kJelloAdaptive{
@@ -270,6 +282,9 @@ void check_restart(const RestartCase& c, const std::string& name) {
 
 TEST_CASE("a run continued from a checkpoint is bit-identical to the uninterrupted run") {
   SUBCASE("solid: column collapse") { check_restart(kColumnCollapse, "column_collapse"); }
+  SUBCASE("solid on an adaptive grid with resampling: column collapse") {
+    check_restart(kColumnAdaptive, "column_collapse_adaptive");
+  }
 #ifdef JELLO_COLLIDE_APP
   SUBCASE("solid on an adaptive grid: jello collide") { check_restart(kJelloAdaptive, "jello_adaptive"); }
 #endif

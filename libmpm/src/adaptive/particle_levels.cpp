@@ -1,9 +1,13 @@
 #include <mpm/adaptive/particle_levels.h>
+#include <mpm/core/error.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <deque>
+#include <limits>
 #include <map>
+#include <unordered_map>
 
 namespace mpm::adaptive {
 
@@ -56,50 +60,84 @@ LevelledParticles<dim> match_particles_to_leaves(const CellTree<dim>& tree, cons
   return out;
 }
 
+namespace {
+constexpr int kSiteBits = 21;  // bits per axis of a packed site key (2D and 3D)
+}  // namespace
+
 template <int dim>
-std::vector<int> lattice_surface_distance(const std::vector<Vec<dim>>& x, double h) {
-  auto site = [&](const Vec<dim>& p) {
-    std::array<int, dim> i;
-    for (int a = 0; a < dim; ++a) i[a] = static_cast<int>(std::floor(p[a] / h));
-    return i;
-  };
-  std::map<std::array<int, dim>, std::size_t> index;
-  for (std::size_t p = 0; p < x.size(); ++p) index.emplace(site(x[p]), p);
-  // Multi-source breadth-first search from the particles with an empty face neighbour.
-  std::vector<int> d(x.size(), 0);
-  std::deque<std::size_t> queue;
-  for (const auto& [i, p] : index) {
-    for (int a = 0; a < dim && d[p] == 0; ++a)
-      for (int s : {-1, 1}) {
-        std::array<int, dim> j = i;
-        j[a] += s;
-        if (!index.count(j)) d[p] = 1;
-      }
-    if (d[p] == 1) queue.push_back(p);
+std::vector<int> manhattan_depth(const std::vector<IVec<dim>>& sites, int max_depth) {
+  if (sites.empty()) return {};
+  // Keys relative to one site below the lowest, so that the empty neighbours pack too.
+  IVec<dim> lo = sites[0], hi = sites[0];
+  for (const IVec<dim>& i : sites) {
+    lo = lo.cwiseMin(i);
+    hi = hi.cwiseMax(i);
   }
-  while (!queue.empty()) {
-    const std::size_t p = queue.front();
-    queue.pop_front();
-    const std::array<int, dim> i = site(x[p]);
+  lo.array() -= 1;
+  MPM_VERIFY(((hi - lo).array() < (1 << kSiteBits) - 2).all(), Error,
+             "manhattan_depth: the sites span more than 2^21 - 3 lattice steps on an axis");
+  auto site_key = [&](const IVec<dim>& i) {
+    std::uint64_t k = 0;
+    for (int a = dim - 1; a >= 0; --a) k = (k << kSiteBits) | static_cast<std::uint64_t>(i[a] - lo[a]);
+    return k;
+  };
+  std::unordered_map<std::uint64_t, int> unique;  // site key -> index of its first entry
+  unique.reserve(sites.size());
+  std::vector<int> first(sites.size());
+  for (std::size_t i = 0; i < sites.size(); ++i)
+    first[i] = unique.emplace(site_key(sites[i]), static_cast<int>(i)).first->second;
+  // Multi-source breadth-first search from the sites with an empty face neighbour.
+  std::vector<int> depth(sites.size(), 0);
+  std::deque<int> queue;
+  auto for_each_neighbour = [&](const IVec<dim>& i, auto&& fn) {
     for (int a = 0; a < dim; ++a)
       for (int s : {-1, 1}) {
-        std::array<int, dim> j = i;
+        IVec<dim> j = i;
         j[a] += s;
-        const auto it = index.find(j);
-        if (it != index.end() && d[it->second] == 0) {
-          d[it->second] = d[p] + 1;
-          queue.push_back(it->second);
-        }
+        const auto it = unique.find(site_key(j));
+        fn(it == unique.end() ? -1 : it->second);
       }
+  };
+  for (const auto& [key, i] : unique) {
+    bool surface = false;
+    for_each_neighbour(sites[i], [&](int j) { surface = surface || j < 0; });
+    if (surface) {
+      depth[i] = 1;
+      queue.push_back(i);
+    }
   }
-  return d;
+  while (!queue.empty()) {
+    const int i = queue.front();
+    queue.pop_front();
+    if (depth[i] > max_depth) continue;
+    for_each_neighbour(sites[i], [&](int j) {
+      if (j >= 0 && depth[j] == 0) {
+        depth[j] = depth[i] + 1;
+        queue.push_back(j);
+      }
+    });
+  }
+  for (std::size_t i = 0; i < sites.size(); ++i) {
+    const int d = depth[first[i]];
+    depth[i] = (d == 0 || d > max_depth) ? max_depth + 1 : d;
+  }
+  return depth;
+}
+
+template <int dim>
+std::vector<int> lattice_surface_distance(const std::vector<Vec<dim>>& x, double h) {
+  std::vector<IVec<dim>> sites(x.size());
+  for (std::size_t p = 0; p < x.size(); ++p)
+    for (int a = 0; a < dim; ++a) sites[p][a] = static_cast<int>(std::floor(x[p][a] / h));
+  return manhattan_depth(sites);
 }
 
 #define MPM_INSTANTIATE(dim)                                                                                    \
   template std::vector<std::uint16_t>& add_level_channel(Particles<dim>&, const CellTree<dim>&);                \
   template LevelledParticles<dim> match_particles_to_leaves(const CellTree<dim>&, const std::vector<Vec<dim>>&, \
                                                             double, int, int);                                  \
-  template std::vector<int> lattice_surface_distance(const std::vector<Vec<dim>>&, double);
+  template std::vector<int> lattice_surface_distance(const std::vector<Vec<dim>>&, double);                     \
+  template std::vector<int> manhattan_depth(const std::vector<IVec<dim>>&, int);
 MPM_INSTANTIATE(2)
 MPM_INSTANTIATE(3)
 

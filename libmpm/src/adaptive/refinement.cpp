@@ -12,6 +12,8 @@ std::optional<RefinementSettings<dim>> parse_refinement(const Config& scene, con
   for (int a = 0; a < dim; ++a)
     if (settings.periodic[a])
       scene.fail("periodic", "an adaptive grid (key adaptive) needs a domain without periodic axes");
+  if (!std::holds_alternative<QuadraticBSpline>(settings.kernel))
+    scene.fail("grid", "an adaptive grid (key adaptive) transfers with GIMP weights: use kernel: quadratic");
   RefinementSettings<dim> r;
   r.levels = cfg->integer("levels", 2, 1, max_levels);
   for (const Config& entry : cfg->list("refine")) {
@@ -41,6 +43,23 @@ std::optional<RefinementSettings<dim>> parse_refinement(const Config& scene, con
   }
   r.surface_band = cfg->number("surface_band", 0.0, Range::non_negative());
   r.follow_particles = cfg->flag("follow_particles", true);
+  if (const std::optional<Config> resample = cfg->optional_child("resample")) {
+    ResampleSettings rs;
+    rs.d_small = resample->number("d_small", 0.0, Range::non_negative());
+    rs.d_medium = resample->number("d_medium", Range::positive());
+    rs.d_large = resample->number("d_large", Range::positive());
+    rs.every = resample->integer("every", 1, 1, 1000000);
+    if (!(rs.d_small < rs.d_medium))
+      resample->fail("d_medium", "must exceed d_small = " + geometry::detail::number_text(rs.d_small) +
+                                     " (0 <= d_small < d_medium < d_large)");
+    if (!(rs.d_medium < rs.d_large))
+      resample->fail("d_large", "must exceed d_medium = " + geometry::detail::number_text(rs.d_medium) +
+                                    " (0 <= d_small < d_medium < d_large)");
+    if (r.levels < 2) cfg->fail("levels", "resampling needs two levels or more");
+    if (!r.follow_particles)
+      cfg->fail("follow_particles", "resampling changes the particle types: the grid must follow them (true)");
+    r.resample = rs;
+  }
   return r;
 }
 

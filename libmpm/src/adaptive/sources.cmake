@@ -5,4 +5,5 @@ list(APPEND MPM_CORE_SOURCES
   src/adaptive/adaptive_transfer.cpp
   src/adaptive/particle_levels.cpp
   src/adaptive/refinement.cpp
+  src/adaptive/resampling.cpp
 )

@@ -14,6 +14,7 @@ list(APPEND MPM_CORE_SOURCES
   src/core/stages/grid_boundary.cpp
   src/core/stages/ghost_velocities.cpp
   src/core/stages/refine_grid.cpp
+  src/core/stages/resample_particles.cpp
   src/core/stages/grid_to_particles.cpp
   src/core/stages/time_step_control.cpp
   src/core/stages/particle_source.cpp

@@ -6,6 +6,7 @@
 #include <mpm/core/stages/grid_to_particles.h>
 #include <mpm/core/stages/particles_to_grid.h>
 #include <mpm/core/stages/refine_grid.h>
+#include <mpm/core/stages/resample_particles.h>
 #include <mpm/core/stages/sort_particles.h>
 #include <mpm/core/stages/time_step_control.h>
 #include <mpm/geometry/body_config.h>
@@ -140,8 +141,6 @@ template <int dim>
 SolidScene<dim> load_solid_scene(const Config& scene) {
   SceneSettings<dim> settings = parse_scene_settings<dim>(scene);
   const auto refinement = adaptive::parse_refinement<dim>(scene, settings);
-  if (refinement && !std::holds_alternative<QuadraticBSpline>(settings.kernel))
-    scene.fail("grid", "an adaptive grid (key adaptive) transfers with GIMP weights: use kernel: quadratic");
   // Walls act on the nodes within two cells of the faces: of coarse cells on an adaptive grid.
   const double wall_dx = refinement ? refinement->coarsest_dx(settings.dx) : settings.dx;
   auto colliders = geometry::parse_colliders<dim>(scene, settings.domain_lo, settings.domain_hi,
@@ -156,6 +155,11 @@ SolidScene<dim> load_solid_scene(const Config& scene) {
 template <int dim>
 Pipeline<MpmState<dim>> make_solid_pipeline(const SolidScene<dim>& scene) {
   Pipeline<MpmState<dim>> p(particle_fields(scene.state.particles));
+  if (scene.refinement && scene.refinement->resample) {
+    std::vector<std::string> deformation;
+    if (scene.state.particles.has_channel(kElasticF)) deformation.push_back(kElasticF);
+    p.add(std::make_unique<stages::ResampleParticles<dim>>(*scene.refinement->resample, deformation));
+  }
   p.add(std::make_unique<stages::TimeStepControl<dim>>(
       stages::time_step_settings(scene.settings, scene.solver->wave_speed())));
   if (scene.refinement && scene.refinement->follow_particles)

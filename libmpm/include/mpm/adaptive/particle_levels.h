@@ -7,6 +7,7 @@
 #include <mpm/core/particles.h>
 
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 namespace mpm::adaptive {
@@ -38,5 +39,12 @@ LevelledParticles<dim> match_particles_to_leaves(const CellTree<dim>& tree, cons
 //! lattice x = (i + 1/2) h) to the nearest lattice site that holds none: 1 on the surface.
 template <int dim>
 std::vector<int> lattice_surface_distance(const std::vector<Vec<dim>>& x, double h);
+
+//! Manhattan depth of each of the lattice sites `sites` (repeats allowed) in the set they form:
+//! the fewest face steps to a site outside the set (1 for a site with an empty face neighbour).
+//! Sites deeper than max_depth get max_depth + 1 (the search stops there).
+template <int dim>
+std::vector<int> manhattan_depth(const std::vector<IVec<dim>>& sites,
+                                 int max_depth = std::numeric_limits<int>::max() - 1);
 
 }  // namespace mpm::adaptive

@@ -11,9 +11,15 @@
 //!                                #   surface; the others are regrouped to the leaves' levels
 //!     follow_particles: true     # every step, refine the cells that hold a particle of a finer
 //!                                #   type (the grid follows moving fine particles, sec. 7.1)
+//!     resample:                  # split and merge particles by their distance from the free
+//!       d_small: 0.005           #   surface (resampling.h, sec. 7.2) [m]: nothing within d_small,
+//!       d_medium: 0.01           #   split coarse particles up to d_medium, merge fine ones
+//!       d_large: 0.02            #   beyond d_large; 0 <= d_small < d_medium < d_large
+//!       every: 1                 #   resample every this many steps, [1, 1000000]
 //!
 //! Without the key a scene is uniform and builds nothing of the adaptive grid.
 #include <mpm/adaptive/cell_tree.h>
+#include <mpm/adaptive/resampling.h>
 #include <mpm/core/config.h>
 #include <mpm/core/scene_settings.h>
 #include <mpm/geometry/collider.h>
@@ -37,13 +43,15 @@ struct RefinementSettings {
   std::vector<RefinementRegion<dim>> regions;
   double surface_band = 0.0;  //!< [m]
   bool follow_particles = true;
+  std::optional<ResampleSettings> resample;  //!< dynamic refinement by particle resampling
   //! Coarsest spacing dx_0 = dx 2^(levels-1) [m] for the finest spacing dx.
   double coarsest_dx(double finest_dx) const { return finest_dx * static_cast<double>(1 << (levels - 1)); }
 };
 
 //! The `adaptive` key of `scene`, or nothing when absent. Fails through Config (file, line,
 //! key, value, accepted range) on levels out of range, boxes outside the domain or inverted,
-//! region levels out of range, a periodic domain.
+//! region levels out of range, a periodic domain, a kernel other than quadratic, resampling distances out of order or
+//! resampling without follow_particles or with one level.
 template <int dim>
 std::optional<RefinementSettings<dim>> parse_refinement(const Config& scene, const SceneSettings<dim>& settings);
 

@@ -1,0 +1,316 @@
+// Particle resampling (resampling.h): surface distance on the finest cells, split and merge
+// candidates by the distance bands, count guards, then the merges in place, the splits
+// appended, the merged-away particles erased.
+#include <mpm/adaptive/particle_levels.h>
+#include <mpm/adaptive/resampling.h>
+#include <mpm/core/error.h>
+#include <mpm/math/svd.h>
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numbers>
+#include <type_traits>
+#include <unordered_map>
+
+namespace mpm::adaptive {
+
+namespace {
+
+//! splitmix64's finaliser: a well-mixed 64-bit hash of z.
+std::uint64_t mix(std::uint64_t z) {
+  z += 0x9E3779B97F4A7C15ull;
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return z ^ (z >> 31);
+}
+
+//! The next number of a counter-based stream, uniform in [0, 1).
+double uniform(std::uint64_t& state) {
+  state = mix(state);
+  return static_cast<double>(state >> 11) * 0x1.0p-53;
+}
+
+//! The band width factor s_t = 2^t - 1 of transition t (resampling.h).
+double band(int t) { return static_cast<double>((1 << t) - 1); }
+
+template <int dim>
+IVec<dim> cell_of(const Vec<dim>& x, const Vec<dim>& origin, double h) {
+  IVec<dim> c;
+  for (int a = 0; a < dim; ++a) c[a] = static_cast<int>(std::floor((x[a] - origin[a]) / h));
+  return c;
+}
+
+//! Calls fn(i) for every i of the integer box [lo, hi].
+template <int dim, class Fn>
+void for_each_in_box(const IVec<dim>& lo, const IVec<dim>& hi, Fn&& fn) {
+  if ((lo.array() > hi.array()).any()) return;
+  IVec<dim> i = lo;
+  while (true) {
+    fn(i);
+    int a = 0;
+    for (; a < dim; ++a) {
+      if (++i[a] <= hi[a]) break;
+      i[a] = lo[a];
+    }
+    if (a == dim) return;
+  }
+}
+
+//! A particle's place in a count or a merge group: level, material, cell; then its index, so
+//! that sorting gives one deterministic order.
+template <int dim>
+struct Slot {
+  int level;
+  int material;
+  IVec<dim> cell;
+  std::size_t p;
+  auto rank() const {
+    std::array<int, dim + 2> r;
+    r[0] = level;
+    r[1] = material;
+    for (int a = 0; a < dim; ++a) r[2 + a] = cell[a];
+    return r;
+  }
+};
+
+//! The slots sorted, and the start of each run of equal (level, material, cell).
+template <int dim>
+std::vector<std::size_t> sort_into_runs(std::vector<Slot<dim>>& slots) {
+  std::sort(slots.begin(), slots.end(), [](const Slot<dim>& a, const Slot<dim>& b) {
+    const auto ra = a.rank(), rb = b.rank();
+    return ra != rb ? ra < rb : a.p < b.p;
+  });
+  std::vector<std::size_t> starts;
+  for (std::size_t i = 0; i < slots.size(); ++i)
+    if (i == 0 || slots[i].rank() != slots[i - 1].rank()) starts.push_back(i);
+  starts.push_back(slots.size());
+  return starts;
+}
+
+}  // namespace
+
+template <int dim>
+Mat<dim> random_rotation(std::uint64_t key) {
+  std::uint64_t state = mix(key);
+  constexpr double two_pi = 2.0 * std::numbers::pi;
+  if constexpr (dim == 2) {
+    const double theta = two_pi * uniform(state);
+    Mat<2> R;
+    R << std::cos(theta), -std::sin(theta), std::sin(theta), std::cos(theta);
+    return R;
+  } else {
+    // Shoemake (1992): a uniform unit quaternion from three uniform numbers.
+    const double u = uniform(state), a = two_pi * uniform(state), b = two_pi * uniform(state);
+    const double s = std::sqrt(1.0 - u), t = std::sqrt(u);
+    return Eigen::Quaterniond(t * std::cos(b), s * std::sin(a), s * std::cos(a), t * std::sin(b))
+        .normalized()
+        .toRotationMatrix();
+  }
+}
+
+template <int dim>
+Mat<dim> average_deformation(const std::vector<Mat<dim>>& F, const std::vector<double>& w) {
+  MPM_VERIFY(F.size() == w.size() && !F.empty(), Error, "average_deformation: one weight per matrix");
+  Eigen::Matrix4d quaternions = Eigen::Matrix4d::Zero();
+  Mat<dim> stretch = Mat<dim>::Zero();
+  double total = 0.0;
+  for (std::size_t i = 0; i < F.size(); ++i) {
+    const math::Svd<dim> f = math::svd<dim>(F[i]);
+    Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+    R.topLeftCorner<dim, dim>() = f.U * f.V.transpose();
+    const Eigen::Quaterniond q(R);
+    const Eigen::Vector4d v(q.w(), q.x(), q.y(), q.z());
+    quaternions += w[i] * v * v.transpose();  // q and -q are the same rotation: v v^T is sign-free
+    stretch += w[i] * f.V * f.sigma.asDiagonal() * f.V.transpose();
+    total += w[i];
+  }
+  MPM_VERIFY(total > 0.0, Error, "average_deformation: the weights sum to zero");
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d> eigen(quaternions);
+  const Eigen::Vector4d v = eigen.eigenvectors().col(3);  // eigenvalues ascend
+  const Eigen::Matrix3d R = Eigen::Quaterniond(v[0], v[1], v[2], v[3]).normalized().toRotationMatrix();
+  return R.topLeftCorner<dim, dim>() * (stretch / total);
+}
+
+template <int dim>
+void split_particle(Particles<dim>& P, std::size_t p, const CellTree<dim>& tree, int points_per_axis,
+                    const Mat<dim>& rotation) {
+  std::vector<std::uint16_t>& level = P.template channel<std::uint16_t>(kParticleLevel);
+  const int q = level[p];
+  MPM_VERIFY(q < tree.finest(), Error, "split_particle: particle " + std::to_string(p) + " is of the finest type");
+  constexpr int children = 1 << dim;
+  const std::size_t first_new = P.size();
+  P.resize(first_new + children - 1);
+  P.for_each_channel([&](const ChannelInfo&, auto& values) {
+    for (int c = 1; c < children; ++c) values[first_new + c - 1] = values[p];
+  });
+  const Vec<dim> x = P.x[p], v = P.v[p];
+  const Mat<dim> C = P.C[p];
+  const double m = P.mass[p] / children, V = P.volume0[p] / children;
+  const double offset = 0.25 * tree.dx(q) / points_per_axis;  // the sub-box centres: +-b/4
+  for (int c = 0; c < children; ++c) {
+    const std::size_t child = c == 0 ? p : first_new + c - 1;
+    Vec<dim> o;
+    for (int a = 0; a < dim; ++a) o[a] = (c >> a) & 1 ? offset : -offset;
+    const Vec<dim> r = rotation * o;
+    P.x[child] = x + r;
+    P.v[child] = v + C * r;  // the parent's APIC velocity field at the child
+    P.mass[child] = m;
+    P.volume0[child] = V;
+    level[child] = static_cast<std::uint16_t>(q + 1);
+  }
+}
+
+template <int dim>
+void merge_particles(Particles<dim>& P, const std::vector<std::size_t>& group,
+                     const std::vector<std::string>& deformation, std::vector<std::uint8_t>& erase) {
+  MPM_VERIFY(group.size() >= 2, Error, "merge_particles: a group has two particles or more");
+  std::vector<std::uint16_t>& level = P.template channel<std::uint16_t>(kParticleLevel);
+  const std::size_t into = group[0];
+  MPM_VERIFY(level[into] > 0, Error, "merge_particles: the particles are of the coarsest type");
+  double mass = 0.0;
+  for (std::size_t p : group) mass += P.mass[p];
+  std::vector<double> w;
+  for (std::size_t p : group) w.push_back(P.mass[p] / mass);
+  P.for_each_channel([&](const ChannelInfo& info, auto& values) {
+    using T = typename std::decay_t<decltype(values)>::value_type;
+    if constexpr (std::is_same_v<T, std::uint16_t>) {
+      return;  // material and level: equal within a group (the level is lowered below)
+    } else {
+      if constexpr (std::is_same_v<T, double>) {
+        if (info.name == "mass" || info.name == "volume0") {  // extensive
+          double sum = 0.0;
+          for (std::size_t p : group) sum += values[p];
+          values[into] = sum;
+          return;
+        }
+      }
+      if constexpr (std::is_same_v<T, Mat<dim>>) {
+        if (std::find(deformation.begin(), deformation.end(), info.name) != deformation.end()) {
+          std::vector<Mat<dim>> F;
+          for (std::size_t p : group) F.push_back(values[p]);
+          values[into] = average_deformation<dim>(F, w);
+          return;
+        }
+      }
+      T mean = w[0] * values[group[0]];
+      for (std::size_t i = 1; i < group.size(); ++i) mean += w[i] * values[group[i]];
+      values[into] = mean;
+    }
+  });
+  level[into] = static_cast<std::uint16_t>(level[into] - 1);
+  for (std::size_t i = 1; i < group.size(); ++i) erase[group[i]] = 1;
+}
+
+template <int dim>
+std::vector<double> surface_distance(const CellTree<dim>& tree, const std::vector<Vec<dim>>& x,
+                                     const std::vector<std::uint16_t>& level, int points_per_axis,
+                                     double max_distance) {
+  const double h = tree.dx(tree.finest());
+  const Vec<dim>& origin = tree.origin();
+  // The first x.size() sites are the particles' own cells; then the other cells their boxes
+  // overlap. (Covering only the cells whose centres lie in a box leaves holes inside a
+  // deformed body of coarse particles, and a hole is a free surface to the distance.)
+  std::vector<IVec<dim>> sites;
+  sites.reserve(2 * x.size());
+  for (const Vec<dim>& xp : x) sites.push_back(cell_of(xp, origin, h));
+  for (std::size_t p = 0; p < x.size(); ++p) {
+    const double half = 0.5 * tree.dx(level[p]) / points_per_axis;
+    IVec<dim> lo, hi;
+    for (int a = 0; a < dim; ++a) {
+      lo[a] = static_cast<int>(std::floor((x[p][a] - half - origin[a]) / h));
+      hi[a] = static_cast<int>(std::ceil((x[p][a] + half - origin[a]) / h)) - 1;
+    }
+    for_each_in_box<dim>(lo, hi, [&](const IVec<dim>& c) {
+      if (c != sites[p]) sites.push_back(c);
+    });
+  }
+  const int max_depth = static_cast<int>(std::min(1e6, std::ceil(max_distance / h))) + 1;
+  const std::vector<int> depth = manhattan_depth(sites, max_depth);
+  std::vector<double> d(x.size());
+  for (std::size_t p = 0; p < x.size(); ++p) d[p] = (depth[p] - 0.5) * h;
+  return d;
+}
+
+template <int dim>
+ResampleCounts resample_particles(Particles<dim>& P, const CellTree<dim>& tree, int points_per_axis,
+                                  const ResampleSettings& settings, const std::vector<std::string>& deformation,
+                                  std::uint64_t step) {
+  ResampleCounts counts;
+  const std::size_t n = P.size();
+  const int finest = tree.finest();
+  if (n == 0 || finest == 0) return counts;
+  std::vector<std::uint16_t>& level = P.template channel<std::uint16_t>(kParticleLevel);
+  const std::vector<double> d = surface_distance(tree, P.x, level, points_per_axis, band(finest) * settings.d_large);
+
+  // Candidates by the distance bands.
+  std::vector<Slot<dim>> splits, merges;
+  for (std::size_t p = 0; p < n; ++p) {
+    const int q = level[p];
+    if (d[p] <= settings.d_small) continue;
+    if (q < finest && d[p] < band(finest - q) * settings.d_medium)
+      splits.push_back({q, P.material[p], cell_of(P.x[p], tree.origin(), tree.dx(q)), p});
+    else if (q > 0 && d[p] > band(finest - q + 1) * settings.d_large)
+      merges.push_back({q, P.material[p], cell_of(P.x[p], tree.origin(), tree.dx(q - 1) / points_per_axis), p});
+  }
+
+  // Split guard: the particles of each level in each cell of that level.
+  const int nominal = ipow(points_per_axis, dim);
+  std::vector<std::size_t> allowed_splits;
+  if (!splits.empty()) {
+    std::vector<std::unordered_map<std::uint64_t, int>> per_cell(tree.levels());
+    auto key = [](const IVec<dim>& c) {
+      std::uint64_t k = 0;
+      for (int a = dim - 1; a >= 0; --a) k = (k << 21) | static_cast<std::uint64_t>(c[a] + 1);
+      return k;
+    };
+    for (std::size_t p = 0; p < n; ++p) ++per_cell[level[p]][key(cell_of(P.x[p], tree.origin(), tree.dx(level[p])))];
+    for (const Slot<dim>& s : splits) {
+      const int count = per_cell[s.level][key(s.cell)];
+      if (2 * count >= nominal && count <= 2 * nominal) allowed_splits.push_back(s.p);
+    }
+  }
+
+  // Merge groups: same level, material and coarse sub-cell, with a count within the guard.
+  std::vector<std::uint8_t> erase(n, 0);
+  if (!merges.empty()) {
+    constexpr int full = 1 << dim;
+    const std::vector<std::size_t> runs = sort_into_runs(merges);
+    std::vector<std::size_t> group;
+    for (std::size_t r = 0; r + 1 < runs.size(); ++r) {
+      const std::size_t size = runs[r + 1] - runs[r];
+      if (2 * size < full || size > 2 * full || size < 2) continue;
+      group.clear();
+      for (std::size_t i = runs[r]; i < runs[r + 1]; ++i) group.push_back(merges[i].p);
+      merge_particles(P, group, deformation, erase);
+      counts.merged += size;
+      ++counts.groups;
+    }
+  }
+
+  for (std::size_t p : allowed_splits) {
+    split_particle(P, p, tree, points_per_axis, random_rotation<dim>(mix(step) ^ p));
+    ++counts.split;
+  }
+  erase.resize(P.size(), 0);
+  P.erase_flagged(erase);
+  return counts;
+}
+
+#define MPM_INSTANTIATE(dim)                                                                                       \
+  template Mat<dim> random_rotation<dim>(std::uint64_t);                                                           \
+  template Mat<dim> average_deformation<dim>(const std::vector<Mat<dim>>&, const std::vector<double>&);            \
+  template void split_particle(Particles<dim>&, std::size_t, const CellTree<dim>&, int, const Mat<dim>&);          \
+  template void merge_particles(Particles<dim>&, const std::vector<std::size_t>&, const std::vector<std::string>&, \
+                                std::vector<std::uint8_t>&);                                                       \
+  template std::vector<double> surface_distance(const CellTree<dim>&, const std::vector<Vec<dim>>&,                \
+                                                const std::vector<std::uint16_t>&, int, double);                   \
+  template ResampleCounts resample_particles(Particles<dim>&, const CellTree<dim>&, int, const ResampleSettings&,  \
+                                             const std::vector<std::string>&, std::uint64_t);
+MPM_INSTANTIATE(2)
+MPM_INSTANTIATE(3)
+
+}  // namespace mpm::adaptive

@@ -1,0 +1,360 @@
+// Particle resampling on the adaptive grid (adaptive/resampling.h):
+//  - random rotations are proper rotations, the same for the same key;
+//  - the deformation average returns F for equal F (inverted included), the mean rotation of
+//    rotations, the mean of commuting stretches, and stays near the arithmetic mean close to
+//    F = I (where the SVD factors are not unique);
+//  - a split conserves mass, volume, the first moment and linear momentum to round-off, and
+//    changes the angular momentum sum m x x v by exactly m eps:(C (b/4)^2);
+//  - a merge conserves mass, volume, the mass centre and linear momentum to round-off and
+//    drops exactly the children's spread angular momentum; a split then merge restores the
+//    particle;
+//  - the surface distance counts face steps of the finest cells, with coarse particles' boxes
+//    covering the cells they stand for;
+//  - resampling a block merges deep inside and splits near the surface by the bands and
+//    guards, conserves mass and momentum, and is deterministic.
+#include <mpm/adaptive/particle_levels.h>
+#include <mpm/adaptive/resampling.h>
+
+#include <doctest/doctest.h>
+#include <Eigen/Geometry>
+
+#include <random>
+
+using namespace mpm;
+using namespace mpm::adaptive;
+
+namespace {
+
+template <int dim>
+Eigen::Vector3d cross(const Vec<dim>& a, const Vec<dim>& b) {
+  Eigen::Vector3d a3 = Eigen::Vector3d::Zero(), b3 = Eigen::Vector3d::Zero();
+  a3.head<dim>() = a;
+  b3.head<dim>() = b;
+  return a3.cross(b3);
+}
+// The axial vector of the antisymmetric part of A: spin(C S) is sum r x (C r) for S = sum r r^T.
+template <int dim>
+Eigen::Vector3d spin(const Mat<dim>& A) {
+  if constexpr (dim == 2)
+    return Eigen::Vector3d(0.0, 0.0, A(1, 0) - A(0, 1));
+  else
+    return Eigen::Vector3d(A(2, 1) - A(1, 2), A(0, 2) - A(2, 0), A(1, 0) - A(0, 1));
+}
+
+struct Totals {
+  double mass = 0.0, volume = 0.0;
+  Eigen::Vector3d momentum = Eigen::Vector3d::Zero(), moment = Eigen::Vector3d::Zero(),
+                  angular = Eigen::Vector3d::Zero();
+};
+template <int dim>
+Totals totals(const Particles<dim>& P) {
+  Totals t;
+  for (std::size_t p = 0; p < P.size(); ++p) {
+    t.mass += P.mass[p];
+    t.volume += P.volume0[p];
+    t.momentum.head<dim>() += P.mass[p] * P.v[p];
+    t.moment.head<dim>() += P.mass[p] * P.x[p];
+    t.angular += P.mass[p] * cross<dim>(P.x[p], P.v[p]);
+  }
+  return t;
+}
+
+template <int dim>
+CellTree<dim> tree_of(int levels, int base = 4, double dx0 = 1.0) {
+  return CellTree<dim>(Vec<dim>::Zero(), IVec<dim>::Constant(base), dx0, levels);
+}
+
+// Particles with the solid's channels, a level channel, random v, C, F and plastic state.
+template <int dim>
+Particles<dim> solid_particles(const CellTree<dim>& tree) {
+  Particles<dim> P;
+  add_level_channel(P, tree);
+  P.template add_channel<Mat<dim>>("F", Mat<dim>::Identity(), {true, true, "J"});
+  P.template add_channel<double>("plastic", 0.0, {true, true});
+  return P;
+}
+template <int dim>
+void randomise(Particles<dim>& P, std::size_t p, std::mt19937& rng) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int a = 0; a < dim; ++a) P.v[p][a] = u(rng);
+  for (int i = 0; i < dim; ++i)
+    for (int j = 0; j < dim; ++j) {
+      P.C[p](i, j) = u(rng);
+      P.template channel<Mat<dim>>("F")[p](i, j) = (i == j ? 1.0 : 0.0) + 0.3 * u(rng);
+    }
+  P.template channel<double>("plastic")[p] = u(rng);
+  P.mass[p] = 1.0 + 0.5 * u(rng);
+  P.volume0[p] = 1e-3 * (1.0 + 0.5 * u(rng));
+}
+
+constexpr double tight = 1e-12;
+
+}  // namespace
+
+TEST_CASE_TEMPLATE("random rotations are proper rotations, reproducible by key", T, std::integral_constant<int, 2>,
+                   std::integral_constant<int, 3>) {
+  constexpr int dim = T::value;
+  for (std::uint64_t key = 0; key < 50; ++key) {
+    const Mat<dim> R = random_rotation<dim>(key);
+    CHECK((R.transpose() * R - Mat<dim>::Identity()).norm() < tight);
+    CHECK(R.determinant() == doctest::Approx(1.0).epsilon(tight));
+    CHECK(R == random_rotation<dim>(key));
+    CHECK((R - random_rotation<dim>(key + 1)).norm() > 1e-6);
+  }
+}
+
+TEST_CASE_TEMPLATE("the deformation average", T, std::integral_constant<int, 2>, std::integral_constant<int, 3>) {
+  constexpr int dim = T::value;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  SUBCASE("equal matrices, inverted ones too, average to themselves") {
+    for (int trial = 0; trial < 20; ++trial) {
+      Mat<dim> F;
+      for (int i = 0; i < dim; ++i)
+        for (int j = 0; j < dim; ++j) F(i, j) = u(rng);
+      const Mat<dim> A = average_deformation<dim>({F, F, F}, {0.2, 0.5, 0.3});
+      CHECK((A - F).norm() < 1e-10 * F.norm());
+    }
+  }
+  SUBCASE("rotations spread symmetrically about R0 average to R0") {
+    const Mat<dim> R0 = random_rotation<dim>(3);
+    for (double angle : {0.01, 0.3, 1.0}) {
+      std::vector<Mat<dim>> F;
+      for (int axis = 0; axis < (dim == 2 ? 1 : 3); ++axis)
+        for (double sign : {-1.0, 1.0}) {
+          Eigen::Matrix3d turn = Eigen::AngleAxisd(sign * angle, Eigen::Vector3d::Unit(dim == 2 ? 2 : axis)).matrix();
+          F.push_back(R0 * turn.topLeftCorner<dim, dim>());
+        }
+      const Mat<dim> A = average_deformation<dim>(F, std::vector<double>(F.size(), 1.0));
+      CHECK((A - R0).norm() < 1e-12);
+    }
+  }
+  SUBCASE("commuting stretches average arithmetically") {
+    const Mat<dim> R = random_rotation<dim>(11);
+    const Vec<dim> s1 = Vec<dim>::LinSpaced(0.5, 1.5), s2 = Vec<dim>::LinSpaced(2.0, 1.2);
+    const Mat<dim> A = average_deformation<dim>({R * s1.asDiagonal(), R * s2.asDiagonal()}, {1.0, 3.0});
+    CHECK((A - R * Mat<dim>((0.25 * s1 + 0.75 * s2).asDiagonal())).norm() < 1e-12);
+  }
+  SUBCASE("near F = I, where U and V are not unique, the average stays near the mean") {
+    // Averaging U and V separately would give an arbitrary rotation here; R S is within
+    // O(eps^2) of the arithmetic mean.
+    const double eps = 1e-4;
+    std::vector<Mat<dim>> F;
+    Mat<dim> mean = Mat<dim>::Zero();
+    for (int i = 0; i < 8; ++i) {
+      Mat<dim> E;
+      for (int r = 0; r < dim; ++r)
+        for (int c = 0; c < dim; ++c) E(r, c) = eps * u(rng);
+      F.push_back(Mat<dim>::Identity() + E);
+      mean += F.back() / 8.0;
+    }
+    CHECK((average_deformation<dim>(F, std::vector<double>(8, 1.0)) - mean).norm() < 10 * eps * eps);
+  }
+}
+
+TEST_CASE_TEMPLATE("split and merge conserve mass and momentum", T, std::integral_constant<int, 2>,
+                   std::integral_constant<int, 3>) {
+  constexpr int dim = T::value;
+  constexpr int children = 1 << dim;
+  const CellTree<dim> tree = tree_of<dim>(3);
+  const int k = 2;
+  std::mt19937 rng(5);
+  Particles<dim> P = solid_particles(tree);
+  P.push_back(Vec<dim>::Constant(1.3), Vec<dim>::Zero(), 1.0, 1.0, 0);
+  P.push_back(Vec<dim>::Constant(2.2), Vec<dim>::Zero(), 1.0, 1.0, 0);
+  randomise(P, 0, rng);
+  randomise(P, 1, rng);
+  std::vector<std::uint16_t>& level = P.template channel<std::uint16_t>(kParticleLevel);
+  level[0] = 1;
+  level[1] = 0;
+  const Particles<dim> before = P;
+
+  SUBCASE("split") {
+    const Totals t0 = totals(P);
+    const Mat<dim> R = random_rotation<dim>(42);
+    split_particle(P, 0, tree, k, R);
+    REQUIRE(P.size() == 2 + children - 1);
+    const Totals t1 = totals(P);
+    CHECK(t1.mass == doctest::Approx(t0.mass).epsilon(tight));
+    CHECK(t1.volume == doctest::Approx(t0.volume).epsilon(tight));
+    CHECK((t1.momentum - t0.momentum).norm() < tight * t0.momentum.norm());
+    CHECK((t1.moment - t0.moment).norm() < tight * t0.moment.norm());
+    // The parent's affine spin becomes orbital: m eps:(C S), S = (b/4)^2 I, b = dx_1 / k.
+    const double b = tree.dx(1) / k;
+    const Eigen::Vector3d expected = t0.angular + before.mass[0] * (b / 4) * (b / 4) * spin<dim>(before.C[0]);
+    CHECK((t1.angular - expected).norm() < tight * t0.angular.norm());
+    const std::vector<Mat<dim>>& F = P.template channel<Mat<dim>>("F");
+    for (std::size_t c : {std::size_t{0}, std::size_t{2}, std::size_t{3}}) {
+      CHECK(level[c] == 2);
+      CHECK(F[c] == before.template channel<Mat<dim>>("F")[0]);
+      CHECK(P.C[c] == before.C[0]);
+      CHECK(((P.x[c] - before.x[0]).array().abs() <= 0.5 * b * std::sqrt(double(dim)) / 2 + 1e-15).all());
+    }
+    CHECK(level[1] == 0);  // the other particle is untouched
+    CHECK(P.x[1] == before.x[1]);
+
+    SUBCASE("then merging the children restores the parent") {
+      std::vector<std::size_t> group{0};
+      for (std::size_t c = 2; c < P.size(); ++c) group.push_back(c);
+      std::vector<std::uint8_t> erase(P.size(), 0);
+      merge_particles(P, group, {"F"}, erase);
+      P.erase_flagged(erase);
+      REQUIRE(P.size() == 2);
+      CHECK(level[0] == 1);
+      CHECK((P.x[0] - before.x[0]).norm() < tight);
+      CHECK((P.v[0] - before.v[0]).norm() < tight);
+      CHECK((P.C[0] - before.C[0]).norm() < tight);
+      CHECK(P.mass[0] == doctest::Approx(before.mass[0]).epsilon(tight));
+      CHECK(P.volume0[0] == doctest::Approx(before.volume0[0]).epsilon(tight));
+      CHECK((P.template channel<Mat<dim>>("F")[0] - before.template channel<Mat<dim>>("F")[0]).norm() < 1e-10);
+      CHECK(P.template channel<double>("plastic")[0] ==
+            doctest::Approx(before.template channel<double>("plastic")[0]).epsilon(tight));
+    }
+  }
+
+  SUBCASE("merge of unrelated particles") {
+    Particles<dim> Q = solid_particles(tree);
+    std::uniform_real_distribution<double> u(1.0, 1.25);
+    for (int i = 0; i < children; ++i) {
+      Vec<dim> x;
+      for (int a = 0; a < dim; ++a) x[a] = u(rng);
+      Q.push_back(x, Vec<dim>::Zero(), 1.0, 1.0, 0);
+      randomise(Q, Q.size() - 1, rng);
+      Q.template channel<std::uint16_t>(kParticleLevel).back() = 2;
+    }
+    const Totals t0 = totals(Q);
+    Eigen::Vector3d spread = Eigen::Vector3d::Zero();
+    const Vec<dim> centre = t0.moment.head<dim>() / t0.mass, velocity = t0.momentum.head<dim>() / t0.mass;
+    for (std::size_t p = 0; p < Q.size(); ++p) spread += Q.mass[p] * cross<dim>(Q.x[p] - centre, Q.v[p] - velocity);
+    std::vector<std::size_t> group(Q.size());
+    for (std::size_t p = 0; p < Q.size(); ++p) group[p] = p;
+    std::vector<std::uint8_t> erase(Q.size(), 0);
+    merge_particles(Q, group, {"F"}, erase);
+    Q.erase_flagged(erase);
+    REQUIRE(Q.size() == 1);
+    const Totals t1 = totals(Q);
+    CHECK(Q.template channel<std::uint16_t>(kParticleLevel)[0] == 1);
+    CHECK(t1.mass == doctest::Approx(t0.mass).epsilon(tight));
+    CHECK(t1.volume == doctest::Approx(t0.volume).epsilon(tight));
+    CHECK((t1.momentum - t0.momentum).norm() < tight * t0.momentum.norm());
+    CHECK((t1.moment - t0.moment).norm() < tight * t0.moment.norm());
+    CHECK((t1.angular - (t0.angular - spread)).norm() < 1e-12 * (t0.angular.norm() + spread.norm()));
+    CHECK(spread.norm() > 1e-3);  // the test would not see a dropped term of zero
+  }
+}
+
+namespace {
+// A box of particles of type `type` on their own lattice (k = 2 per axis per cell), at rest.
+template <int dim>
+Particles<dim> block(const CellTree<dim>& tree, int type, const Vec<dim>& lo, const Vec<dim>& hi) {
+  Particles<dim> P = solid_particles(tree);
+  const double h = tree.dx(type) / 2;
+  IVec<dim> n;
+  for (int a = 0; a < dim; ++a) n[a] = static_cast<int>(std::lround((hi[a] - lo[a]) / h));
+  IVec<dim> i = IVec<dim>::Zero();
+  while (true) {
+    P.push_back(lo + h * (i.template cast<double>().array() + 0.5).matrix(), Vec<dim>::Zero(), std::pow(h, dim),
+                std::pow(h, dim), 0);
+    P.template channel<std::uint16_t>(kParticleLevel).back() = static_cast<std::uint16_t>(type);
+    int a = 0;
+    for (; a < dim; ++a) {
+      if (++i[a] < n[a]) break;
+      i[a] = 0;
+    }
+    if (a == dim) break;
+  }
+  return P;
+}
+}  // namespace
+
+TEST_CASE_TEMPLATE("surface distance on the finest cells", T, std::integral_constant<int, 2>,
+                   std::integral_constant<int, 3>) {
+  constexpr int dim = T::value;
+  const CellTree<dim> tree = tree_of<dim>(3, 4, 1.0);  // finest cells h = 0.25
+  const double h = tree.dx(2);
+  const Vec<dim> lo = Vec<dim>::Constant(1.0), hi = Vec<dim>::Constant(3.0);  // 8 finest cells per axis
+  for (int type : {2, 1, 0}) {
+    CAPTURE(type);
+    const Particles<dim> P = block(tree, type, lo, hi);
+    const auto& level = P.template channel<std::uint16_t>(kParticleLevel);
+    const std::vector<double> d = surface_distance(tree, P.x, level, 2, 100.0);
+    for (std::size_t p = 0; p < P.size(); ++p) {
+      // The finest cell of the particle, its face steps to the block's outside.
+      int steps = 1 << 20;
+      for (int a = 0; a < dim; ++a) {
+        const int c = static_cast<int>(std::floor((P.x[p][a] - lo[a]) / h));
+        steps = std::min({steps, c + 1, 8 - c});
+      }
+      CHECK(d[p] == doctest::Approx((steps - 0.5) * h));
+    }
+    // Capped: cells deeper than the cap are reported beyond it.
+    const std::vector<double> capped = surface_distance(tree, P.x, level, 2, 0.3);
+    for (std::size_t p = 0; p < P.size(); ++p) CHECK((capped[p] == d[p] || (d[p] > 0.3 && capped[p] > 0.3)));
+  }
+}
+
+TEST_CASE_TEMPLATE("resampling a block by the distance bands", T, std::integral_constant<int, 2>,
+                   std::integral_constant<int, 3>) {
+  constexpr int dim = T::value;
+  const CellTree<dim> tree = tree_of<dim>(3, 4, 1.0);  // finest cells h = 0.25
+  const double h = tree.dx(2);
+  const Vec<dim> lo = Vec<dim>::Constant(1.0), hi = Vec<dim>::Constant(3.0);
+  ResampleSettings s{0.5 * h, 1.2 * h, 1.6 * h, 1};
+
+  SUBCASE("a fine block merges inside, keeps its fine surface band") {
+    Particles<dim> P = block(tree, 2, lo, hi);
+    std::mt19937 rng(3);
+    for (std::size_t p = 0; p < P.size(); ++p) randomise(P, p, rng);
+    const Totals t0 = totals(P);
+    const std::size_t n0 = P.size();
+    const Particles<dim> copy = P;
+    const ResampleCounts c = resample_particles(P, tree, 2, s, {"F"}, 0);
+    CHECK(c.split == 0);
+    CHECK(c.merged > 0);
+    CHECK(P.size() == n0 - c.merged + c.groups);
+    const Totals t1 = totals(P);
+    CHECK(t1.mass == doctest::Approx(t0.mass).epsilon(tight));
+    CHECK((t1.momentum - t0.momentum).norm() < 1e-12 * t0.mass);
+    CHECK((t1.moment - t0.moment).norm() < 1e-12 * t0.moment.norm());
+    // Only particles deeper than d_large merged: the outer two cell layers stay fine.
+    const auto& level = P.template channel<std::uint16_t>(kParticleLevel);
+    for (std::size_t p = 0; p < P.size(); ++p) {
+      double depth = 1e300;
+      for (int a = 0; a < dim; ++a) depth = std::min({depth, P.x[p][a] - lo[a], hi[a] - P.x[p][a]});
+      if (depth < 2 * h) CHECK(level[p] == 2);
+      if (depth > 2 * h + 0.25 * h) CHECK(level[p] == 1);
+    }
+    // Deterministic.
+    Particles<dim> again = copy;
+    resample_particles(again, tree, 2, s, {"F"}, 0);
+    CHECK(again.x == P.x);
+    CHECK(again.v == P.v);
+  }
+
+  SUBCASE("a coarse block splits in the band, one level per resampling") {
+    Particles<dim> P = block<dim>(tree, 0, Vec<dim>::Constant(0.0), Vec<dim>::Constant(4.0));
+    const Totals t0 = totals(P);
+    const ResampleCounts first = resample_particles(P, tree, 2, {0.0, 3.0 * h, 100.0, 1}, {"F"}, 1);
+    CHECK(first.split > 0);
+    CHECK(first.merged == 0);
+    const auto& level = P.template channel<std::uint16_t>(kParticleLevel);
+    int finest = 0;
+    for (std::size_t p = 0; p < P.size(); ++p) finest = std::max<int>(finest, level[p]);
+    CHECK(finest == 1);
+    resample_particles(P, tree, 2, {0.0, 3.0 * h, 100.0, 1}, {"F"}, 2);
+    for (std::size_t p = 0; p < P.size(); ++p) finest = std::max<int>(finest, level[p]);
+    CHECK(finest == 2);
+    const Totals t1 = totals(P);
+    CHECK(t1.mass == doctest::Approx(t0.mass).epsilon(tight));
+    CHECK((t1.moment - t0.moment).norm() < 1e-12 * t0.moment.norm());
+  }
+
+  SUBCASE("the guards: a lone coarse particle does not split, a lone fine one does not merge") {
+    Particles<dim> P = solid_particles(tree);
+    P.push_back(Vec<dim>::Constant(2.1), Vec<dim>::Zero(), 1.0, 1.0, 0);
+    P.template channel<std::uint16_t>(kParticleLevel).back() = 0;
+    CHECK(resample_particles(P, tree, 2, {0.0, 100.0, 200.0, 1}, {"F"}, 0).split == 0);
+    P.template channel<std::uint16_t>(kParticleLevel).back() = 2;
+    CHECK(resample_particles(P, tree, 2, {0.0, 1e-3, 2e-3, 1}, {"F"}, 0).merged == 0);
+  }
+}
