@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <deque>
 #include <limits>
 #include <map>
 #include <unordered_map>
@@ -64,10 +63,49 @@ namespace {
 constexpr int kSiteBits = 21;  // bits per axis of a packed site key (2D and 3D)
 }  // namespace
 
+namespace {
+//! The breadth-first search of manhattan_depth over the distinct sites `unique` (indices into
+//! `sites`); find(i) is the index of the first entry of site i, or -1 when i holds none.
+template <int dim, class Find>
+std::vector<int> depth_search(const std::vector<IVec<dim>>& sites, const std::vector<int>& unique, Find&& find,
+                              int max_depth) {
+  std::vector<int> depth(sites.size(), 0);
+  std::vector<int> queue;  // every site enters once: a vector with a read cursor
+  queue.reserve(unique.size());
+  auto for_each_neighbour = [&](const IVec<dim>& i, auto&& fn) {
+    for (int a = 0; a < dim; ++a)
+      for (int s : {-1, 1}) {
+        IVec<dim> j = i;
+        j[a] += s;
+        fn(find(j));
+      }
+  };
+  for (const int i : unique) {  // the sources: sites with an empty face neighbour
+    bool surface = false;
+    for_each_neighbour(sites[i], [&](int j) { surface = surface || j < 0; });
+    if (surface) {
+      depth[i] = 1;
+      queue.push_back(i);
+    }
+  }
+  for (std::size_t next = 0; next < queue.size(); ++next) {
+    const int i = queue[next];
+    if (depth[i] > max_depth) continue;
+    for_each_neighbour(sites[i], [&](int j) {
+      if (j >= 0 && depth[j] == 0) {
+        depth[j] = depth[i] + 1;
+        queue.push_back(j);
+      }
+    });
+  }
+  return depth;
+}
+}  // namespace
+
 template <int dim>
 std::vector<int> manhattan_depth(const std::vector<IVec<dim>>& sites, int max_depth) {
   if (sites.empty()) return {};
-  // Keys relative to one site below the lowest, so that the empty neighbours pack too.
+  // Coordinates relative to one site below the lowest, so that the empty neighbours fit too.
   IVec<dim> lo = sites[0], hi = sites[0];
   for (const IVec<dim>& i : sites) {
     lo = lo.cwiseMin(i);
@@ -76,46 +114,53 @@ std::vector<int> manhattan_depth(const std::vector<IVec<dim>>& sites, int max_de
   lo.array() -= 1;
   MPM_VERIFY(((hi - lo).array() < (1 << kSiteBits) - 2).all(), Error,
              "manhattan_depth: the sites span more than 2^21 - 3 lattice steps on an axis");
-  auto site_key = [&](const IVec<dim>& i) {
-    std::uint64_t k = 0;
-    for (int a = dim - 1; a >= 0; --a) k = (k << kSiteBits) | static_cast<std::uint64_t>(i[a] - lo[a]);
-    return k;
-  };
-  std::unordered_map<std::uint64_t, int> unique;  // site key -> index of its first entry
-  unique.reserve(sites.size());
-  std::vector<int> first(sites.size());
-  for (std::size_t i = 0; i < sites.size(); ++i)
-    first[i] = unique.emplace(site_key(sites[i]), static_cast<int>(i)).first->second;
-  // Multi-source breadth-first search from the sites with an empty face neighbour.
-  std::vector<int> depth(sites.size(), 0);
-  std::deque<int> queue;
-  auto for_each_neighbour = [&](const IVec<dim>& i, auto&& fn) {
-    for (int a = 0; a < dim; ++a)
-      for (int s : {-1, 1}) {
-        IVec<dim> j = i;
-        j[a] += s;
-        const auto it = unique.find(site_key(j));
-        fn(it == unique.end() ? -1 : it->second);
+  const IVec<dim> extent = (hi - lo).array() + 2;
+  double box = 1.0;
+  for (int a = 0; a < dim; ++a) box *= extent[a];
+  std::vector<int> first(sites.size()), unique;
+  std::vector<int> depth;
+  if (box <= 8.0 * static_cast<double>(sites.size()) + 65536.0) {
+    // A compact set (a body): a dense array over the bounding box.
+    auto flat = [&](const IVec<dim>& i) {
+      std::size_t f = 0;
+      for (int a = dim - 1; a >= 0; --a) f = f * static_cast<std::size_t>(extent[a]) + (i[a] - lo[a]);
+      return f;
+    };
+    std::vector<int> id(static_cast<std::size_t>(box), -1);
+    for (std::size_t i = 0; i < sites.size(); ++i) {
+      int& slot = id[flat(sites[i])];
+      if (slot < 0) {
+        slot = static_cast<int>(i);
+        unique.push_back(slot);
       }
-  };
-  for (const auto& [key, i] : unique) {
-    bool surface = false;
-    for_each_neighbour(sites[i], [&](int j) { surface = surface || j < 0; });
-    if (surface) {
-      depth[i] = 1;
-      queue.push_back(i);
+      first[i] = slot;
     }
-  }
-  while (!queue.empty()) {
-    const int i = queue.front();
-    queue.pop_front();
-    if (depth[i] > max_depth) continue;
-    for_each_neighbour(sites[i], [&](int j) {
-      if (j >= 0 && depth[j] == 0) {
-        depth[j] = depth[i] + 1;
-        queue.push_back(j);
-      }
-    });
+    depth = depth_search<dim>(
+        sites, unique,
+        [&](const IVec<dim>& j) {
+          return ((j - lo).array() < 0).any() || ((j - lo).array() >= extent.array()).any() ? -1 : id[flat(j)];
+        },
+        max_depth);
+  } else {
+    auto key = [&](const IVec<dim>& i) {
+      std::uint64_t k = 0;
+      for (int a = dim - 1; a >= 0; --a) k = (k << kSiteBits) | static_cast<std::uint64_t>(i[a] - lo[a]);
+      return k;
+    };
+    std::unordered_map<std::uint64_t, int> id;  // site key -> index of its first entry
+    id.reserve(sites.size());
+    for (std::size_t i = 0; i < sites.size(); ++i) {
+      const auto [it, inserted] = id.emplace(key(sites[i]), static_cast<int>(i));
+      if (inserted) unique.push_back(it->second);
+      first[i] = it->second;
+    }
+    depth = depth_search<dim>(
+        sites, unique,
+        [&](const IVec<dim>& j) {
+          const auto it = id.find(key(j));
+          return it == id.end() ? -1 : it->second;
+        },
+        max_depth);
   }
   for (std::size_t i = 0; i < sites.size(); ++i) {
     const int d = depth[first[i]];

@@ -358,3 +358,31 @@ TEST_CASE_TEMPLATE("resampling a block by the distance bands", T, std::integral_
     CHECK(resample_particles(P, tree, 2, {0.0, 1e-3, 2e-3, 1}, {"F"}, 0).merged == 0);
   }
 }
+
+TEST_CASE_TEMPLATE("Manhattan depth: the dense and the hashed search agree", T, std::integral_constant<int, 2>,
+                   std::integral_constant<int, 3>) {
+  constexpr int dim = T::value;
+  // A cube of 6^dim sites (compact: the dense path), and the same cube beside a far copy (a
+  // sparse set: the hashed path). Depth = 1 + the fewest steps to the cube's outside.
+  std::vector<IVec<dim>> cube, pair;
+  for (int i = 0; i < ipow(6, dim); ++i) {
+    IVec<dim> c;
+    for (int a = 0, r = i; a < dim; ++a, r /= 6) c[a] = r % 6 - 3;
+    cube.push_back(c);
+  }
+  pair = cube;
+  for (const IVec<dim>& c : cube) pair.push_back(c + IVec<dim>::Constant(5000));
+  pair.push_back(cube[7]);  // a repeated site takes its first entry's depth
+  const std::vector<int> dense = manhattan_depth(cube), hashed = manhattan_depth(pair);
+  REQUIRE(hashed.size() == 2 * cube.size() + 1);
+  for (std::size_t i = 0; i < cube.size(); ++i) {
+    int steps = 1 << 20;
+    for (int a = 0; a < dim; ++a) steps = std::min({steps, cube[i][a] + 3, 2 - cube[i][a]});
+    CHECK(dense[i] == steps + 1);
+    CHECK(hashed[i] == dense[i]);
+    CHECK(hashed[cube.size() + i] == dense[i]);
+  }
+  CHECK(hashed.back() == dense[7]);
+  const std::vector<int> capped = manhattan_depth(cube, 1);
+  for (std::size_t i = 0; i < cube.size(); ++i) CHECK(capped[i] == std::min(dense[i], 2));
+}
