@@ -73,10 +73,15 @@ def main():
                                         end + [f"column.cells_per_width={args.cells}"])
     coarse, coarse_profile, _ = run(args.app, args.scenes / "column_collapse.yaml", args.work / "coarse",
                                     end + [f"column.cells_per_width={coarse_cells}"])
+    # The scene's bands in finest cells (2 and 3 cells, the seeded band 3 cells) at this dx.
+    dx = 0.1 / args.cells
     adaptive, adaptive_profile, rows = run(args.app, args.scenes / "column_collapse_adaptive.yaml",
                                            args.work / "adaptive",
                                            end + [f"column.cells_per_width={args.cells}",
-                                                  f"adaptive.levels={args.levels}"])
+                                                  f"adaptive.levels={args.levels}",
+                                                  f"adaptive.surface_band={3 * dx}",
+                                                  f"adaptive.resample.d_medium={2 * dx}",
+                                                  f"adaptive.resample.d_large={3 * dx}"])
     width = max(x for x, _ in fine_profile)
     d_adaptive = profile_difference(adaptive_profile, fine_profile, width)
     d_coarse = profile_difference(coarse_profile, fine_profile, width)

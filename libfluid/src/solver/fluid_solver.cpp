@@ -45,7 +45,9 @@ template <int dim>
 double free_surface_wave_speed(const mpm::SceneSettings<dim>& settings,
                                const mpm::geometry::ColliderSet<dim>& colliders) {
   double speed = std::sqrt(settings.gravity.norm() * settings.dx);
-  for (const auto& c : colliders.colliders()) speed = std::max(speed, c.velocity().norm());
+  // A turning collider's surface speed, bounded over the domain's diagonal.
+  const double reach = (settings.domain_hi - settings.domain_lo).norm();
+  for (const auto& c : colliders.colliders()) speed = std::max(speed, c.speed_within(reach));
   return speed;
 }
 

@@ -274,15 +274,19 @@ ResampleCounts resample_particles(Particles<dim>& P, const CellTree<dim>& tree, 
     }
   }
 
-  // Merge groups: same level, material and coarse sub-cell, with a count within the guard.
+  // Merge groups: same level, material and coarse sub-cell, holding between 3/4 and 3/2 of a
+  // coarse particle's nominal volume. (A guard on the count alone let 2 particles merge into a
+  // light coarse one that split into 4 lighter fine ones: the count grew without bound.)
   std::vector<std::uint8_t> erase(n, 0);
   if (!merges.empty()) {
-    constexpr int full = 1 << dim;
     const std::vector<std::size_t> runs = sort_into_runs(merges);
     std::vector<std::size_t> group;
     for (std::size_t r = 0; r + 1 < runs.size(); ++r) {
       const std::size_t size = runs[r + 1] - runs[r];
-      if (2 * size < full || size > 2 * full || size < 2) continue;
+      const double nominal_volume = std::pow(tree.dx(merges[runs[r]].level - 1) / points_per_axis, dim);
+      double volume = 0.0;
+      for (std::size_t i = runs[r]; i < runs[r + 1]; ++i) volume += P.volume0[merges[i].p];
+      if (size < 2 || volume < 0.75 * nominal_volume || volume > 1.5 * nominal_volume) continue;
       group.clear();
       for (std::size_t i = runs[r]; i < runs[r + 1]; ++i) group.push_back(merges[i].p);
       merge_particles(P, group, deformation, erase);

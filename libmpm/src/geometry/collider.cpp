@@ -8,6 +8,8 @@
 
 #include "number_text.h"
 
+#include <Eigen/Geometry>
+
 #include <cmath>
 #include <string>
 
@@ -36,13 +38,23 @@ Vec<dim> Collider<dim>::shape_position(const Vec<dim>& x, double t) const {
 template <int dim>
 double Collider<dim>::phi(const Vec<dim>& x, double t) const {
   const Vec<dim> x0 = shape_position(x, t);
-  return std::visit([&](const auto& shape) { return shape.phi(x0); }, shape_);
+  const double d = std::visit([&](const auto& shape) { return shape.phi(x0); }, shape_);
+  return hollow_ ? -d : d;
 }
 
 template <int dim>
 Vec<dim> Collider<dim>::normal(const Vec<dim>& x, double t) const {
   const Vec<dim> x0 = shape_position(x, t);
-  return std::visit([&](const auto& shape) { return shape.normal(x0); }, shape_);
+  const Vec<dim> n = std::visit([&](const auto& shape) { return shape.normal(x0); }, shape_);
+  return hollow_ ? Vec<dim>(-n) : n;
+}
+
+template <int dim>
+Vec<dim> Collider<dim>::velocity_at(const Vec<dim>& x) const {
+  if (omega_.isZero(0.0)) return velocity_;
+  Eigen::Vector3d r = Eigen::Vector3d::Zero();
+  r.head<dim>() = x - center_;
+  return velocity_ + omega_.cross(r).head<dim>();
 }
 
 template <int dim>
@@ -50,7 +62,8 @@ void Collider<dim>::project(const Vec<dim>& x, double t, Vec<dim>& v) const {
   if (phi(x, t) > 0.0) return;
   // A sticky node needs no normal, and the normal of a level set costs 2 dim samples.
   const Vec<dim> n = contact_.type == ContactType::sticky ? Vec<dim>::Zero() : normal(x, t);
-  v = velocity_ + contact_.apply<dim>(Vec<dim>(v - velocity_), n);
+  const Vec<dim> vc = velocity_at(x);
+  v = vc + contact_.apply<dim>(Vec<dim>(v - vc), n);
 }
 
 template <int dim>

@@ -3,6 +3,8 @@
 #include <mpm/core/error.h>
 #include <mpm/geometry/triangle_mesh.h>
 
+#include <Eigen/Geometry>
+
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -105,7 +107,30 @@ template <int dim>
 Collider<dim> parse_collider(const Config& entry) {
   Shape<dim> shape = parse_shape<dim>(entry);
   const Contact contact = parse_contact(entry);
-  return Collider<dim>(std::move(shape), contact, entry.vector<dim>("velocity", Vec<dim>::Zero()));
+  const Vec<dim> velocity = entry.vector<dim>("velocity", Vec<dim>::Zero());
+  Eigen::Vector3d omega = Eigen::Vector3d::Zero();
+  if constexpr (dim == 2)
+    omega[2] = entry.number("angular_velocity", 0.0, Range::any());
+  else
+    omega = entry.vector<3>("angular_velocity", Vec<3>::Zero());
+  Collider<dim> collider(std::move(shape), contact, velocity);
+  collider.set_hollow(entry.flag("hollow", false));
+  if (omega.isZero(0.0)) return collider;
+  // The surface turns about the shape's own axis; the shape stays (it is symmetric about it).
+  if (!velocity.isZero(0.0)) entry.fail("angular_velocity", "a turning collider cannot also translate (velocity)");
+  Vec<dim> center;
+  if (const auto* sphere = std::get_if<Sphere<dim>>(&collider.shape())) {
+    center = sphere->center();
+  } else if (const auto* cylinder = std::get_if<Cylinder<dim>>(&collider.shape())) {
+    center = cylinder->point();
+    if constexpr (dim == 3)
+      if (omega.cross(cylinder->axis()).norm() > 1e-9 * omega.norm())
+        entry.fail("angular_velocity", "a cylinder turns about its axis: the vector must be parallel to it");
+  } else {
+    entry.fail("angular_velocity", "only a sphere or a cylinder can turn in place (type: sphere or cylinder)");
+  }
+  collider.set_rotation(omega, center);
+  return collider;
 }
 
 template <int dim>

@@ -3,7 +3,8 @@
 //! grid velocity update, every node inside an obstacle gets the obstacle's contact condition on
 //! its velocity relative to the obstacle.
 //!
-//!   Collider     one obstacle: a shape moving at a constant velocity, phi(x, t) = phi0(x - v t)
+//!   Collider     one obstacle: a shape moving at a constant velocity, phi(x, t) = phi0(x - v t),
+//!                or hollow (material inside it), or with a turning surface (a drum)
 //!   DomainWalls  the faces of the simulation box, each with a boundary layer of nodes
 //!   ColliderSet  all obstacles of a scene, applied in order, the walls last
 #include <mpm/core/types.h>
@@ -36,14 +37,31 @@ public:
   Collider(Shape<dim> shape, const Contact& contact, const Vec<dim>& velocity = Vec<dim>::Zero(),
            Motion motion = Motion::translating);
 
+  //! A hollow obstacle is the outside of its shape: material sits inside (a drum, a tank).
+  void set_hollow(bool hollow) { hollow_ = hollow; }
+  //! The obstacle's surface turns at `omega` [rad/s] (2D: omega.z) about `center` [m]: its
+  //! velocity at x is velocity + omega x (x - center). The shape itself does not turn, so this
+  //! is for shapes symmetric about that axis (a sphere, a cylinder about its axis: a drum).
+  void set_rotation(const Eigen::Vector3d& omega, const Vec<dim>& center) {
+    omega_ = omega;
+    center_ = center;
+  }
+
   double phi(const Vec<dim>& x, double t) const;       //!< [m], negative inside the obstacle
   Vec<dim> normal(const Vec<dim>& x, double t) const;  //!< unit, out of the obstacle
-  //! When phi(x, t) <= 0, replaces the node velocity v [m/s] by v_c + contact.apply(v - v_c, n).
+  //! The obstacle's velocity at x [m/s].
+  Vec<dim> velocity_at(const Vec<dim>& x) const;
+  //! When phi(x, t) <= 0, replaces the node velocity v [m/s] by v_c + contact.apply(v - v_c, n)
+  //! with v_c = velocity_at(x).
   void project(const Vec<dim>& x, double t, Vec<dim>& v) const;
 
   const Shape<dim>& shape() const { return shape_; }
   const Contact& contact() const { return contact_; }
   const Vec<dim>& velocity() const { return velocity_; }
+  const Eigen::Vector3d& angular_velocity() const { return omega_; }
+  bool hollow() const { return hollow_; }
+  //! The largest obstacle speed at points within `reach` [m] of the rotation centre [m/s].
+  double speed_within(double reach) const { return velocity_.norm() + omega_.norm() * reach; }
   bool is_level_set() const { return std::holds_alternative<LevelSetShape<dim>>(shape_); }
 
 private:
@@ -51,6 +69,9 @@ private:
   Contact contact_;
   Vec<dim> velocity_;
   Motion motion_;
+  bool hollow_ = false;
+  Eigen::Vector3d omega_ = Eigen::Vector3d::Zero();
+  Vec<dim> center_ = Vec<dim>::Zero();
   Vec<dim> shape_position(const Vec<dim>& x, double t) const;  // x in the frame of the shape
 };
 

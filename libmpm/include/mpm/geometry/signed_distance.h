@@ -149,6 +149,7 @@ public:
   }
 
   const Vec<dim>& point() const { return point_; }
+  const Vec<dim>& axis() const { return axis_; }  //!< unit (3D); zero in 2D
   double radius() const { return radius_; }
 
 private:

@@ -304,7 +304,11 @@ TEST_CASE_TEMPLATE("resampling a block by the distance bands", T, std::integral_
   SUBCASE("a fine block merges inside, keeps its fine surface band") {
     Particles<dim> P = block(tree, 2, lo, hi);
     std::mt19937 rng(3);
-    for (std::size_t p = 0; p < P.size(); ++p) randomise(P, p, rng);
+    for (std::size_t p = 0; p < P.size(); ++p) {
+      const double V = P.volume0[p];  // nominal: merges need it
+      randomise(P, p, rng);
+      P.volume0[p] = V;
+    }
     const Totals t0 = totals(P);
     const std::size_t n0 = P.size();
     const Particles<dim> copy = P;
@@ -356,6 +360,28 @@ TEST_CASE_TEMPLATE("resampling a block by the distance bands", T, std::integral_
     CHECK(resample_particles(P, tree, 2, {0.0, 100.0, 200.0, 1}, {"F"}, 0).split == 0);
     P.template channel<std::uint16_t>(kParticleLevel).back() = 2;
     CHECK(resample_particles(P, tree, 2, {0.0, 1e-3, 2e-3, 1}, {"F"}, 0).merged == 0);
+  }
+
+  SUBCASE("the volume guard: half a coarse particle's volume does not merge") {
+    // Deep inside a fine block, one coarse sub-cell (side h) loses two of its four particles:
+    // they would merge into a half-weight coarse particle, which would split into four
+    // half-weight fine ones, and so on.
+    Particles<dim> P = block(tree, 2, lo, hi);
+    const Vec<dim> centre = Vec<dim>::Constant(2.0 + 0.5 * h);  // the sub-cell [2, 2 + h)^dim
+    std::vector<std::uint8_t> remove(P.size(), 0);
+    int removed = 0;
+    for (std::size_t p = 0; p < P.size(); ++p)
+      if ((P.x[p] - centre).cwiseAbs().maxCoeff() < 0.5 * h && removed < (1 << dim) / 2) {
+        remove[p] = 1;
+        ++removed;
+      }
+    P.erase_flagged(remove);
+    resample_particles(P, tree, 2, s, {"F"}, 0);
+    const auto& level = P.template channel<std::uint16_t>(kParticleLevel);
+    int fine_left = 0;
+    for (std::size_t p = 0; p < P.size(); ++p)
+      if ((P.x[p] - centre).cwiseAbs().maxCoeff() < 0.5 * h) fine_left += level[p] == 2;
+    CHECK(fine_left == (1 << dim) / 2);
   }
 }
 

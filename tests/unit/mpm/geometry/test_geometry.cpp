@@ -313,6 +313,36 @@ walls:
       std::string::npos);
   CHECK(error_of("walls: {thickness: 0.6}\n").find("walls.thickness") != std::string::npos);
   CHECK(error_of("walls: {z_max: ajar}\n").find("open") != std::string::npos);
+  CHECK(error_of("colliders:\n  - {type: box, lo: [0, 0, 0], hi: [1, 1, 1], angular_velocity: [0, 0, 1]}\n")
+            .find("only a sphere or a cylinder can turn") != std::string::npos);
+  CHECK(error_of("colliders:\n  - {type: cylinder, point: [0, 0, 0], axis: [0, 0, 1], radius: 1, "
+                 "angular_velocity: [1, 0, 0]}\n")
+            .find("parallel") != std::string::npos);
+  CHECK(error_of("colliders:\n  - {type: sphere, center: [0, 0, 0], radius: 1, velocity: [1, 0, 0], "
+                 "angular_velocity: [0, 0, 1]}\n")
+            .find("cannot also translate") != std::string::npos);
+}
+
+TEST_CASE("a hollow turning drum") {
+  // Material inside a disk of radius 0.4 about (0.5, 0.5) turning at 2 rad/s: the obstacle is
+  // the outside, its normal points inward, and a sticky node takes the wall's velocity
+  // omega x (x - c).
+  const Config scene = Config::parse(
+      "colliders:\n  - {type: sphere, center: [0.5, 0.5], radius: 0.4, hollow: true, angular_velocity: 2, "
+      "contact: sticky}\n");
+  const ColliderSet<2> set = parse_colliders<2>(scene, Vec<2>(0, 0), Vec<2>(1, 1), 0.05);
+  const Collider<2>& drum = set.colliders().at(0);
+  CHECK(drum.hollow());
+  CHECK(drum.phi(Vec<2>(0.5, 0.5), 0.0) == doctest::Approx(0.4));
+  CHECK(drum.phi(Vec<2>(0.5, 0.95), 0.0) == doctest::Approx(-0.05));
+  CHECK((drum.normal(Vec<2>(0.5, 0.95), 0.0) - Vec<2>(0, -1)).norm() < 1e-12);
+  Vec<2> v(3.0, -1.0);
+  drum.project(Vec<2>(0.5, 0.95), 0.0, v);  // inside the obstacle: the wall's velocity
+  CHECK((v - Vec<2>(-2.0 * 0.45, 0.0)).norm() < 1e-12);
+  Vec<2> u(3.0, -1.0);
+  drum.project(Vec<2>(0.5, 0.6), 0.0, u);  // inside the drum: untouched
+  CHECK(u == Vec<2>(3.0, -1.0));
+  CHECK(drum.speed_within(0.4) == doctest::Approx(0.8));
 }
 
 TEST_CASE("triangle meshes: OBJ and STL") {
