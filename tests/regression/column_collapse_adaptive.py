@@ -18,29 +18,15 @@ within 10 % of the fine runout.
 Exit status: 0 all hold, 1 one fails (printed), 2 a run failed.
 """
 import argparse
-import csv
-import json
 import pathlib
-import subprocess
 import sys
 
-QUICK = ["--set", "output.png=false", "--set", "output.particles=false", "--quiet"]
-
+from app_runs import read_csv, run_app
 
 def run(app, scene, out, overrides):
-    command = [app, str(scene), "--out", str(out)] + QUICK
-    for assignment in overrides:
-        command += ["--set", assignment]
-    done = subprocess.run(command, capture_output=True, text=True)
-    if done.returncode != 0:
-        print(f"run failed ({done.returncode}): {' '.join(command)}\n{done.stderr}")
-        sys.exit(2)
-    results = json.loads((out / "summary.json").read_text())["results"]
-    with open(out / "profile.csv") as f:
-        profile = [(float(r["x"]), float(r["height"])) for r in csv.DictReader(f)]
-    with open(out / "diagnostics.csv") as f:
-        rows = list(csv.DictReader(f))
-    return results, profile, rows
+    results = run_app(app, scene, out, overrides)
+    profile = [(float(r["x"]), float(r["height"])) for r in read_csv(out / "profile.csv")]
+    return results, profile, read_csv(out / "diagnostics.csv")
 
 
 def height_at(profile, x):

@@ -12,23 +12,10 @@
 Exit status: 0 all hold, 1 one fails (printed), 2 a run failed.
 """
 import argparse
-import json
 import pathlib
-import subprocess
 import sys
 
-QUICK = ["--set", "output.png=false", "--set", "output.particles=false", "--quiet"]
-
-
-def run(app, scene, out, overrides):
-    command = [app, str(scene), "--out", str(out)] + QUICK
-    for assignment in overrides:
-        command += ["--set", assignment]
-    done = subprocess.run(command, capture_output=True, text=True)
-    if done.returncode != 0:
-        print(f"run failed ({done.returncode}): {' '.join(command)}\n{done.stderr}")
-        sys.exit(2)
-    return json.loads((out / "summary.json").read_text())["results"]
+from app_runs import run_app as run
 
 
 def main():

@@ -19,26 +19,13 @@ half). The run without resampling is reported, not asserted on.
 Exit status: 0 all hold, 1 one fails (printed), 2 a run failed.
 """
 import argparse
-import csv
-import json
 import pathlib
-import subprocess
 import sys
 
-QUICK = ["--set", "output.png=false", "--set", "output.particles=false", "--quiet"]
-
+from app_runs import read_csv, run_app
 
 def run(app, scene, out, overrides):
-    command = [app, str(scene), "--out", str(out)] + QUICK
-    for assignment in overrides:
-        command += ["--set", assignment]
-    done = subprocess.run(command, capture_output=True, text=True)
-    if done.returncode != 0:
-        print(f"run failed ({done.returncode}): {' '.join(command)}\n{done.stderr}")
-        sys.exit(2)
-    with open(out / "diagnostics.csv") as f:
-        rows = list(csv.DictReader(f))
-    return json.loads((out / "summary.json").read_text())["results"], rows
+    return run_app(app, scene, out, overrides), read_csv(out / "diagnostics.csv")
 
 
 def main():

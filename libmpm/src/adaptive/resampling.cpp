@@ -44,22 +44,6 @@ IVec<dim> cell_of(const Vec<dim>& x, const Vec<dim>& origin, double h) {
   return c;
 }
 
-//! Calls fn(i) for every i of the integer box [lo, hi].
-template <int dim, class Fn>
-void for_each_in_box(const IVec<dim>& lo, const IVec<dim>& hi, Fn&& fn) {
-  if ((lo.array() > hi.array()).any()) return;
-  IVec<dim> i = lo;
-  while (true) {
-    fn(i);
-    int a = 0;
-    for (; a < dim; ++a) {
-      if (++i[a] <= hi[a]) break;
-      i[a] = lo[a];
-    }
-    if (a == dim) return;
-  }
-}
-
 //! A particle's place in a count or a merge group: level, material, cell; then its index, so
 //! that sorting gives one deterministic order.
 template <int dim>

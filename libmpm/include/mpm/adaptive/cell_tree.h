@@ -89,18 +89,8 @@ private:
     for (int a = 0; a < dim; ++a) {
       first[a] = std::max(0, static_cast<int>(std::floor(std::max(-1e9, (lo[a] - origin_[a]) / dx0_))));
       last[a] = std::min(base_cells_[a] - 1, static_cast<int>(std::floor(std::min(1e9, (hi[a] - origin_[a]) / dx0_))));
-      if (first[a] > last[a]) return;
     }
-    IVec<dim> cell = first;
-    while (true) {
-      fn(cell);
-      int a = 0;
-      for (; a < dim; ++a) {
-        if (++cell[a] <= last[a]) break;
-        cell[a] = first[a];
-      }
-      if (a == dim) return;
-    }
+    for_each_in_box<dim>(first, last, fn);
   }
   void visit_leaves(int level, const IVec<dim>& cell, const std::function<void(int, const IVec<dim>&)>& fn) const;
   int finest_level_in(int level, const IVec<dim>& cell, const Vec<dim>& lo, const Vec<dim>& hi) const;

@@ -15,27 +15,17 @@
 #include <doctest/doctest.h>
 
 #include "../core/random_particles.h"
+#include "angular_momentum.h"
 #include "random_tree.h"
 
 #include <random>
 
 using namespace mpm;
 using namespace mpm::adaptive;
+using mpm::test::cross;
+using mpm::test::spin;
 
 namespace {
-
-// The axial vector of the antisymmetric part: sum_i w (x_i - x_p) x v_i for B = sum_i w v_i (x_i - x_p)^T.
-template <int dim>
-Eigen::Vector3d spin(const Mat<dim>& B) {
-  if constexpr (dim == 2)
-    return Eigen::Vector3d(0.0, 0.0, B(1, 0) - B(0, 1));
-  else
-    return Eigen::Vector3d(B(2, 1) - B(1, 2), B(0, 2) - B(2, 0), B(1, 0) - B(0, 1));
-}
-template <int dim>
-Eigen::Vector3d cross(const Vec<dim>& a, const Vec<dim>& b) {
-  return spin<dim>(Mat<dim>(b * a.transpose()));
-}
 
 // Particles of random types (levels) inside the domain of `tree`, with random v and C.
 template <int dim>

@@ -18,28 +18,16 @@
 #include <doctest/doctest.h>
 #include <Eigen/Geometry>
 
+#include "angular_momentum.h"
+
 #include <random>
 
 using namespace mpm;
 using namespace mpm::adaptive;
+using mpm::test::cross;
+using mpm::test::spin;
 
 namespace {
-
-template <int dim>
-Eigen::Vector3d cross(const Vec<dim>& a, const Vec<dim>& b) {
-  Eigen::Vector3d a3 = Eigen::Vector3d::Zero(), b3 = Eigen::Vector3d::Zero();
-  a3.head<dim>() = a;
-  b3.head<dim>() = b;
-  return a3.cross(b3);
-}
-// The axial vector of the antisymmetric part of A: spin(C S) is sum r x (C r) for S = sum r r^T.
-template <int dim>
-Eigen::Vector3d spin(const Mat<dim>& A) {
-  if constexpr (dim == 2)
-    return Eigen::Vector3d(0.0, 0.0, A(1, 0) - A(0, 1));
-  else
-    return Eigen::Vector3d(A(2, 1) - A(1, 2), A(0, 2) - A(2, 0), A(1, 0) - A(0, 1));
-}
 
 struct Totals {
   double mass = 0.0, volume = 0.0;
