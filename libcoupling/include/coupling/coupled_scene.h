@@ -34,10 +34,11 @@ namespace coupling {
 template <int dim>
 struct SedimentPhase {
   double density = 2650.0;  //!< grain material density rho_s [kg/m^3]
-  //! The solid solver of the sediment (mpm/solid/solid_solver.h): "explicit" for a continuum of
-  //! `materials`, "grains" for discrete grains that feel only gravity, buoyancy and drag (a
-  //! dilute suspension; no materials).
+  //! The solid solver of the sediment (mpm/solid/solid_solver.h): "explicit" or "implicit" for a
+  //! continuum of `materials`, "grains" for discrete grains that feel only gravity, buoyancy and
+  //! drag (a dilute suspension; no materials).
   std::string solver = "grains";
+  mpm::stages::ImplicitSettings implicit;  //!< the Newton and CG settings of "implicit"
   //! Drucker-Prager (or any libmpm) continuum of the sediment; empty with "grains".
   std::vector<mpm::Material<dim>> materials;
   double min_fluid_fraction = default_min_fluid_fraction;  //!< n_min of volume_fraction.h

@@ -50,7 +50,8 @@ CoupledScene<dim> make_coupled_scene(mpm::SceneSettings<dim> settings, mpm::geom
   std::shared_ptr<const mpm::solid::SolidSolver<dim>> solid;
   if (sediment) {
     state.sediment = mpm::initial_state(settings);
-    solid = mpm::solid::make_solid_solver<dim>(sediment->solver, sediment->materials, sediment->switching.has_value());
+    solid = mpm::solid::make_solid_solver<dim>(sediment->solver, sediment->materials, sediment->switching.has_value(),
+                                               colliders, sediment->implicit);
     solid->add_channels(state.sediment.particles);
   }
   if (!(fluid && sediment)) drag.reset();

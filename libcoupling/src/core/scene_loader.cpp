@@ -50,6 +50,7 @@ SedimentPhase<dim> parse_sediment_phase(const mpm::Config& sediment) {
   // A continuum by default when the map holds material keys, discrete grains otherwise.
   s.solver = sediment.choice("solver", sediment.has("youngs_modulus") ? "explicit" : "grains",
                              mpm::solid::solid_solver_names());
+  s.implicit = mpm::solid::parse_implicit_settings(sediment, s.solver);
   if (s.solver != "grains") {
     s.materials.push_back(mpm::parse_material<dim>(sediment));
     s.density = s.materials.front().density;

@@ -71,12 +71,18 @@ void grid_to_particles(Particles<dim>& particles, const ParticleBuckets<dim>& bu
 template <int dim>
 void velocity_gradient(const Particles<dim>& P, const ParticleBuckets<dim>& buckets, const Kernel& kernel,
                        const SparseGrid<dim>& grid, std::vector<Mat<dim>>& grad_v) {
+  node_field_gradient(P, buckets, kernel, grid, grid.velocity, grad_v);
+}
+
+template <int dim>
+void node_field_gradient(const Particles<dim>& P, const ParticleBuckets<dim>& buckets, const Kernel& kernel,
+                         const SparseGrid<dim>& grid, const std::vector<Vec<dim>>& u, std::vector<Mat<dim>>& grad_v) {
   grad_v.resize(P.size());
   const double inv_dx = 1.0 / grid.dx();
   std::visit(
       [&](const auto& k) {
         using K = std::decay_t<decltype(k)>;
-        detail::gather<dim, dim>(grid, buckets, vector_views<dim>(grid.velocity),
+        detail::gather<dim, dim>(grid, buckets, vector_views<dim>(u),
                                  [&](std::uint32_t p, const PatchFrame<dim>& f, const double* patch) {
                                    Stencil<dim, K::support> st;
                                    st.compute(k, f.cells(P.x[p]), f.origin);
@@ -114,9 +120,16 @@ void scalar_to_grid(const std::vector<double>& values, const Particles<dim>& P, 
 template <int dim>
 void stress_to_grid_forces(const std::vector<Mat<dim>>& weighted_stress, const Particles<dim>& P,
                            const ParticleBuckets<dim>& buckets, const Kernel& kernel, SparseGrid<dim>& g) {
-  g.force.assign(g.node_storage(), Vec<dim>::Zero());
+  stress_to_nodes(weighted_stress, P, buckets, kernel, g, g.force);
+}
+
+template <int dim>
+void stress_to_nodes(const std::vector<Mat<dim>>& weighted_stress, const Particles<dim>& P,
+                     const ParticleBuckets<dim>& buckets, const Kernel& kernel, const SparseGrid<dim>& g,
+                     std::vector<Vec<dim>>& out) {
+  out.assign(g.node_storage(), Vec<dim>::Zero());
   std::array<ChannelView, dim> channels;
-  for (int a = 0; a < dim; ++a) channels[a] = component_view<dim>(g.force, a);
+  for (int a = 0; a < dim; ++a) channels[a] = component_view<dim>(out, a);
   const double inv_dx = 1.0 / g.dx();
   std::visit(
       [&](const auto& k) {
@@ -145,7 +158,11 @@ void stress_to_grid_forces(const std::vector<Mat<dim>>& weighted_stress, const P
   template void stress_to_grid_forces(const std::vector<Mat<dim>>&, const Particles<dim>&,                            \
                                       const ParticleBuckets<dim>&, const Kernel&, SparseGrid<dim>&);                  \
   template void velocity_gradient(const Particles<dim>&, const ParticleBuckets<dim>&, const Kernel&,                  \
-                                  const SparseGrid<dim>&, std::vector<Mat<dim>>&);
+                                  const SparseGrid<dim>&, std::vector<Mat<dim>>&);                                    \
+  template void stress_to_nodes(const std::vector<Mat<dim>>&, const Particles<dim>&, const ParticleBuckets<dim>&,     \
+                                const Kernel&, const SparseGrid<dim>&, std::vector<Vec<dim>>&);                       \
+  template void node_field_gradient(const Particles<dim>&, const ParticleBuckets<dim>&, const Kernel&,                \
+                                    const SparseGrid<dim>&, const std::vector<Vec<dim>>&, std::vector<Mat<dim>>&);
 MPM_INSTANTIATE(2)
 MPM_INSTANTIATE(3)
 

@@ -66,6 +66,28 @@ void Collider<dim>::project(const Vec<dim>& x, double t, Vec<dim>& v) const {
   v = vc + contact_.apply<dim>(Vec<dim>(v - vc), n);
 }
 
+namespace {
+//! Appends the directions `contact` fixes for a relative velocity v_rel at a surface of unit
+//! outward normal n.
+template <int dim>
+void contact_directions(const Contact& contact, const Vec<dim>& v_rel, const Vec<dim>& n,
+                        std::vector<Vec<dim>>& fixed) {
+  if (contact.type == ContactType::sticky) {
+    for (int a = 0; a < dim; ++a) fixed.push_back(Vec<dim>::Unit(a));
+  } else if (contact.type == ContactType::slip || v_rel.dot(n) < 0.0) {
+    fixed.push_back(n);
+  }
+}
+}  // namespace
+
+template <int dim>
+void Collider<dim>::fixed_directions(const Vec<dim>& x, double t, const Vec<dim>& v,
+                                     std::vector<Vec<dim>>& fixed) const {
+  if (phi(x, t) > 0.0) return;
+  const Vec<dim> n = contact_.type == ContactType::sticky ? Vec<dim>::Zero() : normal(x, t);
+  contact_directions(contact_, Vec<dim>(v - velocity_at(x)), n, fixed);
+}
+
 template <int dim>
 DomainWalls<dim>::DomainWalls(const Vec<dim>& lo, const Vec<dim>& hi, double thickness, const Contact& contact)
     : lo_(lo), hi_(hi), thickness_(thickness) {
@@ -94,6 +116,33 @@ void DomainWalls<dim>::project(const Vec<dim>& x, Vec<dim>& v) const {
     if (lower && x[axis] - lo_[axis] <= layer) v = lower->apply<dim>(v, Vec<dim>::Unit(axis));
     if (upper && hi_[axis] - x[axis] <= layer) v = upper->apply<dim>(v, Vec<dim>(-Vec<dim>::Unit(axis)));
   }
+}
+
+template <int dim>
+void DomainWalls<dim>::fixed_directions(const Vec<dim>& x, const Vec<dim>& v, std::vector<Vec<dim>>& fixed) const {
+  const double layer = thickness_ * (1.0 + 1e-9);  // as in project
+  for (int axis = 0; axis < dim; ++axis) {
+    const std::optional<Contact>& lower = walls_[index(axis, Side::lower)];
+    const std::optional<Contact>& upper = walls_[index(axis, Side::upper)];
+    if (lower && x[axis] - lo_[axis] <= layer) contact_directions<dim>(*lower, v, Vec<dim>::Unit(axis), fixed);
+    if (upper && hi_[axis] - x[axis] <= layer)
+      contact_directions<dim>(*upper, v, Vec<dim>(-Vec<dim>::Unit(axis)), fixed);
+  }
+}
+
+template <int dim>
+Mat<dim> ColliderSet<dim>::free_directions(const Vec<dim>& x, double t, const Vec<dim>& v) const {
+  std::vector<Vec<dim>> fixed;
+  for (const Collider<dim>& collider : colliders_) collider.fixed_directions(x, t, v, fixed);
+  if (walls_) walls_->fixed_directions(x, v, fixed);
+  // Gram-Schmidt: an orthonormal basis Q of the fixed directions, then I - Q Q^T.
+  Mat<dim> free = Mat<dim>::Identity();
+  for (Vec<dim> d : fixed) {
+    d = free * d;
+    const double length = d.norm();
+    if (length > 1e-9) free -= (d / length) * (d / length).transpose();
+  }
+  return free;
 }
 
 template <int dim>

@@ -123,11 +123,14 @@ void seed_body(SolidScene<dim>& scene, const Config& body) {
 
 template <int dim>
 SolidScene<dim> make_solid_scene(SceneSettings<dim> settings, std::vector<Material<dim>> materials,
-                                 geometry::ColliderSet<dim> colliders, const std::string& solver) {
+                                 geometry::ColliderSet<dim> colliders, const std::string& solver,
+                                 const stages::ImplicitSettings& implicit) {
+  for (int a = 0; solver == "implicit" && a < dim; ++a)
+    MPM_VERIFY(!settings.periodic[a], InputError, "solver 'implicit' does not support periodic axes yet");
   MpmState<dim> state = initial_state(settings);
   // The solver declares its channels before seeding, even for a scene without bodies: its
   // stages read them, and a restart loads them into this particle set.
-  std::shared_ptr<const SolidSolver<dim>> s = make_solid_solver<dim>(solver, materials);
+  std::shared_ptr<const SolidSolver<dim>> s = make_solid_solver<dim>(solver, materials, false, colliders, implicit);
   s->add_channels(state.particles);
   return {std::move(settings), std::move(materials), std::move(colliders), std::move(s), std::move(state), {}};
 }
@@ -146,7 +149,13 @@ SolidScene<dim> load_solid_scene(const Config& scene) {
   auto colliders = geometry::parse_colliders<dim>(scene, settings.domain_lo, settings.domain_hi,
                                                   wall_layer(settings.kernel, wall_dx));
   const std::string solver = scene.choice("solver", "explicit", solid_solver_names());
-  SolidScene<dim> s = make_solid_scene(std::move(settings), parse_materials<dim>(scene), std::move(colliders), solver);
+  const stages::ImplicitSettings implicit = parse_implicit_settings(scene, solver);
+  if (solver == "implicit" && refinement)
+    scene.fail("solver", "solver 'implicit' runs on a uniform grid only; remove the key 'adaptive' or use 'explicit'");
+  for (int a = 0; solver == "implicit" && a < dim; ++a)
+    if (settings.periodic[a]) scene.fail("solver", "solver 'implicit' does not support periodic axes yet");
+  SolidScene<dim> s =
+      make_solid_scene(std::move(settings), parse_materials<dim>(scene), std::move(colliders), solver, implicit);
   if (refinement) make_adaptive(s, *refinement);
   seed_bodies(s, scene);
   return s;
@@ -160,8 +169,11 @@ Pipeline<MpmState<dim>> make_solid_pipeline(const SolidScene<dim>& scene) {
     if (scene.state.particles.has_channel(kElasticF)) deformation.push_back(kElasticF);
     p.add(std::make_unique<stages::ResampleParticles<dim>>(*scene.refinement->resample, deformation));
   }
-  p.add(std::make_unique<stages::TimeStepControl<dim>>(
-      stages::time_step_settings(scene.settings, scene.solver->wave_speed())));
+  // A solver stable at any step (implicit, grains) still resolves free fall: a particle at
+  // rest falls at most wave_cfl^2 dx / 2 in its first step, dt <= wave_cfl sqrt(dx / |g|).
+  double wave_speed = scene.solver->wave_speed();
+  if (wave_speed == 0.0) wave_speed = std::sqrt(scene.settings.gravity.norm() * scene.settings.dx);
+  p.add(std::make_unique<stages::TimeStepControl<dim>>(stages::time_step_settings(scene.settings, wave_speed)));
   if (scene.refinement && scene.refinement->follow_particles)
     p.add(std::make_unique<stages::RefineGrid<dim>>(
         adaptive::build_tree(*scene.refinement, scene.settings, scene.colliders)));
@@ -192,7 +204,8 @@ double elastic_energy(const MpmState<dim>& state, const std::vector<Material<dim
   template void add_particles(SolidScene<dim>&, const std::vector<Vec<dim>>&, double, std::uint16_t, const Vec<dim>&, \
                               const std::string&);                                                                    \
   template SolidScene<dim> make_solid_scene(SceneSettings<dim>, std::vector<Material<dim>>,                           \
-                                            geometry::ColliderSet<dim>, const std::string&);                          \
+                                            geometry::ColliderSet<dim>, const std::string&,                           \
+                                            const stages::ImplicitSettings&);                                         \
   template void make_adaptive(SolidScene<dim>&, const adaptive::RefinementSettings<dim>&);                            \
   template void seed_bodies(SolidScene<dim>&, const Config&);                                                         \
   template SolidScene<dim> load_solid_scene<dim>(const Config&);                                                      \

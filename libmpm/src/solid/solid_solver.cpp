@@ -1,4 +1,5 @@
 #include <mpm/solid/explicit_solver.h>
+#include <mpm/solid/implicit_solver.h>
 #include <mpm/solid/solid_solver.h>
 
 #include <mpm/core/error.h>
@@ -11,20 +12,51 @@
 
 namespace mpm::solid {
 
-std::vector<std::string> solid_solver_names() { return {"explicit", "grains"}; }
+std::vector<std::string> solid_solver_names() { return {"explicit", "implicit", "grains"}; }
 
 template <int dim>
 std::shared_ptr<const SolidSolver<dim>> make_solid_solver(const std::string& name, std::vector<Material<dim>> materials,
-                                                          bool stress_free_particles) {
+                                                          bool stress_free_particles,
+                                                          geometry::ColliderSet<dim> colliders,
+                                                          const stages::ImplicitSettings& implicit) {
   if (name == "grains") return std::make_shared<GrainSolver<dim>>();
-  if (name == "explicit") {
-    MPM_VERIFY(!materials.empty(), InputError, "solid solver 'explicit' needs at least one material");
-    return std::make_shared<ExplicitSolver<dim>>(std::move(materials), stress_free_particles);
-  }
+  MPM_VERIFY((name != "explicit" && name != "implicit") || !materials.empty(), InputError,
+             "solid solver '" + name + "' needs at least one material");
+  if (name == "explicit") return std::make_shared<ExplicitSolver<dim>>(std::move(materials), stress_free_particles);
+  if (name == "implicit")
+    return std::make_shared<ImplicitSolver<dim>>(std::move(materials), stress_free_particles, std::move(colliders),
+                                                 implicit);
   std::string names;
   for (const std::string& n : solid_solver_names()) names += (names.empty() ? "" : ", ") + n;
   throw InputError("unknown solid solver '" + name + "' (solvers: " + names + ")");
 }
+
+stages::ImplicitSettings parse_implicit_settings(const Config& parent, const std::string& solver) {
+  stages::ImplicitSettings s;
+  const std::optional<Config> keys = parent.optional_child("implicit");
+  if (!keys) return s;
+  if (solver != "implicit")
+    parent.fail("implicit", "the implicit solve settings need solver: implicit (solver is '" + solver + "')");
+  s.tolerance = keys->number("tolerance", s.tolerance, Range::positive());
+  s.max_newton_iterations = keys->integer("max_newton_iterations", s.max_newton_iterations, 1, 1000);
+  s.linear_tolerance = keys->number("linear_tolerance", s.linear_tolerance, Range::open(0.0, 1.0));
+  s.max_linear_iterations = keys->integer("max_linear_iterations", s.max_linear_iterations, 1, 1000000);
+  s.on_failure =
+      keys->choice("on_failure", "stop", {"stop", "warn"}) == "stop" ? solve::OnFailure::stop : solve::OnFailure::warn;
+  return s;
+}
+
+namespace {
+//! deformation -> plasticity (only when a material is plastic): the particle update of both
+//! elastoplastic solvers.
+template <int dim>
+typename SolidSolver<dim>::Stages elastoplastic_particle_update(const std::vector<Material<dim>>& materials) {
+  typename SolidSolver<dim>::Stages s;
+  s.push_back(std::make_unique<stages::DeformationUpdate<dim>>());
+  if (stages::any_plastic(materials)) s.push_back(std::make_unique<stages::ReturnMap<dim>>(materials));
+  return s;
+}
+}  // namespace
 
 template <int dim>
 ExplicitSolver<dim>::ExplicitSolver(std::vector<Material<dim>> materials, bool stress_free_particles)
@@ -47,10 +79,27 @@ typename ExplicitSolver<dim>::Stages ExplicitSolver<dim>::grid_update() const {
 
 template <int dim>
 typename ExplicitSolver<dim>::Stages ExplicitSolver<dim>::particle_update() const {
+  return elastoplastic_particle_update(materials_);
+}
+
+template <int dim>
+ImplicitSolver<dim>::ImplicitSolver(std::vector<Material<dim>> materials, bool stress_free_particles,
+                                    geometry::ColliderSet<dim> colliders, stages::ImplicitSettings settings)
+    : materials_(std::move(materials)),
+      stress_free_particles_(stress_free_particles),
+      colliders_(std::move(colliders)),
+      settings_(settings) {}
+
+template <int dim>
+typename ImplicitSolver<dim>::Stages ImplicitSolver<dim>::grid_update() const {
   Stages s;
-  s.push_back(std::make_unique<stages::DeformationUpdate<dim>>());
-  if (stages::any_plastic(materials_)) s.push_back(std::make_unique<stages::ReturnMap<dim>>(materials_));
+  s.push_back(std::make_unique<stages::ImplicitUpdate<dim>>(materials_, colliders_, settings_, stress_free_particles_));
   return s;
+}
+
+template <int dim>
+typename ImplicitSolver<dim>::Stages ImplicitSolver<dim>::particle_update() const {
+  return elastoplastic_particle_update(materials_);
 }
 
 template <int dim>
@@ -60,10 +109,16 @@ typename GrainSolver<dim>::Stages GrainSolver<dim>::grid_update() const {
   return s;
 }
 
-template std::shared_ptr<const SolidSolver<2>> make_solid_solver(const std::string&, std::vector<Material<2>>, bool);
-template std::shared_ptr<const SolidSolver<3>> make_solid_solver(const std::string&, std::vector<Material<3>>, bool);
+template std::shared_ptr<const SolidSolver<2>> make_solid_solver(const std::string&, std::vector<Material<2>>, bool,
+                                                                 geometry::ColliderSet<2>,
+                                                                 const stages::ImplicitSettings&);
+template std::shared_ptr<const SolidSolver<3>> make_solid_solver(const std::string&, std::vector<Material<3>>, bool,
+                                                                 geometry::ColliderSet<3>,
+                                                                 const stages::ImplicitSettings&);
 template class ExplicitSolver<2>;
 template class ExplicitSolver<3>;
+template class ImplicitSolver<2>;
+template class ImplicitSolver<3>;
 template class GrainSolver<2>;
 template class GrainSolver<3>;
 

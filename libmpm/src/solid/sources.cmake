@@ -3,6 +3,7 @@ list(APPEND MPM_SOLID_SOURCES
   src/solid/solid_scene.cpp
   src/solid/solid_solver.cpp
   src/solid/stages/stress_forces.cpp
+  src/solid/stages/implicit_update.cpp
   src/solid/stages/deformation_update.cpp
   src/solid/stages/return_map.cpp
 )

@@ -18,8 +18,7 @@
 
 namespace fluid::stages {
 
-//! What a scene decides about a pressure solve that did not converge.
-enum class OnFailure { warn, stop };
+using mpm::solve::OnFailure;
 
 struct PressureSettings {
   std::string solver = "mgpcg";  //!< one of pressure_solver_names()

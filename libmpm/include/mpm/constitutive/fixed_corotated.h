@@ -7,10 +7,9 @@
 //!
 //! with F = R S the polar decomposition (R proper) and sigma the rotation-variant singular
 //! values, J = det F = prod sigma_i. Inverted F (J < 0) is well defined: the energy keeps
-//! pushing the negative singular value back through zero, the robustness the model is chosen for.
+//! pushing the negative singular value back through zero, so the model needs no clamp.
 #include <mpm/constitutive/detail/isotropic.h>
 #include <mpm/core/types.h>
-#include <mpm/math/svd.h>
 
 #include <string_view>
 
@@ -19,26 +18,28 @@ namespace mpm::constitutive {
 template <int dim>
 struct FixedCorotated {
   static constexpr std::string_view name = "fixed_corotated";
-  //! Defined and restoring for det F <= 0 (Stomakhin et al. 2012): inverted elements recover.
-  static constexpr bool supports_inversion = true;
 
   double mu = 0.0;      //!< [Pa]
   double lambda = 0.0;  //!< [Pa]
 
-  double energy(const Mat<dim>& F) const {
-    const Vec<dim> sigma = math::svd(F).sigma;
-    const double J = sigma.prod();
-    return mu * (sigma.array() - 1.0).square().sum() + 0.5 * lambda * (J - 1.0) * (J - 1.0);
-  }
-
-  Mat<dim> first_piola(const Mat<dim>& F) const {
-    const math::Svd<dim> f = math::svd(F);
-    return f.U * principal_stress(f.sigma).asDiagonal() * f.V.transpose();
-  }
-
+  double energy(const Mat<dim>& F) const { return isotropic_energy(*this, F); }
+  Mat<dim> first_piola(const Mat<dim>& F) const { return isotropic_first_piola(*this, F); }
   Mat<dim> first_piola_differential(const Mat<dim>& F, const Mat<dim>& dF) const {
-    const math::Svd<dim> f = math::svd(F);
-    const Vec<dim>& s = f.sigma;
+    return stress_derivative(*this, F, false).apply(dF);
+  }
+
+  double principal_energy(const Vec<dim>& s) const {
+    const double J = s.prod();
+    return mu * (s.array() - 1.0).square().sum() + 0.5 * lambda * (J - 1.0) * (J - 1.0);
+  }
+
+  //! p_i = dpsi/dsigma_i
+  Vec<dim> principal_stress(const Vec<dim>& s) const {
+    const double J = s.prod();
+    return 2.0 * mu * (s.array() - 1.0).matrix() + lambda * (J - 1.0) * dJ_dsigma(s);
+  }
+
+  detail::PrincipalDifferential<dim> principal_hessian(const Vec<dim>& s) const {
     const double J = s.prod();
     const Vec<dim> dJ = dJ_dsigma(s);
     detail::PrincipalDifferential<dim> d{Mat<dim>::Zero(), Mat<dim>::Zero(), Mat<dim>::Zero()};
@@ -55,7 +56,7 @@ struct FixedCorotated {
         d.skew(i, j) = 2.0 * mu - 4.0 * mu / detail::safe_denominator(s(i) + s(j)) + lambda * (J - 1.0) * q;
       }
     }
-    return detail::principal_differential(f, d, dF);
+    return d;
   }
 
 private:
@@ -75,12 +76,6 @@ private:
     } else {
       return s(3 - i - j);
     }
-  }
-
-  //! p_i = dpsi/dsigma_i
-  Vec<dim> principal_stress(const Vec<dim>& s) const {
-    const double J = s.prod();
-    return 2.0 * mu * (s.array() - 1.0).matrix() + lambda * (J - 1.0) * dJ_dsigma(s);
   }
 };
 

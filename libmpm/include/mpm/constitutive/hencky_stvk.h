@@ -3,15 +3,16 @@
 //! elastic response under Drucker-Prager and von Mises plasticity.
 //!
 //!   psi(F) = mu tr(log(Sigma)^2) + lambda/2 (tr log(Sigma))^2            [J/m^3]
-//!          = mu sum_i eps_i^2 + lambda/2 (sum_i eps_i)^2,   eps_i = log|sigma_i|
-//!   P      = U diag(tau_i / sigma_i) V^T,   tau_i = 2 mu eps_i + lambda sum_k eps_k
+//!          = mu sum_i L_i^2 + lambda/2 (sum_i L_i)^2
+//!   p_i    = tau_i L'_i,   tau_i = 2 mu L_i + lambda sum_k L_k
 //!
-//! with F = U diag(sigma) V^T the rotation-variant SVD; tau_i are the principal Kirchhoff
-//! stresses (tau = P F^T = U diag(tau_i) U^T), linear in the principal Hencky strain, which is
-//! what makes the return maps closed-form. |sigma_i| below detail::min_stretch is raised to it.
+//! with F = U diag(sigma) V^T the rotation-variant SVD and L_i = log sigma_i the principal
+//! Hencky strain; tau_i are the principal Kirchhoff stresses (tau = P F^T = U diag(tau_i) U^T),
+//! linear in the strain, which is what makes the return maps closed-form. Below the critical
+//! stretch inversion_clamp, L is the extended logarithm of detail/isotropic.h: a flat or
+//! inverted particle (sigma_i <= 0) keeps a finite energy whose stress pushes it back.
 #include <mpm/constitutive/detail/isotropic.h>
 #include <mpm/core/types.h>
-#include <mpm/math/svd.h>
 
 #include <cmath>
 #include <string_view>
@@ -21,68 +22,78 @@ namespace mpm::constitutive {
 template <int dim>
 struct HenckyStVK {
   static constexpr std::string_view name = "hencky_stvk";
-  //! Defined for det F < 0 through log|sigma| (a reflection carries no stress).
-  static constexpr bool supports_inversion = true;
 
   double mu = 0.0;      //!< [Pa]
   double lambda = 0.0;  //!< [Pa]
 
-  //! Principal Hencky strain eps_i = log|sigma_i| of the rotation-variant singular values.
-  static Vec<dim> principal_strain(const Vec<dim>& sigma) { return safe(sigma).array().abs().log().matrix(); }
+  //! Principal Hencky strain eps_i = log|sigma_i| of the rotation-variant singular values, the
+  //! variable of the return maps (|sigma_i| below detail::min_stretch is raised to it).
+  static Vec<dim> principal_strain(const Vec<dim>& sigma) {
+    return sigma.unaryExpr([](double x) { return std::log(std::abs(detail::safe_denominator(x))); });
+  }
 
   //! Principal Kirchhoff stress tau_i = dpsi/deps_i [Pa].
   Vec<dim> principal_kirchhoff(const Vec<dim>& eps) const {
     return 2.0 * mu * eps + Vec<dim>::Constant(lambda * eps.sum());
   }
 
-  double energy(const Mat<dim>& F) const {
-    const Vec<dim> eps = principal_strain(math::svd(F).sigma);
-    return mu * eps.squaredNorm() + 0.5 * lambda * eps.sum() * eps.sum();
-  }
-
-  Mat<dim> first_piola(const Mat<dim>& F) const {
-    const math::Svd<dim> f = math::svd(F);
-    const Vec<dim> tau = principal_kirchhoff(principal_strain(f.sigma));
-    return f.U * tau.cwiseQuotient(safe(f.sigma)).asDiagonal() * f.V.transpose();
-  }
-
+  double energy(const Mat<dim>& F) const { return isotropic_energy(*this, F); }
+  Mat<dim> first_piola(const Mat<dim>& F) const { return isotropic_first_piola(*this, F); }
   Mat<dim> first_piola_differential(const Mat<dim>& F, const Mat<dim>& dF) const {
-    const math::Svd<dim> f = math::svd(F);
-    const Vec<dim> s = safe(f.sigma);
-    const Vec<dim> eps = principal_strain(f.sigma);
-    const Vec<dim> p = principal_kirchhoff(eps).cwiseQuotient(s);
+    return stress_derivative(*this, F, false).apply(dF);
+  }
+
+  double principal_energy(const Vec<dim>& s) const {
+    const Vec<dim> L = detail::ExtendedLogs<dim>(s).value;
+    return mu * L.squaredNorm() + 0.5 * lambda * L.sum() * L.sum();
+  }
+
+  Vec<dim> principal_stress(const Vec<dim>& s) const {
+    const detail::ExtendedLogs<dim> L(s);
+    return principal_kirchhoff(L.value).cwiseProduct(L.first);
+  }
+
+  detail::PrincipalDifferential<dim> principal_hessian(const Vec<dim>& s) const {
+    const detail::ExtendedLogs<dim> L(s);
+    const double trace = L.value.sum();
+    const Vec<dim> tau = principal_kirchhoff(L.value);
+    const Vec<dim> p = tau.cwiseProduct(L.first);
     detail::PrincipalDifferential<dim> d{Mat<dim>::Zero(), Mat<dim>::Zero(), Mat<dim>::Zero()};
+    d.dp_dsigma = lambda * L.first * L.first.transpose();
+    d.dp_dsigma.diagonal() += 2.0 * mu * L.first.cwiseAbs2() + tau.cwiseProduct(L.second);
     for (int i = 0; i < dim; ++i) {
       for (int j = 0; j < dim; ++j) {
-        d.dp_dsigma(i, j) = ((i == j ? 2.0 * mu : 0.0) + lambda) / (s(i) * s(j));
-        if (i == j) {
-          d.dp_dsigma(i, i) -= p(i) / s(i);
-          continue;
+        if (i == j) continue;
+        // p_i = 2 mu g(s_i) + lambda tr L h(s_i) with g = L L', h = L': divided differences.
+        double dd_g, dd_h;
+        if (s(i) >= inversion_clamp && s(j) >= inversion_clamp) {
+          dd_g = divided_log_over_x(s(i), s(j));
+          dd_h = -1.0 / (s(i) * s(j));
+        } else {
+          const auto dg = [](double x) {
+            const detail::ExtendedLog l(x);
+            return l.first * l.first + l.value * l.second;
+          };
+          dd_g = detail::divided_difference(s(i), s(j), L.value(i) * L.first(i), L.value(j) * L.first(j), dg);
+          dd_h = detail::divided_difference(s(i), s(j), L.first(i), L.first(j),
+                                            [](double x) { return detail::ExtendedLog(x).second; });
         }
-        // p_i = (2 mu log|s_i| + lambda tr eps) / s_i: divided differences of log|x|/x and 1/x.
-        d.sym(i, j) = 2.0 * mu * divided_log_over_x(s(i), s(j)) - lambda * eps.sum() / (s(i) * s(j));
+        d.sym(i, j) = 2.0 * mu * dd_g + lambda * trace * dd_h;
         d.skew(i, j) = (p(i) + p(j)) / detail::safe_denominator(s(i) + s(j));
       }
     }
-    return detail::principal_differential(f, d, dF);
+    return d;
   }
 
 private:
-  static Vec<dim> safe(const Vec<dim>& sigma) {
-    return sigma.unaryExpr([](double x) { return detail::safe_denominator(x); });
-  }
-
-  //! (log|a| - log|b|) / (a - b), through log1p when a and b are close (same sign).
+  //! (log a - log b) / (a - b) for a, b > 0, through log1p when a and b are close.
   static double divided_log(double a, double b) {
-    if (a * b < 0) return (std::log(std::abs(a)) - std::log(std::abs(b))) / (a - b);
     const double x = (a - b) / b;
     return x == 0.0 ? 1.0 / b : std::log1p(x) / (x * b);
   }
 
-  //! (g(a) - g(b)) / (a - b) for g(x) = log|x| / x, without cancellation when a ~ b.
-  static double divided_log_over_x(double a, double b) {
-    return (b * divided_log(a, b) - std::log(std::abs(b))) / (a * b);
-  }
+  //! (g(a) - g(b)) / (a - b) for g(x) = log x / x, without cancellation when a ~ b.
+  static double divided_log_over_x(double a, double b) { return (b * divided_log(a, b) - std::log(b)) / (a * b); }
 };
 
 }  // namespace mpm::constitutive

@@ -51,9 +51,21 @@ template <int dim>
 void stress_to_grid_forces(const std::vector<Mat<dim>>& weighted_stress, const Particles<dim>& particles,
                            const ParticleBuckets<dim>& buckets, const Kernel& kernel, SparseGrid<dim>& grid);
 
+//! The same sum into any node array `out` (sized to the node storage): the force differential
+//! of an implicit solve.
+template <int dim>
+void stress_to_nodes(const std::vector<Mat<dim>>& weighted_stress, const Particles<dim>& particles,
+                     const ParticleBuckets<dim>& buckets, const Kernel& kernel, const SparseGrid<dim>& grid,
+                     std::vector<Vec<dim>>& out);
+
 //! Velocity gradient grad v_p = sum_i v_i (grad w_ip)^T [1/s] for every particle.
 template <int dim>
 void velocity_gradient(const Particles<dim>& particles, const ParticleBuckets<dim>& buckets, const Kernel& kernel,
                        const SparseGrid<dim>& grid, std::vector<Mat<dim>>& grad_v);
+
+//! The same gradient of any node field u (sized to the node storage): sum_i u_i (grad w_ip)^T.
+template <int dim>
+void node_field_gradient(const Particles<dim>& particles, const ParticleBuckets<dim>& buckets, const Kernel& kernel,
+                         const SparseGrid<dim>& grid, const std::vector<Vec<dim>>& u, std::vector<Mat<dim>>& grad);
 
 }  // namespace mpm

@@ -54,6 +54,11 @@ public:
   //! When phi(x, t) <= 0, replaces the node velocity v [m/s] by v_c + contact.apply(v - v_c, n)
   //! with v_c = velocity_at(x).
   void project(const Vec<dim>& x, double t, Vec<dim>& v) const;
+  //! The linear part of project for an implicit solve: appends to `fixed` the unit directions
+  //! in which the obstacle prescribes the velocity v of a node at x (every axis for sticky
+  //! contact, the normal for slip contact and for separating contact that v approaches; none
+  //! outside the obstacle). Friction is left to project.
+  void fixed_directions(const Vec<dim>& x, double t, const Vec<dim>& v, std::vector<Vec<dim>>& fixed) const;
 
   const Shape<dim>& shape() const { return shape_; }
   const Contact& contact() const { return contact_; }
@@ -90,6 +95,8 @@ public:
   const std::optional<Contact>& wall(int axis, Side side) const { return walls_[index(axis, side)]; }
 
   void project(const Vec<dim>& x, Vec<dim>& v) const;
+  //! As Collider::fixed_directions, for the closed walls whose layer holds x.
+  void fixed_directions(const Vec<dim>& x, const Vec<dim>& v, std::vector<Vec<dim>>& fixed) const;
 
   const Vec<dim>& lo() const { return lo_; }
   const Vec<dim>& hi() const { return hi_; }
@@ -112,6 +119,10 @@ public:
   //! Applies every collider in the order added, then the walls, so that no node velocity
   //! leaves the domain through a closed wall.
   void project(const Vec<dim>& x, double t, Vec<dim>& v) const;
+  //! The orthogonal projector onto the velocity directions that no obstacle prescribes at x for
+  //! a node moving at v (identity in free space, zero for a sticky node): the degrees of
+  //! freedom an implicit solve leaves to the node (Collider::fixed_directions).
+  Mat<dim> free_directions(const Vec<dim>& x, double t, const Vec<dim>& v) const;
   bool uses_level_sets() const;
   bool empty() const { return colliders_.empty() && !walls_; }
 

@@ -54,10 +54,12 @@ void add_particles(SolidScene<dim>& scene, const std::vector<Vec<dim>>& position
                    const Vec<dim>& velocity, const std::string& where);
 
 //! A scene with an empty particle set, the grid sized to the settings' domain and the solid
-//! solver called `solver` (solid_solver_names()).
+//! solver called `solver` (solid_solver_names()), with `implicit` its settings when it is
+//! "implicit" (uniform grids without periodic axes only: InputError otherwise).
 template <int dim>
 SolidScene<dim> make_solid_scene(SceneSettings<dim> settings, std::vector<Material<dim>> materials,
-                                 geometry::ColliderSet<dim> colliders, const std::string& solver = "explicit");
+                                 geometry::ColliderSet<dim> colliders, const std::string& solver = "explicit",
+                                 const stages::ImplicitSettings& implicit = {});
 
 //! Makes an unseeded scene adaptive: its AdaptiveGrid from `refinement`, the particle channel
 //! "level" (mpm/adaptive/). load_solid_scene does it for the key `adaptive`.

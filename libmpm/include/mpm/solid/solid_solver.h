@@ -4,12 +4,15 @@
 //! swap it (`solver:` in a solid scene, `sediment.solver:` in a coupled one). A pipeline runs
 //!   time_step -> sort -> p2g -> grid_update() -> boundary -> particle_update() -> g2p
 //! and a coupled step puts the exchange and the mixture projection between grid_update() and
-//! particle_update() (libcoupling). An implicit solver enforces walls and colliders inside its
+//! particle_update() (libcoupling). The implicit solver enforces walls and colliders inside its
 //! grid update as well; the boundary stage after it then leaves its velocities unchanged.
+#include <mpm/core/config.h>
 #include <mpm/core/particles.h>
 #include <mpm/core/stage.h>
 #include <mpm/core/state.h>
+#include <mpm/geometry/collider.h>
 #include <mpm/solid/material.h>
+#include <mpm/solid/stages/implicit_update.h>
 
 #include <memory>
 #include <string>
@@ -35,16 +38,25 @@ public:
 };
 
 //! "explicit": symplectic Euler on the elastoplastic materials (explicit_solver.h).
+//! "implicit": backward Euler on the same materials, Newton-CG (implicit_solver.h).
 //! "grains": stress-free particles (discrete grains; gravity, and in a coupled scene buoyancy and
 //! drag, move them).
 std::vector<std::string> solid_solver_names();
 
 //! The solver called `name` (one of solid_solver_names()) over `materials`. With
 //! `stress_free_particles` some particles carry the index stress_free_material and add no stress
-//! (a sediment that switches between continuum and discrete grains). InputError for another name
-//! or for "explicit" without materials.
+//! (a sediment that switches between continuum and discrete grains). The implicit solver
+//! enforces `colliders` inside its solve, with `implicit` as its solve settings. InputError for
+//! another name or for "explicit" or "implicit" without materials.
 template <int dim>
 std::shared_ptr<const SolidSolver<dim>> make_solid_solver(const std::string& name, std::vector<Material<dim>> materials,
-                                                          bool stress_free_particles = false);
+                                                          bool stress_free_particles = false,
+                                                          geometry::ColliderSet<dim> colliders = {},
+                                                          const stages::ImplicitSettings& implicit = {});
+
+//! The optional map `implicit` of `parent` (the scene, or a coupled scene's sediment): the
+//! Newton and CG settings of solver `solver`. InputError naming file, line, key and range for
+//! a value out of range, or for the map under another solver.
+stages::ImplicitSettings parse_implicit_settings(const Config& parent, const std::string& solver);
 
 }  // namespace mpm::solid

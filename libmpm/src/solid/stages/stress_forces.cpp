@@ -15,18 +15,6 @@
 
 namespace mpm::stages {
 
-namespace {
-template <int dim>
-void check_not_inverted(const Particles<dim>& P, const std::vector<Mat<dim>>& F, std::size_t m,
-                        std::string_view model) {
-  for (std::size_t p = 0; p < P.size(); ++p)
-    if (P.material[p] == m && !(F[p].determinant() > 0.0))
-      throw NumericalError("stage 'stress_forces': particle " + std::to_string(p) + " is inverted (det F = " +
-                           std::to_string(F[p].determinant()) + "); the " + std::string(model) +
-                           " model is undefined for det F <= 0 (fixed_corotated handles inversion)");
-}
-}  // namespace
-
 template <int dim>
 void StressForces<dim>::run(MpmState<dim>& s) {
   Particles<dim>& P = s.particles;
@@ -39,8 +27,6 @@ void StressForces<dim>::run(MpmState<dim>& s) {
   for (std::size_t m = 0; m < materials_.size(); ++m) {
     std::visit(
         [&](const auto& model) {
-          using Model = std::decay_t<decltype(model)>;
-          if constexpr (!Model::supports_inversion) check_not_inverted(P, F, m, Model::name);
           tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.size(), 4096), [&](const auto& r) {
             for (std::size_t p = r.begin(); p != r.end(); ++p)
               if (P.material[p] == m) weighted_stress_[p] = P.volume0[p] * model.first_piola(F[p]) * F[p].transpose();

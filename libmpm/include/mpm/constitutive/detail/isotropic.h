@@ -1,5 +1,5 @@
 #pragma once
-//! Stress differential of an isotropic model written in principal (SVD) space.
+//! Isotropic elasticity written in principal (SVD) space, shared by every elastic model.
 //!
 //! An isotropic energy psi(F) = psihat(sigma) of the rotation-variant singular values
 //! (math/svd.h) has P = U diag(p) V^T with p_i = d psihat / d sigma_i. Writing a perturbation
@@ -8,15 +8,35 @@
 //!   D_ij = (p_i - p_j)/(sigma_i - sigma_j) (M_ij + M_ji)/2
 //!        + (p_i + p_j)/(sigma_i + sigma_j) (M_ij - M_ji)/2          (i != j)
 //! (Stomakhin et al. 2012, supplement; the derivation differentiates U and V as rotations).
-//! Each model supplies the two quotients in a form that stays finite when singular values
-//! coincide; the second one is singular where sigma_i = -sigma_j (an inverted F), and the
-//! models evaluate it with safe_denominator().
+//! Each model supplies p, the Hessian dp/dsigma and the two quotients in a form that stays
+//! finite when singular values coincide; the second quotient is singular where
+//! sigma_i = -sigma_j (an inverted F), and is evaluated with safe_denominator().
+//!
+//! The map M -> D is block diagonal: the dim x dim block dp/dsigma on diag(M), and for each
+//! pair i < j a 2 x 2 block on (M_ij, M_ji) with eigenvalues sym_ij and skew_ij. Clamping the
+//! eigenvalues of every block at zero makes the differential positive semi-definite (Teran et
+//! al. 2005), which an implicit step needs where the energy is not convex (compression,
+//! inversion): make_positive_semidefinite().
+//!
+//! Inversion handling (Irving et al. 2004; Zhu et al. sec. 5.3): the models built on log sigma
+//! (Neo-Hookean, Hencky) take it through extended_log, which below the critical stretch
+//! inversion_clamp continues log by its second-order Taylor polynomial. The energy then stays
+//! finite, C2 and restoring for flat (sigma = 0) and inverted (sigma < 0) particles, and its
+//! gradient is still the stress, as Newton's line search requires; for sigma >= the clamp the
+//! model is unchanged.
 #include <mpm/core/types.h>
 #include <mpm/math/svd.h>
 
+#include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 
-namespace mpm::constitutive::detail {
+namespace mpm::constitutive {
+
+//! Critical stretch below which the logarithmic models continue their energy quadratically.
+inline constexpr double inversion_clamp = 0.1;
+
+namespace detail {
 
 template <int dim>
 struct PrincipalDifferential {
@@ -32,6 +52,48 @@ inline constexpr double min_stretch = 1e-6;
 //! x with its magnitude raised to min_stretch, sign kept (0 counts as positive).
 inline double safe_denominator(double x) { return std::abs(x) >= min_stretch ? x : std::copysign(min_stretch, x); }
 
+//! log x for x >= c = inversion_clamp, and below it log c + (x - c)/c - (x - c)^2 / (2 c^2):
+//! value, first and second derivative. Increasing everywhere (L' >= 1/c below c).
+struct ExtendedLog {
+  double value, first, second;
+  explicit ExtendedLog(double x) {
+    constexpr double c = inversion_clamp;
+    if (x >= c) {
+      value = std::log(x);
+      first = 1.0 / x;
+      second = -first * first;
+    } else {
+      const double d = (x - c) / c;
+      value = std::log(c) + d - 0.5 * d * d;
+      first = (1.0 - d) / c;
+      second = -1.0 / (c * c);
+    }
+  }
+};
+
+//! ExtendedLog of every singular value.
+template <int dim>
+struct ExtendedLogs {
+  Vec<dim> value, first, second;
+  explicit ExtendedLogs(const Vec<dim>& sigma) {
+    for (int i = 0; i < dim; ++i) {
+      const ExtendedLog l(sigma(i));
+      value(i) = l.value;
+      first(i) = l.first;
+      second(i) = l.second;
+    }
+  }
+};
+
+//! (f(a) - f(b)) / (a - b), or f'((a + b)/2) where a and b are too close for the quotient
+//! (second-order accurate; the quotient would lose digits to cancellation).
+template <class DF>
+double divided_difference(double a, double b, double fa, double fb, const DF& derivative) {
+  if (std::abs(a - b) > 1e-6 * (std::abs(a) + std::abs(b))) return (fa - fb) / (a - b);
+  return derivative(0.5 * (a + b));
+}
+
+//! D of the header comment for M = U^T dF V, back in world axes.
 template <int dim>
 Mat<dim> principal_differential(const math::Svd<dim>& f, const PrincipalDifferential<dim>& d, const Mat<dim>& dF) {
   const Mat<dim> M = f.U.transpose() * dF * f.V;
@@ -46,4 +108,64 @@ Mat<dim> principal_differential(const math::Svd<dim>& f, const PrincipalDifferen
   return f.U * D * f.V.transpose();
 }
 
-}  // namespace mpm::constitutive::detail
+//! Clamps the eigenvalues of every block of the differential at zero (Teran et al. 2005): the
+//! result is positive semi-definite and equals the input where that already was.
+template <int dim>
+void make_positive_semidefinite(PrincipalDifferential<dim>& d) {
+  const Eigen::SelfAdjointEigenSolver<Mat<dim>> eigen(d.dp_dsigma);
+  if (eigen.eigenvalues().minCoeff() < 0.0)
+    d.dp_dsigma =
+        eigen.eigenvectors() * eigen.eigenvalues().cwiseMax(0.0).asDiagonal() * eigen.eigenvectors().transpose();
+  d.sym = d.sym.cwiseMax(0.0);
+  d.skew = d.skew.cwiseMax(0.0);
+}
+
+}  // namespace detail
+
+//! The stress differential of one particle, prepared once (SVD and principal quantities) and
+//! applied to many perturbations: the Hessian-vector products of an implicit solve.
+template <int dim>
+struct StressDerivative {
+  math::Svd<dim> f;
+  detail::PrincipalDifferential<dim> d;
+  //! dP = (d^2 psi / dF dF) : dF [Pa].
+  Mat<dim> apply(const Mat<dim>& dF) const { return detail::principal_differential(f, d, dF); }
+  //! a . (dP(a q^T) q) without forming dF = a q^T: the diagonal entries of an implicit
+  //! system's Hessian (Zhu et al. eq. 18-19). With u = U^T a, w = V^T q, M = u w^T.
+  double quadratic(const Vec<dim>& a, const Vec<dim>& q) const {
+    const Vec<dim> u = f.U.transpose() * a, w = f.V.transpose() * q;
+    const Vec<dim> uw = u.cwiseProduct(w);
+    double r = uw.dot(d.dp_dsigma * uw);
+    for (int i = 0; i < dim; ++i)
+      for (int j = 0; j < dim; ++j)
+        if (i != j) {
+          const double mij = u(i) * w(j), mji = u(j) * w(i);
+          r += mij * (0.5 * d.sym(i, j) * (mij + mji) + 0.5 * d.skew(i, j) * (mij - mji));
+        }
+    return r;
+  }
+};
+
+//! The energy, stress and differential of a model that supplies principal_energy,
+//! principal_stress and principal_hessian of its singular values.
+template <class Model, int dim>
+double isotropic_energy(const Model& model, const Mat<dim>& F) {
+  return model.principal_energy(math::svd(F).sigma);
+}
+
+template <class Model, int dim>
+Mat<dim> isotropic_first_piola(const Model& model, const Mat<dim>& F) {
+  const math::Svd<dim> f = math::svd(F);
+  return f.U * model.principal_stress(f.sigma).asDiagonal() * f.V.transpose();
+}
+
+//! The differential at F; with `definite` made positive semi-definite (Teran et al. 2005).
+template <class Model, int dim>
+StressDerivative<dim> stress_derivative(const Model& model, const Mat<dim>& F, bool definite) {
+  StressDerivative<dim> s{math::svd(F), {}};
+  s.d = model.principal_hessian(s.f.sigma);
+  if (definite) detail::make_positive_semidefinite(s.d);
+  return s;
+}
+
+}  // namespace mpm::constitutive

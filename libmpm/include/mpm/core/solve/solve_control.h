@@ -4,6 +4,9 @@
 //! caller reads `converged` and decides whether the step warns or stops.
 namespace mpm::solve {
 
+//! What a scene decides about a solve that did not converge: go on with a warning, or stop.
+enum class OnFailure { warn, stop };
+
 struct SolveControl {
   double relative_tolerance = 1e-8;  //!< stop when |b - A x| <= rtol |b|
   double absolute_tolerance = 0.0;   //!< ... or when |b - A x| <= atol

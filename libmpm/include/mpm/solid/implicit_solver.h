@@ -1,0 +1,32 @@
+#pragma once
+//! The implicit (backward Euler) elastoplastic step: grid_update() = implicit_update (Newton
+//! on the incremental potential, stages/implicit_update.h); particle_update() = deformation ->
+//! plasticity, as in the explicit step. Stable at any step: the time step follows the particle
+//! CFL condition alone, not the elastic wave speed.
+#include <mpm/geometry/collider.h>
+#include <mpm/solid/solid_channels.h>
+#include <mpm/solid/solid_solver.h>
+#include <mpm/solid/stages/implicit_update.h>
+
+namespace mpm::solid {
+
+template <int dim>
+class ImplicitSolver final : public SolidSolver<dim> {
+public:
+  using typename SolidSolver<dim>::Stages;
+  ImplicitSolver(std::vector<Material<dim>> materials, bool stress_free_particles, geometry::ColliderSet<dim> colliders,
+                 stages::ImplicitSettings settings);
+  std::string name() const override { return "implicit"; }
+  void add_channels(Particles<dim>& particles) const override { add_solid_channels(particles); }
+  double wave_speed() const override { return 0.0; }
+  Stages grid_update() const override;
+  Stages particle_update() const override;
+
+private:
+  std::vector<Material<dim>> materials_;
+  bool stress_free_particles_;
+  geometry::ColliderSet<dim> colliders_;
+  stages::ImplicitSettings settings_;
+};
+
+}  // namespace mpm::solid

@@ -1,0 +1,92 @@
+#pragma once
+#include <mpm/constitutive/detail/isotropic.h>
+#include <mpm/core/solve/solve_control.h>
+#include <mpm/core/stage.h>
+#include <mpm/core/state.h>
+#include <mpm/geometry/collider.h>
+#include <mpm/solid/material.h>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace mpm::stages {
+
+//! The keys of an implicit solid step (scene key `implicit`, docs/user_guide.md).
+struct ImplicitSettings {
+  //! Newton stops when the mass-weighted rms velocity residual |g|_{M^-1} / sqrt(M) is at most
+  //! tolerance * (rms(v^*) + |g| dt): a relative accuracy of the step's velocities.
+  double tolerance = 1e-5;
+  int max_newton_iterations = 50;
+  double linear_tolerance = 1e-3;  //!< relative residual of each Newton system (an inexact Newton step)
+  int max_linear_iterations = 1000;
+  solve::OnFailure on_failure = solve::OnFailure::stop;
+};
+
+//! Backward Euler on the grid velocities of an elastoplastic solid (Stomakhin et al. 2013;
+//! Zhu et al. sec. 6): Newton's method with a line search on the incremental potential, the
+//! systems solved matrix-free by Jacobi-preconditioned CG, walls and colliders enforced in the
+//! solve. Replaces stress_forces + grid_update of the explicit step; the same deformation
+//! update and return map follow it. Equations in the source file.
+template <int dim>
+class ImplicitUpdate final : public Stage<MpmState<dim>> {
+public:
+  ImplicitUpdate(std::vector<Material<dim>> materials, geometry::ColliderSet<dim> colliders, ImplicitSettings settings,
+                 bool stress_free_particles = false);
+  std::string name() const override { return "implicit_update"; }
+  std::vector<std::string> reads() const override {
+    return {"particle.order", "grid.blocks",      "grid.mass",         "grid.momentum",
+            "particle.x",     "particle.volume0", "particle.material", "particle.F"};
+  }
+  std::vector<std::string> writes() const override { return {"grid.velocity"}; }
+  void run(MpmState<dim>& s) override;
+  //! newton_iterations, linear_iterations (CG or GMRES, summed over the step's Newton iterations) and
+  //! newton_residual (the last step's final relative residual, compare with `tolerance`).
+  std::vector<Diagnostic> diagnostics() const override;
+  //! The line search's merit at the start and after each Newton iteration of the last step:
+  //! the incremental potential, or |g|^2_{M^-1} / 2 when a material is plastic.
+  const std::vector<double>& merit_history() const { return history_; }
+
+  //! The incremental potential E(v) = sum_i m_i |v_i - v_i^*|^2 / 2 + sum_p V_p^0 psi(F_p(v)),
+  //! F_p(v) = (I + dt grad v_p) F_p^n, for the node velocities v of s.grid (sized to the node
+  //! storage) and predicted velocities v^*. Public for tests.
+  double potential(const MpmState<dim>& s, const std::vector<Vec<dim>>& v, const std::vector<Vec<dim>>& predicted);
+  //! Its gradient g = M (v - v^*) - dt f(v) at v, unconstrained.
+  void gradient(const MpmState<dim>& s, const std::vector<Vec<dim>>& v, const std::vector<Vec<dim>>& predicted,
+                std::vector<Vec<dim>>& g);
+  //! The Hessian-vector product (M + dt^2 K) dv at v; with `definite` the stress differential
+  //! made positive semi-definite (Teran et al. 2005), as the solve uses it.
+  void hessian_product(const MpmState<dim>& s, const std::vector<Vec<dim>>& v, const std::vector<Vec<dim>>& dv,
+                       std::vector<Vec<dim>>& out, bool definite);
+
+private:
+  struct Outcome {
+    int newton_iterations = 0;
+    int linear_iterations = 0;
+    double residual = 0.0;  //!< relative, as `tolerance`
+    bool converged = false;
+  };
+  //! F_p(v) into trial_F_, and the per-particle energies when `energy` (returns their sum).
+  double deform(const MpmState<dim>& s, const std::vector<Vec<dim>>& v, bool energy);
+  //! Stress (weighted_stress_) and, when `derivatives`, the differentials at trial_F_.
+  void linearise(const MpmState<dim>& s, bool derivatives, bool definite);
+  //! (M + dt^2 K) dv with the differentials of the last linearise().
+  void apply_hessian(const MpmState<dim>& s, const std::vector<Vec<dim>>& dv, std::vector<Vec<dim>>& out);
+  //! The Jacobi diagonal of M + dt^2 K, per node and component (Zhu et al. eq. 17, 19).
+  void jacobi_diagonal(const MpmState<dim>& s, std::vector<Vec<dim>>& diagonal) const;
+
+  std::vector<Material<dim>> materials_;
+  geometry::ColliderSet<dim> colliders_;
+  ImplicitSettings settings_;
+  bool stress_free_particles_;
+  Outcome last_;
+  std::vector<double> history_;
+  // Per-particle work arrays, kept between steps to avoid reallocation.
+  std::vector<Mat<dim>> grad_, trial_F_, weighted_stress_, differential_stress_;
+  std::vector<Vec<dim>> merit_residual_;
+  std::vector<double> energy_;
+  std::vector<constitutive::StressDerivative<dim>> derivative_;
+  std::vector<std::uint8_t> has_stress_;
+};
+
+}  // namespace mpm::stages

@@ -1,0 +1,440 @@
+// Backward Euler on the grid (Stomakhin et al. 2013 sec. 9; Zhu et al. sec. 6, eq. 12-19).
+//
+// Unknown: the node velocities v at t + dt. With the nodes moved to x_i + dt v_i, particle
+// p deforms to F_p(v) = (I + dt sum_i v_i grad w_ip^T) F_p^n and the step minimises the
+// incremental potential
+//   E(v) = sum_i m_i |v_i - v_i^*|^2 / 2 + sum_p V_p^0 psi(F_p(v)),   v^* = v^n + dt g,
+// whose stationarity g(v) = M (v - v^*) - dt f(v) = 0 is the implicit momentum balance
+// (f the stress forces of the explicit step, evaluated at t + dt). Newton's method:
+//   (M + dt^2 K) dv = -g,   K dv = -df[dv] = sum_p V_p^0 dP_p(dF_p) F_p^nT grad w_ip,
+//   dF_p = dt sum_j dv_j grad w_jp^T F_p^n                             (eq. 14-15)
+// solved by CG with the exact dP, or, where CG meets negative curvature (compression and
+// inversion soften a body), with dP made positive semi-definite in principal space (eq. 16,
+// Teran et al. 2005), which makes the system SPD; Jacobi preconditioner, the
+// diagonal formed in closed form (eq. 17-19). Each system is solved to linear_tolerance (an
+// inexact Newton step); a backtracking line search halves the step until E decreases.
+//
+// Plastic materials: the return map acts inside the step, the stress at v is that of the
+// returned state, tau(Z(F_p(v))) F_p(v)^-T (returned_stress below), so a stiff sediment
+// flows at the rate its yield stress allows at any dt. (Projecting only after the solve, as
+// Stomakhin et al. 2013 do, limits the plastic strain of a step to the elastic strain of the
+// trial state: a stiff Drucker-Prager column then barely collapses at large steps.) That
+// stress has no potential; the line search then decreases |g|^2_{M^-1} instead of E.
+//
+// Walls and colliders: the obstacle directions that the predicted velocity v^* meets
+// (ColliderSet::free_directions) are fixed at the obstacle's velocity; Newton moves the free
+// directions only (the operator, the preconditioner and g projected by the node's projector).
+// After the solve the fixed components get back their predicted (approach) velocity and the
+// obstacles' projection runs once more: it restores the fixed values and applies Coulomb
+// friction from the approach speed, so the boundary stage after this one changes nothing.
+#include <mpm/solid/stages/implicit_update.h>
+
+#include <mpm/core/detail/transfer_loops.h>
+#include <mpm/core/error.h>
+#include <mpm/core/solve/conjugate_gradient.h>
+#include <mpm/core/solve/gmres.h>
+#include <mpm/core/transfer.h>
+#include <mpm/solid/solid_channels.h>
+#include <mpm/solid/stages/return_map.h>
+
+#include <tbb/parallel_for.h>
+
+#include <cmath>
+#include <iostream>
+#include <sstream>
+#include <utility>
+
+namespace mpm::stages {
+
+template <int dim>
+ImplicitUpdate<dim>::ImplicitUpdate(std::vector<Material<dim>> materials, geometry::ColliderSet<dim> colliders,
+                                    ImplicitSettings settings, bool stress_free_particles)
+    : materials_(std::move(materials)),
+      colliders_(std::move(colliders)),
+      settings_(settings),
+      stress_free_particles_(stress_free_particles) {}
+
+template <int dim>
+std::vector<Diagnostic> ImplicitUpdate<dim>::diagnostics() const {
+  return {{"newton_iterations", double(last_.newton_iterations)},
+          {"linear_iterations", double(last_.linear_iterations)},
+          {"newton_residual", last_.residual}};
+}
+
+namespace {
+template <int dim>
+void for_each_particle(std::size_t n, const auto& body) {
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const auto& r) {
+    for (std::size_t p = r.begin(); p != r.end(); ++p) body(p);
+  });
+}
+
+template <int dim>
+double kinetic(const SparseGrid<dim>& g, const std::vector<Vec<dim>>& v, const std::vector<Vec<dim>>& predicted) {
+  double e = 0.0;
+  for (std::size_t k = 0; k < g.node_storage(); ++k)
+    if (g.mass[k] > 0.0) e += 0.5 * g.mass[k] * (v[k] - predicted[k]).squaredNorm();
+  return e;
+}
+}  // namespace
+
+template <int dim>
+double ImplicitUpdate<dim>::deform(const MpmState<dim>& s, const std::vector<Vec<dim>>& v, bool energy) {
+  const Particles<dim>& P = s.particles;
+  const std::vector<Mat<dim>>& F = solid::elastic_F(P);
+  node_field_gradient(P, s.buckets, s.kernel, s.grid, v, grad_);
+  trial_F_.resize(P.size());
+  for_each_particle<dim>(P.size(),
+                         [&](std::size_t p) { trial_F_[p] = (Mat<dim>::Identity() + s.dt * grad_[p]) * F[p]; });
+  if (!energy) return 0.0;
+  energy_.assign(P.size(), 0.0);
+  for (std::size_t m = 0; m < materials_.size(); ++m)
+    std::visit(
+        [&](const auto& model) {
+          for_each_particle<dim>(P.size(), [&](std::size_t p) {
+            if (P.material[p] == m) energy_[p] = P.volume0[p] * model.energy(trial_F_[p]);
+          });
+        },
+        materials_[m].elastic);
+  double sum = 0.0;  // in index order: the same bits on every thread count
+  for (const double e : energy_) sum += e;
+  return sum;
+}
+
+namespace {
+//! The stress and differential of a plastic particle at F^E_trial = U diag(sigma) V^T: the
+//! return map Z inside the step, P~ = tau(Z(F_trial)) F_trial^-T = U diag(p~(sigma)) V^T,
+//! p~_i = tau_i(Z(diag sigma)) / sigma_i, an isotropic function of F_trial. Its principal
+//! Jacobian dp~/dsigma by central differences (the return maps are closed form but piecewise;
+//! a non-associative flow makes the Jacobian non-symmetric: the Newton system is solved by
+//! GMRES then); only when `jacobian`. `stress` gets P~.
+template <int dim, class Elastic, class Plastic>
+constitutive::StressDerivative<dim> returned_stress(const Elastic& elastic, const Plastic& plastic, double state,
+                                                    const Mat<dim>& F, bool jacobian, Mat<dim>& stress) {
+  constitutive::StressDerivative<dim> s{math::svd(F), {}};
+  const auto principal = [&](const Vec<dim>& sigma) {
+    Mat<dim> Fe = sigma.asDiagonal();
+    double a = state;
+    plastic.project(Fe, a);
+    const Vec<dim> tau = (elastic.first_piola(Fe) * Fe.transpose()).diagonal();
+    return Vec<dim>(tau.array() /
+                    sigma.unaryExpr([](double x) { return constitutive::detail::safe_denominator(x); }).array());
+  };
+  const Vec<dim>& sigma = s.f.sigma;
+  const Vec<dim> p = principal(sigma);
+  stress = s.f.U * p.asDiagonal() * s.f.V.transpose();
+  if (!jacobian) return s;
+  Mat<dim> J;
+  for (int j = 0; j < dim; ++j) {
+    const double h = 1e-6 * std::max(std::abs(sigma(j)), 1e-3);
+    Vec<dim> up = sigma, down = sigma;
+    up(j) += h;
+    down(j) -= h;
+    J.col(j) = (principal(up) - principal(down)) / (2.0 * h);
+  }
+  s.d.dp_dsigma = J;
+  s.d.sym.setZero();
+  s.d.skew.setZero();
+  for (int i = 0; i < dim; ++i)
+    for (int j = 0; j < dim; ++j) {
+      if (i == j) continue;
+      const bool close = std::abs(sigma(i) - sigma(j)) <= 1e-6 * (std::abs(sigma(i)) + std::abs(sigma(j)));
+      s.d.sym(i, j) = close ? J(i, i) - J(i, j) : (p(i) - p(j)) / (sigma(i) - sigma(j));
+      s.d.skew(i, j) = (p(i) + p(j)) / constitutive::detail::safe_denominator(sigma(i) + sigma(j));
+    }
+  return s;
+}
+}  // namespace
+
+template <int dim>
+void ImplicitUpdate<dim>::linearise(const MpmState<dim>& s, bool derivatives, bool definite) {
+  const Particles<dim>& P = s.particles;
+  const std::vector<Mat<dim>>& F = solid::elastic_F(P);
+  const std::vector<double>& plastic_state = solid::plastic_state(P);
+  weighted_stress_.assign(P.size(), Mat<dim>::Zero());
+  has_stress_.assign(P.size(), 0);
+  if (derivatives) derivative_.resize(P.size());
+  for (std::size_t m = 0; m < materials_.size(); ++m)
+    std::visit(
+        [&](const auto& model, const auto& plastic) {
+          constexpr bool elastic = std::is_same_v<std::decay_t<decltype(plastic)>, plasticity::NoPlasticity>;
+          for_each_particle<dim>(P.size(), [&](std::size_t p) {
+            if (P.material[p] != m) return;
+            has_stress_[p] = 1;
+            Mat<dim> stress;
+            if constexpr (!elastic) {
+              const auto d = returned_stress<dim>(model, plastic, plastic_state[p], trial_F_[p], derivatives, stress);
+              if (derivatives) {
+                derivative_[p] = d;
+                if (definite) {  // its symmetric part, made positive semi-definite
+                  Mat<dim>& J = derivative_[p].d.dp_dsigma;
+                  J = 0.5 * (J + J.transpose()).eval();
+                  constitutive::detail::make_positive_semidefinite(derivative_[p].d);
+                }
+              }
+            } else if (derivatives) {
+              derivative_[p] = constitutive::stress_derivative(model, trial_F_[p], definite);
+              const math::Svd<dim>& f = derivative_[p].f;
+              stress = f.U * model.principal_stress(f.sigma).asDiagonal() * f.V.transpose();
+            } else {
+              stress = model.first_piola(trial_F_[p]);
+            }
+            weighted_stress_[p] = P.volume0[p] * stress * F[p].transpose();
+          });
+        },
+        materials_[m].elastic, materials_[m].plasticity);
+}
+
+template <int dim>
+void ImplicitUpdate<dim>::jacobi_diagonal(const MpmState<dim>& s, std::vector<Vec<dim>>& diagonal) const {
+  const Particles<dim>& P = s.particles;
+  const SparseGrid<dim>& g = s.grid;
+  const std::vector<Mat<dim>>& F = solid::elastic_F(P);
+  diagonal.assign(g.node_storage(), Vec<dim>::Zero());
+  std::array<detail::ChannelView, dim> channels;
+  for (int a = 0; a < dim; ++a) channels[a] = detail::component_view<dim>(diagonal, a);
+  const double inv_dx = 1.0 / g.dx();
+  std::visit(
+      [&](const auto& k) {
+        using K = std::decay_t<decltype(k)>;
+        detail::scatter<dim, dim>(
+            g, s.buckets, channels, [&](std::uint32_t p, const detail::PatchFrame<dim>& f, double* patch) {
+              if (!has_stress_[p]) return;
+              detail::Stencil<dim, K::support> st;
+              st.compute(k, f.cells(P.x[p]), f.origin);
+              const Mat<dim> FT = inv_dx * F[p].transpose();
+              const double c = s.dt * s.dt * P.volume0[p];
+              st.for_each_node([&](int node, double, const Vec<dim>& grad, const Vec<dim>&) {
+                const Vec<dim> q = FT * grad;  // grad_X w_ip, the reference-configuration gradient
+                for (int a = 0; a < dim; ++a)
+                  patch[node * dim + a] += c * derivative_[p].quadratic(Vec<dim>::Unit(a), q);
+              });
+            });
+      },
+      s.kernel);
+  // A non-symmetric (plastic) system may have entries of K below zero: the mass alone there.
+  for (std::size_t n = 0; n < g.node_storage(); ++n)
+    diagonal[n] = Vec<dim>::Constant(g.mass[n]) + diagonal[n].cwiseMax(0.0);
+}
+
+template <int dim>
+double ImplicitUpdate<dim>::potential(const MpmState<dim>& s, const std::vector<Vec<dim>>& v,
+                                      const std::vector<Vec<dim>>& predicted) {
+  return deform(s, v, true) + kinetic(s.grid, v, predicted);
+}
+
+template <int dim>
+void ImplicitUpdate<dim>::gradient(const MpmState<dim>& s, const std::vector<Vec<dim>>& v,
+                                   const std::vector<Vec<dim>>& predicted, std::vector<Vec<dim>>& out) {
+  deform(s, v, false);
+  linearise(s, false, false);
+  stress_to_nodes(weighted_stress_, s.particles, s.buckets, s.kernel, s.grid, out);
+  for (std::size_t k = 0; k < out.size(); ++k)
+    out[k] = s.grid.mass[k] > 0.0 ? Vec<dim>(s.grid.mass[k] * (v[k] - predicted[k]) - s.dt * out[k]) : Vec<dim>::Zero();
+}
+
+template <int dim>
+void ImplicitUpdate<dim>::hessian_product(const MpmState<dim>& s, const std::vector<Vec<dim>>& v,
+                                          const std::vector<Vec<dim>>& dv, std::vector<Vec<dim>>& out, bool definite) {
+  deform(s, v, false);
+  linearise(s, true, definite);
+  apply_hessian(s, dv, out);
+}
+
+template <int dim>
+void ImplicitUpdate<dim>::apply_hessian(const MpmState<dim>& s, const std::vector<Vec<dim>>& dv,
+                                        std::vector<Vec<dim>>& out) {
+  const Particles<dim>& P = s.particles;
+  const std::vector<Mat<dim>>& F = solid::elastic_F(P);
+  node_field_gradient(P, s.buckets, s.kernel, s.grid, dv, grad_);
+  differential_stress_.resize(P.size());
+  for_each_particle<dim>(P.size(), [&](std::size_t p) {
+    differential_stress_[p] =
+        has_stress_[p] ? Mat<dim>(P.volume0[p] * derivative_[p].apply(s.dt * grad_[p] * F[p]) * F[p].transpose())
+                       : Mat<dim>::Zero();
+  });
+  stress_to_nodes(differential_stress_, P, s.buckets, s.kernel, s.grid, out);
+  for (std::size_t k = 0; k < out.size(); ++k)
+    out[k] = s.grid.mass[k] > 0.0 ? Vec<dim>(s.grid.mass[k] * dv[k] - s.dt * out[k]) : Vec<dim>::Zero();
+}
+
+template <int dim>
+void ImplicitUpdate<dim>::run(MpmState<dim>& s) {
+  MPM_VERIFY(!s.adaptive, InputError, "solver 'implicit' runs on a uniform grid only (the scene is adaptive)");
+  SparseGrid<dim>& g = s.grid;
+  momentum_to_velocity(g, s.transfer);
+  const std::size_t n = g.node_storage();
+  const double t = s.time + s.dt;
+
+  // The predicted velocity, the free directions of every node and the initial iterate.
+  std::vector<Vec<dim>> predicted(n, Vec<dim>::Zero()), v(n, Vec<dim>::Zero());
+  std::vector<Mat<dim>> free(n, Mat<dim>::Zero());
+  double total_mass = 0.0;
+  for (std::size_t k = 0; k < n; ++k) {
+    if (g.mass[k] <= 0.0) continue;
+    total_mass += g.mass[k];
+    predicted[k] = g.velocity[k] + s.dt * s.gravity;
+    free[k] = colliders_.free_directions(g.node_position(k), t, predicted[k]);
+    v[k] = g.velocity[k];  // v^n: near the answer for material at rest under gravity
+    colliders_.project(g.node_position(k), t, v[k]);
+  }
+  last_ = {};
+  history_.clear();
+  if (total_mass <= 0.0) return;
+  // The mass-weighted rms of the velocity residual M^-1 g relative to that of the step's
+  // velocities: rms(v^*) + |g| dt (a body at rest under gravity: its balance to that
+  // accuracy), with a floor for a state without motion or gravity. Relative, so that small
+  // steps do not drop their gravity increment as an error below an absolute tolerance.
+  double predicted_square = 0.0;
+  for (std::size_t k = 0; k < n; ++k) predicted_square += g.mass[k] * predicted[k].squaredNorm();
+  const double scale =
+      std::sqrt(predicted_square / std::max(total_mass, 1e-300)) + s.gravity.norm() * s.dt + 1e-12 * g.dx() / s.dt;
+  const auto residual = [&](const std::vector<Vec<dim>>& r) {
+    double sum = 0.0;
+    for (std::size_t k = 0; k < n; ++k)
+      if (g.mass[k] > 0.0) sum += r[k].squaredNorm() / g.mass[k];
+    return std::sqrt(sum / total_mass) / scale;
+  };
+
+  // Elastic materials: CG and a line search on E. With a return map
+  // inside the step the stress has no potential and the Jacobian is not symmetric: GMRES
+  // minimises |g + J dv|_{M^-1}, so its step descends on the merit |g|^2_{M^-1} / 2 that the
+  // line search then uses.
+  const bool plastic = any_plastic(materials_);
+  std::vector<Vec<dim>> grad(n), dv(n), trial(n), diagonal;
+  // The projected residual g at x from the stresses of the last linearise() at x.
+  const auto residual_at = [&](const std::vector<Vec<dim>>& x, std::vector<Vec<dim>>& r) {
+    stress_to_nodes(weighted_stress_, s.particles, s.buckets, s.kernel, g, r);
+    for (std::size_t k = 0; k < n; ++k)
+      r[k] = g.mass[k] > 0.0 ? Vec<dim>(free[k] * (g.mass[k] * (x[k] - predicted[k]) - s.dt * r[k])) : Vec<dim>::Zero();
+  };
+  const auto weighted_square = [&](const std::vector<Vec<dim>>& r) {
+    double sum = 0.0;
+    for (std::size_t k = 0; k < n; ++k)
+      if (g.mass[k] > 0.0) sum += r[k].squaredNorm() / g.mass[k];
+    return 0.5 * sum;
+  };
+  const auto merit = [&](const std::vector<Vec<dim>>& x) {
+    if (!plastic) return potential(s, x, predicted);
+    deform(s, x, false);
+    linearise(s, false, false);
+    residual_at(x, merit_residual_);
+    return weighted_square(merit_residual_);
+  };
+  const double initial = plastic ? 0.0 : potential(s, v, predicted);
+  if (plastic) deform(s, v, false);
+  linearise(s, true, false);
+  const solve::SolveControl control{settings_.linear_tolerance, 0.0, settings_.max_linear_iterations};
+  std::string stalled;
+  // The system scaled by S = M^-1/2 (on the free directions): the Krylov solvers' residual
+  // |S (b - A dv)| is then the velocity residual that Newton's test measures, also at the
+  // light nodes on a body's edge. Jacobi on the scaled operator: m_k / D_k.
+  const auto S = [&](const std::vector<Vec<dim>>& x, std::vector<Vec<dim>>& y) {
+    y.resize(n);
+    for (std::size_t k = 0; k < n; ++k)
+      y[k] = g.mass[k] > 0.0 ? Vec<dim>(free[k] * x[k] / std::sqrt(g.mass[k])) : Vec<dim>::Zero();
+  };
+  const auto SAS = [&](const std::vector<Vec<dim>>& x, std::vector<Vec<dim>>& y) {
+    S(x, trial);
+    apply_hessian(s, trial, merit_residual_);
+    S(merit_residual_, y);
+  };
+  const auto jacobi = [&](const std::vector<Vec<dim>>& r, std::vector<Vec<dim>>& z) {
+    z.resize(n);
+    for (std::size_t k = 0; k < n; ++k)
+      z[k] = g.mass[k] > 0.0 ? Vec<dim>(free[k] * (free[k] * r[k]).cwiseQuotient(diagonal[k] / g.mass[k]))
+                             : Vec<dim>::Zero();
+  };
+  // dv from the differentials of the last linearise(); false when CG met negative curvature.
+  const auto newton_step = [&] {
+    jacobi_diagonal(s, diagonal);
+    std::vector<Vec<dim>> rhs(n), y(n, Vec<dim>::Zero());
+    for (std::size_t k = 0; k < n; ++k) rhs[k] = -grad[k];
+    S(rhs, rhs);
+    const solve::SolveResult solved =
+        plastic ? solve::gmres(SAS, jacobi, rhs, y, control) : solve::conjugate_gradient(SAS, jacobi, rhs, y, control);
+    last_.linear_iterations += solved.iterations;
+    S(y, dv);
+    const bool breakdown = !solved.converged && solved.iterations < control.max_iterations;
+    return plastic || (!breakdown && solve::dot(grad, dv) < 0.0);
+  };
+  // A line search along dv from v on the merit; true (and v moved) when it decreased. E near
+  // a converged state is known to the round-off of psi near F = R (about 1e-16 / |F - R| of
+  // it, 1e-11 at strains of 1e-5): where E rises by less than 1e-9 |E| the step is taken when
+  // it lowers the residual instead.
+  double energy = 0.0;
+  const auto line_search = [&] {
+    double step = 1.0;
+    for (int halvings = 0; halvings < 30; ++halvings, step *= 0.5) {
+      for (std::size_t k = 0; k < n; ++k) trial[k] = v[k] + step * dv[k];
+      const double e = merit(trial);
+      bool lower = std::isfinite(e) && e <= energy;
+      if (!lower && !plastic && std::isfinite(e) && e <= energy + 1e-9 * std::abs(energy)) {
+        linearise(s, false, false);
+        residual_at(trial, merit_residual_);
+        lower = weighted_square(merit_residual_) < weighted_square(grad);
+      }
+      if (lower) {
+        energy = e;
+        v.swap(trial);
+        return true;
+      }
+    }
+    return false;
+  };
+  while (true) {
+    residual_at(v, grad);
+    last_.residual = residual(grad);
+    if (!std::isfinite(last_.residual)) {
+      stalled = "the residual is not finite";
+      break;
+    }
+    if (last_.newton_iterations == 0 && !plastic) history_.push_back(initial);
+    if (last_.residual <= settings_.tolerance) {
+      last_.converged = true;
+      break;
+    }
+    if (last_.newton_iterations == settings_.max_newton_iterations) break;
+    energy = plastic ? weighted_square(grad) : history_.back();
+    if (plastic) history_.push_back(energy);
+    // Elastic: the exact Hessian first (Newton's quadratic convergence wherever M + dt^2 K is
+    // positive, as the mass term usually makes it); where CG meets negative curvature or the
+    // step does not lower E, the Hessian made definite per particle (Teran et al. 2005).
+    bool moved = newton_step() && line_search();
+    if (!moved && !plastic) {
+      deform(s, v, false);
+      linearise(s, true, true);
+      moved = newton_step() && line_search();
+    }
+    if (!moved) {
+      stalled = plastic ? "the line search found no decrease of the residual"
+                        : "the line search found no decrease of the incremental potential";
+      break;
+    }
+    ++last_.newton_iterations;
+    if (!plastic) history_.push_back(energy);
+    linearise(s, true, false);  // at the accepted iterate, whose F merit() left in trial_F_
+  }
+
+  if (!last_.converged) {
+    std::ostringstream why;
+    why << "stage '" << name() << "': Newton did not converge in " << last_.newton_iterations << " iterations ("
+        << (stalled.empty() ? "iteration cap" : stalled) << "; relative residual " << last_.residual << ", tolerance "
+        << settings_.tolerance << ", " << last_.linear_iterations << " linear solver iterations) at t = " << s.time
+        << " s, step " << s.step;
+    if (settings_.on_failure == solve::OnFailure::stop || !std::isfinite(last_.residual))
+      throw NumericalError(why.str());
+    std::cerr << "warning: " << why.str() << "\n";
+  }
+  // Fixed components back to their approach velocity, then the obstacles' projection once more.
+  for (std::size_t k = 0; k < n; ++k) {
+    if (g.mass[k] <= 0.0) continue;
+    g.velocity[k] = v[k] + (Mat<dim>::Identity() - free[k]) * (predicted[k] - v[k]);
+    colliders_.project(g.node_position(k), t, g.velocity[k]);
+  }
+}
+
+template class ImplicitUpdate<2>;
+template class ImplicitUpdate<3>;
+
+}  // namespace mpm::stages
