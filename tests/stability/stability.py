@@ -147,6 +147,8 @@ CASES = [
     case("implicit_funnel_squeeze", "Neo-Hookean block (E = 2e4 Pa, 0.4 m wide) thrown at 10 m/s into a "
          "funnel whose outlet is 0.08 m wide, solver: implicit", "solid_scene", "data/scenes/stability/funnel.yaml",
          [], "completes", check=True, extra=passed_funnel),
+    case("snowball", "a snowball (snow plasticity, fixed corotated) thrown at the floor at 5.7 m/s", "solid_scene",
+         "data/scenes/snowball.yaml", ["output.png=false"], "completes", check=True),
     case("implicit_no_converge_stop", "solver: implicit with Newton capped at 1 iteration and tolerance "
          "1e-12, on_failure = stop", "solid_scene", BASE,
          ["solver=implicit", "implicit.max_newton_iterations=1", "implicit.tolerance=1e-12", "time.end=0.2"],

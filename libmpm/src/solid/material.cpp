@@ -14,13 +14,19 @@ double Material<dim>::wave_speed() const {
 }
 
 template <int dim>
-double Material<dim>::energy(const Mat<dim>& F) const {
-  return std::visit([&](const auto& model) { return model.energy(F); }, elastic);
+double Material<dim>::energy(const Mat<dim>& F, double plastic) const {
+  return modulus_scale(plastic) * std::visit([&](const auto& model) { return model.energy(F); }, elastic);
 }
 
 template <int dim>
-Mat<dim> Material<dim>::kirchhoff(const Mat<dim>& F) const {
-  return std::visit([&](const auto& model) -> Mat<dim> { return model.first_piola(F) * F.transpose(); }, elastic);
+Mat<dim> Material<dim>::kirchhoff(const Mat<dim>& F, double plastic) const {
+  return modulus_scale(plastic) *
+         std::visit([&](const auto& model) -> Mat<dim> { return model.first_piola(F) * F.transpose(); }, elastic);
+}
+
+template <int dim>
+double Material<dim>::modulus_scale(double plastic) const {
+  return std::visit([&](const auto& model) { return model.modulus_scale(plastic); }, plasticity);
 }
 
 template <int dim>
@@ -40,6 +46,13 @@ Material<dim> parse_material(const Config& cfg) {
   const std::string model =
       plastic->choice("model", std::string(plasticity::NoPlasticity::name), plasticity::plasticity_model_names());
   if (model == plasticity::NoPlasticity::name) return material;
+  if (model == plasticity::Snow<dim>::name) {  // any elasticity (Stomakhin et al. use fixed-corotated)
+    const double compression = plastic->number("critical_compression", 2.5e-2, Range::open(0.0, 1.0));
+    const double stretch = plastic->number("critical_stretch", 7.5e-3, Range::positive());
+    const double hardening = plastic->number("hardening", 10.0, Range::non_negative());
+    material.plasticity = plasticity::Snow<dim>(compression, stretch, hardening);
+    return material;
+  }
   if (elasticity != constitutive::HenckyStVK<dim>::name) {
     plastic->fail("model", model +
                                " plasticity needs 'elasticity: " + std::string(constitutive::HenckyStVK<dim>::name) +

@@ -192,8 +192,9 @@ double elastic_energy(const MpmState<dim>& state, const std::vector<Material<dim
   const Particles<dim>& P = state.particles;
   const std::vector<Mat<dim>>* F = P.template find_channel<Mat<dim>>(kElasticF);
   if (!F) return 0.0;  // stress-free grains store no elastic energy
+  const std::vector<double>& plastic = plastic_state(P);
   double e = 0.0;
-  for (std::size_t p = 0; p < P.size(); ++p) e += P.volume0[p] * materials[P.material[p]].energy((*F)[p]);
+  for (std::size_t p = 0; p < P.size(); ++p) e += P.volume0[p] * materials[P.material[p]].energy((*F)[p], plastic[p]);
   return e;
 }
 

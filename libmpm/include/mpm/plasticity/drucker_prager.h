@@ -61,6 +61,8 @@ public:
     return yield(elastic_.principal_kirchhoff(Hencky::principal_strain(math::svd(Fe).sigma)));
   }
 
+  double modulus_scale(double /*plastic*/) const { return 1.0; }
+
   //! Projects Fe onto the admissible set and updates the volume correction `plastic` (log
   //! volume, >= 0). Returns whether Fe changed. A changed Fe has positive singular values.
   bool project(Mat<dim>& Fe, double& plastic) const {

@@ -2,10 +2,13 @@
 //! The plastic return maps a scene can choose, as one closed std::variant (visited outside the
 //! particle loop, like constitutive::ElasticModel). Each alternative offers
 //!   bool project(Mat<dim>& Fe, double& plastic) const;   // true when Fe changed
-//!   double yield_function(const Mat<dim>& Fe) const;     // [Pa], <= 0 admissible
-//! where `plastic` is the per-particle scalar state (Particles::plastic).
+//!   double yield_function(const Mat<dim>& Fe) const;     // <= 0 admissible
+//!   double modulus_scale(double plastic) const;          // factor of the elastic moduli
+//! where `plastic` is the per-particle scalar state (Particles::plastic); modulus_scale is 1
+//! except for a hardening model (snow).
 #include <mpm/core/types.h>
 #include <mpm/plasticity/drucker_prager.h>
+#include <mpm/plasticity/snow.h>
 #include <mpm/plasticity/von_mises.h>
 
 #include <limits>
@@ -28,14 +31,16 @@ struct NoPlasticity {
   double yield_function(const Mat<dim>& /*Fe*/) const {
     return -std::numeric_limits<double>::infinity();
   }
+  double modulus_scale(double /*plastic*/) const { return 1.0; }
 };
 
 template <int dim>
-using PlasticityModel = std::variant<NoPlasticity, DruckerPrager<dim>, VonMises<dim>>;
+using PlasticityModel = std::variant<NoPlasticity, DruckerPrager<dim>, VonMises<dim>, Snow<dim>>;
 
 //! Scene-file names of the alternatives, in variant order.
 inline std::vector<std::string> plasticity_model_names() {
-  return {std::string(NoPlasticity::name), std::string(DruckerPrager<3>::name), std::string(VonMises<3>::name)};
+  return {std::string(NoPlasticity::name), std::string(DruckerPrager<3>::name), std::string(VonMises<3>::name),
+          std::string(Snow<3>::name)};
 }
 
 }  // namespace mpm::plasticity

@@ -35,6 +35,8 @@ public:
                        "von Mises yield stress " + std::to_string(yield_stress) + " Pa: expected > 0");
   }
 
+  double modulus_scale(double /*plastic*/) const { return 1.0; }
+
   //! y of the Kirchhoff stress of Fe [Pa]; <= 0 is admissible.
   double yield_function(const Mat<dim>& Fe) const {
     return yield(deviator(Hencky::principal_strain(math::svd(Fe).sigma)));

@@ -7,13 +7,17 @@
 //!   poisson_ratio: 0.3         # in (-1, 0.5)
 //!   elasticity: hencky_stvk    # fixed_corotated (default) | neo_hookean | hencky_stvk
 //!   plasticity:                # optional
-//!     model: drucker_prager    # none (default) | drucker_prager | von_mises
+//!     model: drucker_prager    # none (default) | drucker_prager | von_mises | snow
 //!     friction_angle: 30       # [deg] in [0, 90), Drucker-Prager, default 30
 //!     cohesion: 0              # [Pa] >= 0, Drucker-Prager, default 0
 //!     yield_stress: 1e5        # [Pa] > 0, von Mises, required
+//!     critical_compression: 2.5e-2  # snow: theta_c in (0, 1)
+//!     critical_stretch: 7.5e-3      # snow: theta_s > 0
+//!     hardening: 10                 # snow: xi >= 0
 //!
-//! Plasticity needs hencky_stvk elasticity: both return maps are closed-form in Hencky strain
-//! (Gao et al. 2017 sec. 4.2 uses eq. 7), and parsing rejects any other pairing.
+//! Drucker-Prager and von Mises need hencky_stvk elasticity: both return maps are closed-form in
+//! Hencky strain (Gao et al. 2017 sec. 4.2 uses eq. 7), and parsing rejects any other pairing.
+//! Snow (Stomakhin et al. 2013) takes any elasticity.
 #include <mpm/constitutive/elastic_model.h>
 #include <mpm/constitutive/lame.h>
 #include <mpm/core/config.h>
@@ -34,10 +38,13 @@ struct Material {
 
   //! P-wave speed sqrt((lambda + 2 mu) / density) [m/s], the elastic limit of the time step.
   double wave_speed() const;
-  //! Elastic energy density psi(F) [J/m^3] of one particle (visits the model; not for hot loops).
-  double energy(const Mat<dim>& F) const;
+  //! Elastic energy density psi(F) [J/m^3] of one particle in the plastic state `plastic`
+  //! (visits the model; not for hot loops).
+  double energy(const Mat<dim>& F, double plastic = 0.0) const;
   //! Kirchhoff stress tau = P F^T [Pa] of one particle (visits the model; not for hot loops).
-  Mat<dim> kirchhoff(const Mat<dim>& F) const;
+  Mat<dim> kirchhoff(const Mat<dim>& F, double plastic = 0.0) const;
+  //! The factor of the elastic moduli in the plastic state `plastic` (snow hardening; else 1).
+  double modulus_scale(double plastic) const;
 };
 
 //! Reads and validates a material map (keys above); throws InputError with the key's position.

@@ -88,14 +88,16 @@ double ImplicitUpdate<dim>::deform(const MpmState<dim>& s, const std::vector<Vec
                          [&](std::size_t p) { trial_F_[p] = (Mat<dim>::Identity() + s.dt * grad_[p]) * F[p]; });
   if (!energy) return 0.0;
   energy_.assign(P.size(), 0.0);
+  const std::vector<double>& plastic = solid::plastic_state(P);
   for (std::size_t m = 0; m < materials_.size(); ++m)
     std::visit(
-        [&](const auto& model) {
+        [&](const auto& model, const auto& plasticity) {
           for_each_particle<dim>(P.size(), [&](std::size_t p) {
-            if (P.material[p] == m) energy_[p] = P.volume0[p] * model.energy(trial_F_[p]);
+            if (P.material[p] == m)
+              energy_[p] = P.volume0[p] * plasticity.modulus_scale(plastic[p]) * model.energy(trial_F_[p]);
           });
         },
-        materials_[m].elastic);
+        materials_[m].elastic, materials_[m].plasticity);
   double sum = 0.0;  // in index order: the same bits on every thread count
   for (const double e : energy_) sum += e;
   return sum;
@@ -116,7 +118,7 @@ constitutive::StressDerivative<dim> returned_stress(const Elastic& elastic, cons
     Mat<dim> Fe = sigma.asDiagonal();
     double a = state;
     plastic.project(Fe, a);
-    const Vec<dim> tau = (elastic.first_piola(Fe) * Fe.transpose()).diagonal();
+    const Vec<dim> tau = plastic.modulus_scale(a) * (elastic.first_piola(Fe) * Fe.transpose()).diagonal();
     return Vec<dim>(tau.array() /
                     sigma.unaryExpr([](double x) { return constitutive::detail::safe_denominator(x); }).array());
   };

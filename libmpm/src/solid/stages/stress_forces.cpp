@@ -24,15 +24,18 @@ void StressForces<dim>::run(MpmState<dim>& s) {
     weighted_stress_.assign(P.size(), Mat<dim>::Zero());
   else
     weighted_stress_.resize(P.size());
+  const std::vector<double>& plastic = solid::plastic_state(std::as_const(P));
   for (std::size_t m = 0; m < materials_.size(); ++m) {
     std::visit(
-        [&](const auto& model) {
+        [&](const auto& model, const auto& plasticity) {
           tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.size(), 4096), [&](const auto& r) {
             for (std::size_t p = r.begin(); p != r.end(); ++p)
-              if (P.material[p] == m) weighted_stress_[p] = P.volume0[p] * model.first_piola(F[p]) * F[p].transpose();
+              if (P.material[p] == m)
+                weighted_stress_[p] =
+                    (P.volume0[p] * plasticity.modulus_scale(plastic[p])) * model.first_piola(F[p]) * F[p].transpose();
           });
         },
-        materials_[m].elastic);
+        materials_[m].elastic, materials_[m].plasticity);
   }
   check_finite(weighted_stress_, name(), "particle", "Kirchhoff stress");
 

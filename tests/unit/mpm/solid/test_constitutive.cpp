@@ -252,12 +252,20 @@ template <>
 std::vector<plasticity::VonMises<3>> return_maps() {
   return {{2e4, kLame}};
 }
+template <>
+std::vector<plasticity::Snow<2>> return_maps() {
+  return {{2.5e-2, 7.5e-3, 10.0}};
+}
+template <>
+std::vector<plasticity::Snow<3>> return_maps() {
+  return {{2.5e-2, 7.5e-3, 10.0}};
+}
 
 }  // namespace
 
 TEST_CASE_TEMPLATE("return map: lands on the yield surface, idempotent, admissible states untouched", Model,
                    plasticity::DruckerPrager<2>, plasticity::DruckerPrager<3>, plasticity::VonMises<2>,
-                   plasticity::VonMises<3>) {
+                   plasticity::VonMises<3>, plasticity::Snow<2>, plasticity::Snow<3>) {
   constexpr int dim = DimOf<Model>::value;
   const constitutive::HenckyStVK<dim> elastic{kLame.mu, kLame.lambda};
   std::mt19937 rng(2016);
@@ -292,6 +300,29 @@ TEST_CASE_TEMPLATE("return map: lands on the yield surface, idempotent, admissib
     CHECK(outside > 20);
     CHECK(inside > 20);
   }
+}
+
+TEST_CASE_TEMPLATE("snow: the clamp keeps det F^E J^P, compaction hardens, stretching softens", Matrix, Mat<2>,
+                   Mat<3>) {
+  constexpr int dim = Matrix::RowsAtCompileTime;
+  const plasticity::Snow<dim> snow(2.5e-2, 7.5e-3, 10.0);
+  std::mt19937 rng(2013);
+  double plastic = 0.0;
+  Mat<dim> Fe = Mat<dim>::Identity();
+  // Compaction in steps, as a particle under load: F = product of the steps.
+  double J = 1.0;
+  for (int n = 0; n < 10; ++n) {
+    const Mat<dim> step = with_stretches<dim>(rng, random_stretches<dim>(rng, 0.95, 1.0));
+    J *= step.determinant();
+    Fe = step * Fe;
+    snow.project(Fe, plastic);
+    CHECK(Fe.determinant() * std::exp(plastic) == doctest::Approx(J).epsilon(1e-12));
+    CHECK(snow.yield_function(Fe) <= 1e-14);
+  }
+  CHECK(plastic < 0.0);                      // J^P < 1: compacted
+  CHECK(snow.modulus_scale(plastic) > 1.0);  // harder
+  CHECK(snow.modulus_scale(0.0) == 1.0);
+  CHECK(snow.modulus_scale(std::log(1.1)) == doctest::Approx(std::exp(-1.0)));  // xi (1 - J^P) = -1
 }
 
 TEST_CASE_TEMPLATE("von Mises flow is isochoric", Matrix, Mat<2>, Mat<3>) {

@@ -35,8 +35,8 @@ public:
                  bool stress_free_particles = false);
   std::string name() const override { return "implicit_update"; }
   std::vector<std::string> reads() const override {
-    return {"particle.order", "grid.blocks",      "grid.mass",         "grid.momentum",
-            "particle.x",     "particle.volume0", "particle.material", "particle.F"};
+    return {"particle.order",   "grid.blocks",       "grid.mass",  "grid.momentum",   "particle.x",
+            "particle.volume0", "particle.material", "particle.F", "particle.plastic"};
   }
   std::vector<std::string> writes() const override { return {"grid.velocity"}; }
   void run(MpmState<dim>& s) override;

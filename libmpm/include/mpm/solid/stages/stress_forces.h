@@ -16,7 +16,8 @@ public:
       : materials_(std::move(materials)), stress_free_particles_(stress_free_particles) {}
   std::string name() const override { return "stress_forces"; }
   std::vector<std::string> reads() const override {
-    return {"particle.order", "grid.blocks", "particle.x", "particle.volume0", "particle.material", "particle.F"};
+    return {"particle.order",    "grid.blocks", "particle.x",      "particle.volume0",
+            "particle.material", "particle.F",  "particle.plastic"};
   }
   std::vector<std::string> writes() const override { return {"grid.force"}; }
   void run(MpmState<dim>& s) override;
