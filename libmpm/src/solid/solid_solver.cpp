@@ -24,8 +24,7 @@ std::shared_ptr<const SolidSolver<dim>> make_solid_solver(const std::string& nam
              "solid solver '" + name + "' needs at least one material");
   if (name == "explicit") return std::make_shared<ExplicitSolver<dim>>(std::move(materials), stress_free_particles);
   if (name == "implicit")
-    return std::make_shared<ImplicitSolver<dim>>(std::move(materials), stress_free_particles, std::move(colliders),
-                                                 implicit);
+    return std::make_shared<ImplicitSolver<dim>>(std::move(materials), std::move(colliders), implicit);
   std::string names;
   for (const std::string& n : solid_solver_names()) names += (names.empty() ? "" : ", ") + n;
   throw InputError("unknown solid solver '" + name + "' (solvers: " + names + ")");
@@ -83,17 +82,14 @@ typename ExplicitSolver<dim>::Stages ExplicitSolver<dim>::particle_update() cons
 }
 
 template <int dim>
-ImplicitSolver<dim>::ImplicitSolver(std::vector<Material<dim>> materials, bool stress_free_particles,
-                                    geometry::ColliderSet<dim> colliders, stages::ImplicitSettings settings)
-    : materials_(std::move(materials)),
-      stress_free_particles_(stress_free_particles),
-      colliders_(std::move(colliders)),
-      settings_(settings) {}
+ImplicitSolver<dim>::ImplicitSolver(std::vector<Material<dim>> materials, geometry::ColliderSet<dim> colliders,
+                                    stages::ImplicitSettings settings)
+    : materials_(std::move(materials)), colliders_(std::move(colliders)), settings_(settings) {}
 
 template <int dim>
 typename ImplicitSolver<dim>::Stages ImplicitSolver<dim>::grid_update() const {
   Stages s;
-  s.push_back(std::make_unique<stages::ImplicitUpdate<dim>>(materials_, colliders_, settings_, stress_free_particles_));
+  s.push_back(std::make_unique<stages::ImplicitUpdate<dim>>(materials_, colliders_, settings_));
   return s;
 }
 

@@ -14,7 +14,8 @@ template <int dim>
 class ImplicitSolver final : public SolidSolver<dim> {
 public:
   using typename SolidSolver<dim>::Stages;
-  ImplicitSolver(std::vector<Material<dim>> materials, bool stress_free_particles, geometry::ColliderSet<dim> colliders,
+  //! Particles of no listed material (stress-free grains) add no stress.
+  ImplicitSolver(std::vector<Material<dim>> materials, geometry::ColliderSet<dim> colliders,
                  stages::ImplicitSettings settings);
   std::string name() const override { return "implicit"; }
   void add_channels(Particles<dim>& particles) const override { add_solid_channels(particles); }
@@ -24,7 +25,6 @@ public:
 
 private:
   std::vector<Material<dim>> materials_;
-  bool stress_free_particles_;
   geometry::ColliderSet<dim> colliders_;
   stages::ImplicitSettings settings_;
 };

@@ -48,11 +48,8 @@ namespace mpm::stages {
 
 template <int dim>
 ImplicitUpdate<dim>::ImplicitUpdate(std::vector<Material<dim>> materials, geometry::ColliderSet<dim> colliders,
-                                    ImplicitSettings settings, bool stress_free_particles)
-    : materials_(std::move(materials)),
-      colliders_(std::move(colliders)),
-      settings_(settings),
-      stress_free_particles_(stress_free_particles) {}
+                                    ImplicitSettings settings)
+    : materials_(std::move(materials)), colliders_(std::move(colliders)), settings_(settings) {}
 
 template <int dim>
 std::vector<Diagnostic> ImplicitUpdate<dim>::diagnostics() const {
@@ -277,8 +274,11 @@ void ImplicitUpdate<dim>::run(MpmState<dim>& s) {
     total_mass += g.mass[k];
     predicted[k] = g.velocity[k] + s.dt * s.gravity;
     free[k] = colliders_.free_directions(g.node_position(k), t, predicted[k]);
-    v[k] = g.velocity[k];  // v^n: near the answer for material at rest under gravity
-    colliders_.project(g.node_position(k), t, v[k]);
+    // Free directions from v^n (near the answer for material at rest under gravity), the fixed
+    // ones at the obstacle's values for v^*, which Newton then keeps.
+    Vec<dim> fixed = predicted[k];
+    colliders_.project(g.node_position(k), t, fixed);
+    v[k] = free[k] * g.velocity[k] + (Mat<dim>::Identity() - free[k]) * fixed;
   }
   last_ = {};
   history_.clear();
@@ -357,8 +357,7 @@ void ImplicitUpdate<dim>::run(MpmState<dim>& s) {
         plastic ? solve::gmres(SAS, jacobi, rhs, y, control) : solve::conjugate_gradient(SAS, jacobi, rhs, y, control);
     last_.linear_iterations += solved.iterations;
     S(y, dv);
-    const bool breakdown = !solved.converged && solved.iterations < control.max_iterations;
-    return plastic || (!breakdown && solve::dot(grad, dv) < 0.0);
+    return plastic || (!solved.breakdown && solve::dot(grad, dv) < 0.0);
   };
   // A line search along dv from v on the merit; true (and v moved) when it decreased. E near
   // a converged state is known to the round-off of psi near F = R (about 1e-16 / |F - R| of
@@ -366,11 +365,12 @@ void ImplicitUpdate<dim>::run(MpmState<dim>& s) {
   // it lowers the residual instead.
   double energy = 0.0;
   const auto line_search = [&] {
+    if (solve::dot(dv, dv) == 0.0) return false;  // no step: nothing to search
     double step = 1.0;
     for (int halvings = 0; halvings < 30; ++halvings, step *= 0.5) {
       for (std::size_t k = 0; k < n; ++k) trial[k] = v[k] + step * dv[k];
       const double e = merit(trial);
-      bool lower = std::isfinite(e) && e <= energy;
+      bool lower = std::isfinite(e) && (plastic ? e < energy : e <= energy);
       if (!lower && !plastic && std::isfinite(e) && e <= energy + 1e-9 * std::abs(energy)) {
         linearise(s, false, false);
         residual_at(trial, merit_residual_);
@@ -394,6 +394,7 @@ void ImplicitUpdate<dim>::run(MpmState<dim>& s) {
     if (last_.newton_iterations == 0 && !plastic) history_.push_back(initial);
     if (last_.residual <= settings_.tolerance) {
       last_.converged = true;
+      if (plastic) history_.push_back(weighted_square(grad));
       break;
     }
     if (last_.newton_iterations == settings_.max_newton_iterations) break;

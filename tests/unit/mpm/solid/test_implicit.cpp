@@ -119,22 +119,33 @@ TEST_CASE_TEMPLATE("implicit step: gradient and Hessian-vector product against f
           (stage.potential(s, axpy(v, h, dv), predicted) - stage.potential(s, axpy(v, -h, dv), predicted)) / (2 * h);
       CHECK(solve::dot(g, dv) == doctest::Approx(dE).epsilon(1e-6));
 
-      // (M + dt^2 K) dv against differences of the gradient.
+      // (M + dt^2 K) dv against differences of the gradient, compared on the stiffness part
+      // dt^2 K dv alone (M dv is exact on both sides and would hide an error in K).
       std::vector<Vec<dim>> g_plus, g_minus, Hdv;
       stage.gradient(s, axpy(v, h, dv), predicted, g_plus);
       stage.gradient(s, axpy(v, -h, dv), predicted, g_minus);
-      std::vector<Vec<dim>> fd(g.size());
-      for (std::size_t k = 0; k < g.size(); ++k) fd[k] = (g_plus[k] - g_minus[k]) / (2 * h);
+      std::vector<Vec<dim>> fd(g.size()), Mdv(g.size());
+      for (std::size_t k = 0; k < g.size(); ++k) {
+        Mdv[k] = s.grid.mass[k] * dv[k];
+        fd[k] = (g_plus[k] - g_minus[k]) / (2 * h) - Mdv[k];
+      }
       stage.hessian_product(s, v, dv, Hdv, false);
-      CHECK(distance(Hdv, fd) <= 1e-5 * std::sqrt(solve::dot(fd, fd)));
+      const std::vector<Vec<dim>> Kdv = axpy(Hdv, -1.0, Mdv);
+      REQUIRE(solve::dot(fd, fd) > 0.0);
+      CHECK(distance(Kdv, fd) <= 1e-5 * std::sqrt(solve::dot(fd, fd)));
 
-      // The definite product is symmetric and positive: dv . H w = w . H dv, dv . H dv > 0.
+      // The definite product is symmetric and its stiffness part positive semi-definite:
+      // w . H dv = dv . H w and dv . (H - M) dv >= 0. With flat and inverted particles the
+      // exact stiffness is indefinite, and the fix changes the product.
       const std::vector<Vec<dim>> w = random_nodes(s.grid, rng, 1.0);
-      std::vector<Vec<dim>> Hw;
-      stage.hessian_product(s, v, dv, Hdv, true);
+      std::vector<Vec<dim>> Hw, definite;
+      stage.hessian_product(s, v, dv, definite, true);
       stage.hessian_product(s, v, w, Hw, true);
-      CHECK(solve::dot(w, Hdv) == doctest::Approx(solve::dot(dv, Hw)).epsilon(1e-10));
-      CHECK(solve::dot(dv, Hdv) > 0.0);
+      CHECK(solve::dot(w, definite) == doctest::Approx(solve::dot(dv, Hw)).epsilon(1e-10));
+      const std::vector<Vec<dim>> Kdv_definite = axpy(definite, -1.0, Mdv);
+      CHECK(solve::dot(dv, Kdv_definite) >=
+            -1e-10 * std::sqrt(solve::dot(Kdv_definite, Kdv_definite) * solve::dot(dv, dv)));
+      if (extreme) CHECK(distance(Kdv_definite, Kdv) > 1e-3 * std::sqrt(solve::dot(Kdv, Kdv)));
     }
   }
 }
@@ -161,8 +172,9 @@ TEST_CASE_TEMPLATE("implicit step: Newton lowers the potential every iteration a
     stage.run(s);
     const std::vector<double>& E = stage.merit_history();
     REQUIRE(E.size() >= 2);
-    // Decreasing, up to the round-off of E that the line search tolerates (1e-12 |E|).
-    for (std::size_t n = 1; n < E.size(); ++n) CHECK(E[n] <= E[n - 1] + 1e-12 * std::abs(E[n - 1]));
+    // Decreasing, up to the round-off of E that the line search tolerates when the residual
+    // falls (1e-9 |E|).
+    for (std::size_t n = 1; n < E.size(); ++n) CHECK(E[n] <= E[n - 1] + 1e-9 * std::abs(E[n - 1]));
     CHECK(E.back() < E.front());
     const auto d = stage.diagnostics();
     CHECK(d[2].value <= 1e-10);  // newton_residual within tolerance

@@ -61,7 +61,10 @@ SolveResult conjugate_gradient(Operator&& A, Preconditioner&& M, const Vector& b
     while (result.iterations < control.max_iterations) {
       apply(A, d, Ad);
       const double dAd = dot(d, Ad);
-      if (!(dAd > 0.0) || !(rz > 0.0)) break;
+      if (!(dAd > 0.0) || !(rz > 0.0)) {
+        result.breakdown = true;
+        break;
+      }
       const double alpha = rz / dAd;
       for (std::size_t i = 0; i < n; ++i) {
         x[i] += alpha * d[i];

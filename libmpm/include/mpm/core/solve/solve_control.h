@@ -15,6 +15,9 @@ struct SolveControl {
 
 struct SolveResult {
   bool converged = false;
+  //! The iteration stopped on a breakdown (CG: d.A d <= 0 or r.z <= 0, the operator or the
+  //! preconditioner not positive on the Krylov space, or NaN), not on the tolerance or the cap.
+  bool breakdown = false;
   int iterations = 0;
   double relative_residual = 0.0;  //!< |b - A x| / |b| (0 when b = 0)
   double absolute_residual = 0.0;

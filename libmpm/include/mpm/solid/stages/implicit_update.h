@@ -31,8 +31,8 @@ struct ImplicitSettings {
 template <int dim>
 class ImplicitUpdate final : public Stage<MpmState<dim>> {
 public:
-  ImplicitUpdate(std::vector<Material<dim>> materials, geometry::ColliderSet<dim> colliders, ImplicitSettings settings,
-                 bool stress_free_particles = false);
+  //! Particles of no listed material (stress-free grains) add no stress.
+  ImplicitUpdate(std::vector<Material<dim>> materials, geometry::ColliderSet<dim> colliders, ImplicitSettings settings);
   std::string name() const override { return "implicit_update"; }
   std::vector<std::string> reads() const override {
     return {"particle.order",   "grid.blocks",       "grid.mass",  "grid.momentum",   "particle.x",
@@ -78,7 +78,6 @@ private:
   std::vector<Material<dim>> materials_;
   geometry::ColliderSet<dim> colliders_;
   ImplicitSettings settings_;
-  bool stress_free_particles_;
   Outcome last_;
   std::vector<double> history_;
   // Per-particle work arrays, kept between steps to avoid reallocation.
