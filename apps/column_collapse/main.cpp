@@ -99,8 +99,14 @@ int run(const CommandLine& cl, const Config& scene) {
   hi[0] = L0;
   hi[1] = H0;
   if constexpr (dim == 3) hi[2] = depth;
-  solid::add_particles<dim>(solid, geometry::seed_box<dim>(Vec<dim>::Zero(), hi, dx, ppc, 0.0, 1),
-                            geometry::particle_volume<dim>(dx, ppc), std::uint16_t{0}, Vec<dim>::Zero(), "column");
+  std::vector<Vec<dim>> seeded;
+  try {
+    seeded = geometry::seed_box<dim>(Vec<dim>::Zero(), hi, dx, ppc, 0.0, 1);
+  } catch (const InputError& e) {
+    column.fail("cells_per_width", e.what());  // the key that sets dx (too large for the memory)
+  }
+  solid::add_particles<dim>(solid, seeded, geometry::particle_volume<dim>(dx, ppc), std::uint16_t{0}, Vec<dim>::Zero(),
+                            "column");
   scene.reject_unknown_keys();
 
   // 3. Run.

@@ -86,11 +86,11 @@ const RestartCase kSettling{SETTLING_APP,
 
 //! Runs the case's app; its stderr goes to <out>.log. Returns the exit status.
 int run_app(const RestartCase& c, const fs::path& out, const std::string& extra) {
-  const std::string command = "'" + c.app + "' '" + SEDIMENT_DATA_DIR + "/scenes/" + c.scene + "' --quiet " + c.sets +
-                              " --set time.frame_dt=" + std::to_string(c.frame_dt) +
-                              " --set time.end=" + std::to_string(kFrames * c.frame_dt) + " --set output.png=false" +
-                              " --set output.checkpoint_every=" + std::to_string(kCheckpointEvery) + " --out '" +
-                              out.string() + "' " + extra + " 2> '" + out.string() + ".log'";
+  const std::string command =
+      "'" + c.app + "' '" + SEDIMENT_DATA_DIR + "/scenes/" + c.scene + "' --quiet " + c.sets +
+      " --set time.frame_dt=" + std::to_string(c.frame_dt) + " --set time.end=" + std::to_string(kFrames * c.frame_dt) +
+      " --set output.png=false" + " --set output.checkpoint_every=" + std::to_string(kCheckpointEvery) +
+      " --set output.checkpoints_kept=3 --out '" + out.string() + "' " + extra + " 2> '" + out.string() + ".log'";
   const int status = std::system(command.c_str());
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }

@@ -1,7 +1,9 @@
 #include <mpm/core/app.h>
 #include <mpm/core/config.h>
 #include <mpm/core/error.h>
+#include <mpm/core/memory_budget.h>
 #include <mpm/core/scene_settings.h>
+#include <mpm/core/stop_signals.h>
 
 #include <cmath>
 #include <cstdio>
@@ -12,8 +14,12 @@ namespace mpm {
 int run_app(int argc, char** argv, const std::string& app_name, const std::string& description,
             const std::function<int(const CommandLine&)>& body) {
   const CommandLine cl = parse_command_line(argc, argv, app_name, description);
+  if (cl.max_memory_gb) cap_memory(*cl.max_memory_gb * 1e9);
   try {
     return body(cl);
+  } catch (const StopRequested& e) {
+    std::cerr << "\n" << app_name << ": " << e.what() << "\n";
+    return 128 + e.signal();
   } catch (const InputError& e) {
     std::cerr << app_name << ": input error: " << e.what() << "\n";
     return 2;

@@ -22,6 +22,10 @@ CommandLine parse_command_line(int argc, char** argv, const std::string& app_nam
   app.add_flag("--check", cl.check, "Compare the result against the reference; exit 1 on failure");
   app.add_option("--restart", restart, "Continue from this checkpoint")->check(CLI::ExistingFile);
   app.add_flag("--quiet", cl.quiet, "No progress line");
+  double max_memory = 0.0;
+  app.add_option("--max-memory", max_memory,
+                 "Refuse a scene whose estimated memory exceeds this many GB (default: the memory available)")
+      ->check(CLI::PositiveNumber);
 
   try {
     app.parse(argc, argv);
@@ -31,6 +35,7 @@ CommandLine parse_command_line(int argc, char** argv, const std::string& app_nam
     std::exit(2);
   }
   if (!restart.empty()) cl.restart = restart;
+  if (max_memory > 0.0) cl.max_memory_gb = max_memory;
   return cl;
 }
 

@@ -116,6 +116,7 @@ struct Config::Shared {
   std::map<std::string, std::set<std::string>> asked;          //!< map path -> key names requested
   std::vector<std::pair<std::string, std::string>> resolved;
   std::map<std::string, std::size_t> resolved_index;
+  std::vector<std::pair<std::string, std::filesystem::path>> input_files;
 
   //! "file:line:col" of a node, or the --set that put it there.
   std::string position(const std::string& path, const YAML::Node& node) const {
@@ -282,6 +283,18 @@ const std::string& Config::path() const { return path_; }
 const std::string& Config::file() const { return shared_->file; }
 
 std::vector<std::pair<std::string, std::string>> Config::resolved() const { return shared_->resolved; }
+
+std::vector<std::pair<std::string, std::filesystem::path>> Config::input_files() const { return shared_->input_files; }
+
+std::filesystem::path Config::input_file(const std::string& key) const {
+  std::filesystem::path path(text(key));
+  if (path.is_relative()) path = std::filesystem::path(file()).parent_path() / path;
+  const std::string full = join(path_, key);
+  auto& files = shared_->input_files;
+  if (std::none_of(files.begin(), files.end(), [&](const auto& f) { return f.first == full; }))
+    files.emplace_back(full, path);
+  return path;
+}
 
 bool Config::has(const std::string& key) const {
   shared_->asked[path_].insert(key);

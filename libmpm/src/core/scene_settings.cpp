@@ -129,6 +129,8 @@ SceneSettings<dim> parse_scene_settings(const Config& scene, const std::optional
     s.output.color_by = out->choice("color_by", "speed", {"speed", "material", "J", "plastic", "height", "level"});
     s.output.png_width = out->integer("png_width", 640, 16, 8192);
     s.output.checkpoint_every = out->integer("checkpoint_every", 0, 0, 1000000);
+    s.output.checkpoint_minutes = out->number("checkpoint_minutes", 10.0, Range::closed(0.0, 1e6));
+    s.output.checkpoints_kept = out->integer("checkpoints_kept", 2, 1, 1000000);
   }
   return s;
 }

@@ -8,6 +8,8 @@ list(APPEND MPM_CORE_SOURCES
   src/core/pipeline.cpp
   src/core/scene_settings.cpp
   src/core/runner.cpp
+  src/core/stop_signals.cpp
+  src/core/memory_budget.cpp
   src/core/stages/sort_particles.cpp
   src/core/stages/particles_to_grid.cpp
   src/core/stages/grid_velocity_update.cpp

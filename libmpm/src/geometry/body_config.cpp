@@ -25,12 +25,25 @@ BodyParticles<dim> seed_body_shape(const Config& body, const SceneSettings<dim>&
   const auto seed = static_cast<std::uint64_t>(body.integer("seed", 1, 0, 1 << 30));
   const std::string shape = body.choice("shape", "box", shapes);
   BodyParticles<dim> b{{}, particle_volume<dim>(dx, ppc)};
-  if (shape == "box")
-    b.x = seed_box<dim>(body.vector<dim>("lo"), body.vector<dim>("hi"), dx, ppc, jitter, seed);
-  else if (shape == "sphere")
-    b.x = seed_sphere<dim>(body.vector<dim>("center"), body.number("radius", Range::positive()), dx, ppc, jitter, seed);
-  else
-    b.x = seed_level_set<dim>(parse_level_set<dim>(body), dx, ppc, jitter, seed);
+  // Seeding refuses a body too large for the memory (core/memory_budget.h): blame the body.
+  const auto seeded = [&](const auto& seed_points) {
+    try {
+      return seed_points();
+    } catch (const InputError& e) {
+      body.fail("shape", e.what());
+    }
+  };
+  if (shape == "box") {
+    const Vec<dim> lo = body.vector<dim>("lo"), hi = body.vector<dim>("hi");
+    b.x = seeded([&] { return seed_box<dim>(lo, hi, dx, ppc, jitter, seed); });
+  } else if (shape == "sphere") {
+    const Vec<dim> center = body.vector<dim>("center");
+    const double radius = body.number("radius", Range::positive());
+    b.x = seeded([&] { return seed_sphere<dim>(center, radius, dx, ppc, jitter, seed); });
+  } else {
+    const LevelSetShape<dim> level_set = parse_level_set<dim>(body);
+    b.x = seeded([&] { return seed_level_set<dim>(level_set, dx, ppc, jitter, seed); });
+  }
   if (b.x.empty()) body.fail("shape", "the body contains no particle at this resolution");
   // Blame the key that placed the body, so the message carries its file position and value.
   if (const OutsideDomain outside = first_outside_domain(settings, b.x); !outside.why.empty())

@@ -74,8 +74,7 @@ Shape<dim> parse_shape(const Config& entry) {
 template <int dim>
 LevelSetShape<dim> parse_level_set(const Config& entry) {
   const std::string file = entry.text("file");
-  std::filesystem::path path(file);
-  if (path.is_relative()) path = std::filesystem::path(entry.file()).parent_path() / path;
+  const std::filesystem::path path = entry.input_file("file");
 
   double slice_z = 0.0;
   if constexpr (dim == 2) {

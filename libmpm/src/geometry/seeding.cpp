@@ -1,6 +1,7 @@
 #include <mpm/geometry/seeding.h>
 
 #include <mpm/core/error.h>
+#include <mpm/core/memory_budget.h>
 #include <mpm/geometry/signed_distance.h>
 
 #include "number_text.h"
@@ -60,6 +61,10 @@ std::vector<Vec<dim>> seed_lattice(const Vec<dim>& lo, const Vec<dim>& hi, doubl
   verify<InputError>(candidates <= kMaxLatticePoints,
                      "seeding: " + detail::number_text(candidates) + " lattice points (at most " +
                          detail::number_text(kMaxLatticePoints) + "); check dx and the extent of the body");
+  if (const std::string why = memory_shortfall(candidates * kBytesPerParticle<dim>); !why.empty())
+    throw InputError("seeding: up to " + detail::number_text(candidates) + " particles at grid spacing dx = " +
+                     detail::number_text(dx) + " m, " + std::to_string(particles_per_cell) + " per cell, need " + why +
+                     ": coarsen the grid or lower particles_per_cell");
   const IVec<dim> first = first_index.template cast<int>(), end = end_index.template cast<int>();
   std::vector<Vec<dim>> points;
   if (candidates == 0.0) return points;

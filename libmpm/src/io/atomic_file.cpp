@@ -31,14 +31,12 @@ void AtomicFile::commit() {
   committed_ = true;
 }
 
-void write_file_atomically(const std::filesystem::path& path, std::string_view content) {
-  AtomicFile file(path);
+void write_whole_file(const std::filesystem::path& path, std::string_view content) {
   const auto fail = [&](const char* what) {
-    throw IoError("cannot write '" + path.string() + "': " + what + " '" + file.temp_path().string() +
-                  "': " + std::strerror(errno));
+    throw IoError(std::string(what) + " '" + path.string() + "': " + std::strerror(errno));
   };
   // POSIX I/O rather than a stream: errno gives the reason (ENOSPC, EACCES, ...).
-  const int fd = ::open(file.temp_path().c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) fail("cannot create");
   std::size_t written = 0;
   while (written < content.size()) {
@@ -53,6 +51,15 @@ void write_file_atomically(const std::filesystem::path& path, std::string_view c
     written += static_cast<std::size_t>(n);
   }
   if (::close(fd) != 0) fail("cannot close");
+}
+
+void write_file_atomically(const std::filesystem::path& path, std::string_view content) {
+  AtomicFile file(path);
+  try {
+    write_whole_file(file.temp_path(), content);
+  } catch (const IoError& e) {
+    throw IoError("cannot write '" + path.string() + "': " + e.what());
+  }
   file.commit();
 }
 

@@ -53,7 +53,8 @@ std::string document(const std::string& grids) {
 }  // namespace
 
 template <int dim>
-void write_cells(const std::filesystem::path& h5_path, const adaptive::CellTree<dim>& tree, double time, int frame) {
+void write_cells(const std::filesystem::path& h5_path, const adaptive::CellTree<dim>& tree, double time, int frame,
+                 const std::string& run_id) {
   constexpr int corners = 1 << dim;
   std::vector<double> points;
   std::vector<std::int32_t> cells, level;
@@ -74,6 +75,7 @@ void write_cells(const std::filesystem::path& h5_path, const adaptive::CellTree<
     file.write("level", level.data(), {n});
     file.write_attribute("time", time);
     file.write_attribute<std::int32_t>("frame", frame);
+    if (!run_id.empty()) file.write_attribute("run_id", run_id);
     file.close();
   }
   out.commit();
@@ -92,8 +94,8 @@ void write_cells_time_series(const std::filesystem::path& dir, const std::vector
   write_file_atomically(dir / "cells.xdmf", document(grids + "    </Grid>\n"));
 }
 
-template void write_cells(const std::filesystem::path&, const adaptive::CellTree<2>&, double, int);
-template void write_cells(const std::filesystem::path&, const adaptive::CellTree<3>&, double, int);
+template void write_cells(const std::filesystem::path&, const adaptive::CellTree<2>&, double, int, const std::string&);
+template void write_cells(const std::filesystem::path&, const adaptive::CellTree<3>&, double, int, const std::string&);
 template void write_cells_time_series<2>(const std::filesystem::path&, const std::vector<std::pair<int, double>>&);
 template void write_cells_time_series<3>(const std::filesystem::path&, const std::vector<std::pair<int, double>>&);
 

@@ -2,11 +2,15 @@
 
 #include <mpm/core/error.h>
 #include <mpm/io/atomic_file.h>
+#include <mpm/io/checksum.h>
 
 #include "channel_sizes.h"
 #include "hdf5_file.h"
 
 #include <algorithm>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
 #include <sstream>
 #include <string>
 #include <type_traits>
@@ -18,9 +22,9 @@ namespace mpm::io {
 namespace {
 
 constexpr const char* kFormat = "mpm-checkpoint";
-// 2: the channels of a phase are listed in "<phase>.channels" (1 had fixed datasets and a
-// deformation flag).
-constexpr std::int32_t kVersion = 2;
+// 3: checksums, run id, frame_step and input digests (2 listed the channels of a phase in
+// "<phase>.channels"; 1 had fixed datasets and a deformation flag).
+constexpr std::int32_t kVersion = 3;
 
 // Eigen's fixed-size vectors and matrices are plain arrays of doubles, so a channel is one
 // contiguous block of N * rows * cols doubles.
@@ -78,12 +82,72 @@ std::string joined(const std::vector<std::string>& names) {
   return text.empty() ? "none" : text;
 }
 
+std::string inputs_text(const std::vector<InputFile>& inputs) {
+  std::string text;
+  for (const InputFile& f : inputs) {
+    verify<InputError>((f.key + f.path + f.digest).find_first_of("\t\n") == std::string::npos,
+                       "checkpoint: input file '" + f.path + "' has a tab or line break in its name");
+    text += (text.empty() ? "" : "\n") + f.key + "\t" + f.path + "\t" + f.digest;
+  }
+  return text;
+}
+
+std::vector<InputFile> parse_inputs(const std::string& text, const std::string& name) {
+  std::vector<InputFile> inputs;
+  for (const std::string& line : lines(text)) {
+    const std::size_t a = line.find('\t'), b = line.find('\t', a == std::string::npos ? a : a + 1);
+    if (b == std::string::npos) throw IoError("checkpoint " + name + " is corrupt: input entry '" + line + "'");
+    inputs.push_back({line.substr(0, a), line.substr(a + 1, b - a - 1), line.substr(b + 1)});
+  }
+  return inputs;
+}
+
+//! The checksum of one channel, its name included. A phase's checksum xors those of its channels,
+//! so it does not depend on the order in which a scene declares them.
+template <class T>
+std::uint64_t channel_checksum(const std::string& name, const std::vector<T>& values) {
+  Checksum sum;
+  sum.add(name);
+  sum.add(values.data(), values.size() * sizeof(T));
+  return sum.value();
+}
+
+//! The checksum of everything in the header that a restart uses.
+std::string header_checksum(const CheckpointHeader& h, int dim) {
+  Checksum sum;
+  const std::int64_t integers[] = {dim, h.frame, h.step, h.frame_step};
+  sum.add(integers, sizeof integers);
+  sum.add(&h.time, sizeof h.time);
+  sum.add(&h.dt_previous, sizeof h.dt_previous);
+  sum.add(h.scene_digest);
+  sum.add(h.run_id);
+  sum.add(inputs_text(h.inputs));
+  for (const auto& [name, values] : h.stage_data) {
+    sum.add(name);
+    sum.add(values.data(), values.size() * sizeof(double));
+  }
+  return sum.hex();
+}
+
 }  // namespace
 
+std::string file_digest(const std::filesystem::path& path) {
+  std::FILE* file = std::fopen(path.c_str(), "rb");
+  if (!file) throw IoError("cannot read '" + path.string() + "' to take its digest: " + std::strerror(errno));
+  Checksum sum;
+  std::vector<char> buffer(1 << 20);
+  for (std::size_t n; (n = std::fread(buffer.data(), 1, buffer.size(), file)) > 0;) sum.add(buffer.data(), n);
+  const bool failed = std::ferror(file) != 0;
+  std::fclose(file);
+  if (failed) throw IoError("cannot read '" + path.string() + "' to take its digest");
+  return sum.hex();
+}
+
 template <int dim>
-void save_checkpoint(const std::filesystem::path& path, const std::vector<CheckpointPhase<dim>>& phases,
-                     const CheckpointHeader& header) {
+std::string save_checkpoint(const std::filesystem::path& path, const std::vector<CheckpointPhase<dim>>& phases,
+                            const CheckpointHeader& header) {
   AtomicFile out(path);
+  Checksum all;
   {
     using detail::Hdf5File;
     Hdf5File file(out.temp_path(), Hdf5File::Mode::create, path);
@@ -91,14 +155,19 @@ void save_checkpoint(const std::filesystem::path& path, const std::vector<Checkp
       const Particles<dim>& p = *particles;
       detail::verify_channel_sizes(p, path);
       std::string stored;
+      std::uint64_t checksum = 0;
       p.for_each_channel([&](const ChannelInfo& info, const auto& values) {
         if (!info.use.checkpoint) return;
         using T = typename std::decay_t<decltype(values)>::value_type;
         file.write(dataset(name, info.name), scalars(values), shape_of<dim, T>(values.size()));
         stored += (stored.empty() ? "" : "\n") + info.name;
+        checksum ^= channel_checksum(info.name, values);
       });
       file.write_attribute<std::int64_t>(attribute(name, "particles"), static_cast<std::int64_t>(p.size()));
       file.write_attribute(attribute(name, "channels"), stored);
+      file.write_attribute(attribute(name, "checksum"), Checksum::hex(checksum));
+      all.add(name);
+      all.add(&checksum, sizeof checksum);
     }
     file.write_attribute("format", std::string(kFormat));
     file.write_attribute("version", kVersion);
@@ -108,6 +177,10 @@ void save_checkpoint(const std::filesystem::path& path, const std::vector<Checkp
     file.write_attribute("time", header.time);
     file.write_attribute("dt_previous", header.dt_previous);
     file.write_attribute("scene_digest", header.scene_digest);
+    file.write_attribute("run_id", header.run_id);
+    file.write_attribute<std::int64_t>("frame_step", header.frame_step);
+    file.write_attribute("inputs", inputs_text(header.inputs));
+    file.write_attribute("header_checksum", header_checksum(header, dim));
     std::string names;
     for (const auto& [name, values] : header.stage_data) {
       verify<InputError>(name.find('\n') == std::string::npos, "checkpoint: stage data name with a newline");
@@ -118,6 +191,7 @@ void save_checkpoint(const std::filesystem::path& path, const std::vector<Checkp
     file.close();
   }
   out.commit();
+  return all.hex();
 }
 
 template <int dim>
@@ -145,6 +219,9 @@ void load_checkpoint(const std::filesystem::path& path, CheckpointHeader& header
   loaded.time = file.read_attribute<double>("time");
   loaded.dt_previous = file.read_attribute<double>("dt_previous");
   loaded.scene_digest = file.read_string_attribute("scene_digest");
+  loaded.run_id = file.read_string_attribute("run_id");
+  loaded.frame_step = file.read_attribute<std::int64_t>("frame_step");
+  loaded.inputs = parse_inputs(file.read_string_attribute("inputs"), name);
   if (file.has_attribute("stage_data")) {
     for (const std::string& entry : lines(file.read_string_attribute("stage_data"))) {
       const detail::Shape shape = file.shape("stages/" + entry);
@@ -154,6 +231,11 @@ void load_checkpoint(const std::filesystem::path& path, CheckpointHeader& header
       loaded.stage_data.emplace_back(entry, std::move(values));
     }
   }
+  if (const std::string recorded = file.read_string_attribute("header_checksum"),
+      computed = header_checksum(loaded, dim);
+      recorded != computed)
+    throw IoError("checkpoint " + name + " is corrupt: its header checksum is " + computed + ", the file says " +
+                  recorded + " (an attribute was changed after it was written)");
 
   if (!file.has_attribute(attribute(phase, "channels")))
     throw InputError("checkpoint " + name + " holds no particle phase '" + phase + "'");
@@ -193,13 +275,19 @@ void load_checkpoint(const std::filesystem::path& path, CheckpointHeader& header
   using Buffer =
       std::variant<std::vector<double>, std::vector<Vec<dim>>, std::vector<Mat<dim>>, std::vector<std::uint16_t>>;
   std::vector<Buffer> buffers;
+  std::uint64_t checksum = 0;
   into.for_each_channel([&](const ChannelInfo& info, const auto& values) {
     if (!info.use.checkpoint) return;
     using T = typename std::decay_t<decltype(values)>::value_type;
     std::vector<T> buffer(n);
     file.read(dataset(phase, info.name), scalars(buffer), shape_of<dim, T>(n));
+    checksum ^= channel_checksum(info.name, buffer);
     buffers.emplace_back(std::move(buffer));
   });
+  if (const std::string recorded = file.read_string_attribute(attribute(phase, "checksum"));
+      recorded != Checksum::hex(checksum))
+    throw IoError(where + " is corrupt: the checksum of its particle data is " + Checksum::hex(checksum) +
+                  ", the file says " + recorded + " (a dataset was changed after it was written)");
   into.resize(0);
   into.resize(n);
   std::size_t next = 0;
@@ -209,10 +297,10 @@ void load_checkpoint(const std::filesystem::path& path, CheckpointHeader& header
   header = std::move(loaded);
 }
 
-template void save_checkpoint<2>(const std::filesystem::path&, const std::vector<CheckpointPhase<2>>&,
-                                 const CheckpointHeader&);
-template void save_checkpoint<3>(const std::filesystem::path&, const std::vector<CheckpointPhase<3>>&,
-                                 const CheckpointHeader&);
+template std::string save_checkpoint<2>(const std::filesystem::path&, const std::vector<CheckpointPhase<2>>&,
+                                        const CheckpointHeader&);
+template std::string save_checkpoint<3>(const std::filesystem::path&, const std::vector<CheckpointPhase<3>>&,
+                                        const CheckpointHeader&);
 template void load_checkpoint<2>(const std::filesystem::path&, CheckpointHeader&, Particles<2>&, const std::string&);
 template void load_checkpoint<3>(const std::filesystem::path&, CheckpointHeader&, Particles<3>&, const std::string&);
 

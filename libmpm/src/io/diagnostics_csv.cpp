@@ -41,6 +41,13 @@ std::vector<std::string_view> split(std::string_view line) {
   }
 }
 
+//! One row as the file holds it: 17 significant digits, so that it reads back to the same doubles.
+std::string row_line(const std::vector<double>& row) {
+  std::string line;
+  for (std::size_t i = 0; i < row.size(); ++i) line += (i ? "," : "") + detail::to_text(row[i]);
+  return line + '\n';
+}
+
 }  // namespace
 
 void DiagnosticsCsv::open(const std::filesystem::path& path, std::vector<std::string> columns) {
@@ -54,11 +61,9 @@ void DiagnosticsCsv::open(const std::filesystem::path& path, std::vector<std::st
     throw IoError("cannot write '" + path_.string() + "': " + std::strerror(errno));
 }
 
-void DiagnosticsCsv::open_for_restart(const std::filesystem::path& path, std::vector<std::string> columns,
-                                      int last_frame_kept) {
+void DiagnosticsCsv::load(const std::filesystem::path& path, std::vector<std::string> columns) {
   verify_columns(columns, path);
-  const auto frame_column = std::find(columns.begin(), columns.end(), "frame") - columns.begin();
-  verify<InputError>(frame_column < std::ssize(columns),
+  verify<InputError>(std::find(columns.begin(), columns.end(), "frame") != columns.end(),
                      "diagnostics '" + path.string() + "': restart needs a 'frame' column");
 
   std::ifstream in(path, std::ios::binary);
@@ -67,7 +72,6 @@ void DiagnosticsCsv::open_for_restart(const std::filesystem::path& path, std::ve
   const std::string header = header_line(columns);
 
   // Only lines ending in '\n' are complete; text after the last one is a row cut short.
-  std::string kept;
   std::vector<std::vector<double>> rows;
   std::size_t line_number = 0;
   for (std::size_t start = 0, end; (end = text.find('\n', start)) != std::string::npos; start = end + 1) {
@@ -88,17 +92,22 @@ void DiagnosticsCsv::open_for_restart(const std::filesystem::path& path, std::ve
       if (error != std::errc() || end_of_number != fields[c].data() + fields[c].size())
         throw IoError(where + ": " + columns[c] + " '" + std::string(fields[c]) + "' is not a number");
     }
-    if (row[static_cast<std::size_t>(frame_column)] <= last_frame_kept) {
-      kept.append(line).push_back('\n');
-      rows.push_back(std::move(row));
-    }
+    rows.push_back(std::move(row));
   }
   if (line_number == 0) throw IoError("'" + path.string() + "' has no header line");
-
-  write_file_atomically(path, header + "\n" + kept);
+  file_.reset();
   path_ = path;
   columns_ = std::move(columns);
   rows_ = std::move(rows);
+}
+
+void DiagnosticsCsv::keep_until(int last_frame_kept) {
+  verify<IoError>(!path_.empty() && !is_open(), "diagnostics: keep_until without load");
+  const std::size_t frame = std::find(columns_.begin(), columns_.end(), "frame") - columns_.begin();
+  std::erase_if(rows_, [&](const std::vector<double>& row) { return row[frame] > last_frame_kept; });
+  std::string text = header_line(columns_) + "\n";
+  for (const auto& row : rows_) text += row_line(row);
+  write_file_atomically(path_, text);
   open_file("a");
 }
 
@@ -107,9 +116,7 @@ void DiagnosticsCsv::append(const std::vector<double>& row) {
   if (row.size() != columns_.size())
     throw IoError("cannot append to '" + path_.string() + "': the row has " + std::to_string(row.size()) +
                   " values, the header " + std::to_string(columns_.size()) + " columns");
-  std::string line;
-  for (std::size_t i = 0; i < row.size(); ++i) line += (i ? "," : "") + detail::to_text(row[i]);
-  line += '\n';
+  const std::string line = row_line(row);
   if (std::fputs(line.c_str(), file_.get()) < 0 || std::fflush(file_.get()) != 0)
     throw IoError("cannot append to '" + path_.string() + "': " + std::strerror(errno));
   rows_.push_back(row);

@@ -1,6 +1,7 @@
 #include "hdf5_file.h"
 
 #include <mpm/core/error.h>
+#include <mpm/io/atomic_file.h>
 
 #include <algorithm>
 
@@ -46,11 +47,19 @@ std::string describe(const Shape& shape) {
 }  // namespace
 
 Hdf5File::Hdf5File(const std::filesystem::path& file, Mode mode, const std::filesystem::path& reported)
-    : reported_(reported) {
+    : path_(file), reported_(reported) {
   H5Eget_auto2(H5E_DEFAULT, &saved_printer_, &saved_printer_data_);
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
-  file_ = mode == Mode::create ? H5Fcreate(file.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT)
-                               : H5Fopen(file.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  if (mode == Mode::create) {
+    // A new file is built in memory (the core driver without a backing store) and written out by
+    // close() in one POSIX write: HDF5 itself never writes to disk, so a full disk is an error
+    // with errno's reason instead of a file HDF5 cannot close (it crashed at exit retrying).
+    const Handle access(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
+    if (access.valid() && H5Pset_fapl_core(access, 1 << 20, false) >= 0)
+      file_ = H5Fcreate(file.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, access);
+  } else {
+    file_ = H5Fopen(file.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  }
   if (file_ < 0) {
     // The destructor does not run for a throwing constructor: restore the printer here.
     const std::string reason = take_reason();
@@ -69,7 +78,20 @@ Hdf5File::~Hdf5File() {
 void Hdf5File::close() {
   const hid_t file = file_;
   file_ = H5I_INVALID_HID;
-  if (H5Fclose(file) < 0) fail("cannot flush and close it");
+  std::string image;
+  if (H5Fflush(file, H5F_SCOPE_GLOBAL) >= 0) {
+    const ssize_t size = H5Fget_file_image(file, nullptr, 0);
+    if (size > 0) {
+      image.resize(static_cast<std::size_t>(size));
+      if (H5Fget_file_image(file, image.data(), image.size()) != size) image.clear();
+    }
+  }
+  if (H5Fclose(file) < 0 || image.empty()) fail("cannot flush and close it");
+  try {
+    write_whole_file(path_, image);
+  } catch (const IoError& e) {
+    throw IoError("HDF5 file '" + reported_.string() + "': " + e.what());
+  }
 }
 
 void Hdf5File::fail(const std::string& what) const {

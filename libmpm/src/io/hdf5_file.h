@@ -91,7 +91,7 @@ private:
   void write_attribute_raw(const std::string& name, hid_t file_type, hid_t memory_type, const void* value);
   void read_attribute_raw(const std::string& name, hid_t memory_type, void* value) const;
 
-  std::filesystem::path reported_;
+  std::filesystem::path path_, reported_;
   H5E_auto2_t saved_printer_ = nullptr;
   void* saved_printer_data_ = nullptr;
   hid_t file_ = H5I_INVALID_HID;

@@ -125,7 +125,8 @@ std::string particle_file_name(int frame, const std::string& stem) {
 }
 
 template <int dim>
-void write_particles(const std::filesystem::path& h5_path, const Particles<dim>& p, double time, int frame) {
+void write_particles(const std::filesystem::path& h5_path, const Particles<dim>& p, double time, int frame,
+                     const std::string& run_id) {
   detail::verify_channel_sizes(p, h5_path);
   const auto rows = static_cast<hsize_t>(p.size());
   std::vector<Attribute> attributes;
@@ -148,6 +149,7 @@ void write_particles(const std::filesystem::path& h5_path, const Particles<dim>&
     file.write_attribute(kAttributeList, names);
     file.write_attribute("time", time);
     file.write_attribute<std::int32_t>("frame", frame);
+    if (!run_id.empty()) file.write_attribute("run_id", run_id);
     file.write_attribute<std::int32_t>("dim", dim);
     file.close();
   }
@@ -184,7 +186,7 @@ void write_time_series_xdmf(const std::filesystem::path& dir, const std::vector<
   write_file_atomically(dir / (stem + ".xdmf"), xdmf_document(grids));
 }
 
-template void write_particles<2>(const std::filesystem::path&, const Particles<2>&, double, int);
-template void write_particles<3>(const std::filesystem::path&, const Particles<3>&, double, int);
+template void write_particles<2>(const std::filesystem::path&, const Particles<2>&, double, int, const std::string&);
+template void write_particles<3>(const std::filesystem::path&, const Particles<3>&, double, int, const std::string&);
 
 }  // namespace mpm::io

@@ -22,13 +22,15 @@ void step_towards(State& state, Pipeline<State>& pipeline, double t_end) {
   ++state.step;
 }
 
-//! Steps `pipeline` until state.time is within `slack` [s] of t_end. NumericalError, naming the
-//! time-step stage, when a step is not positive or more than `max_steps` steps do not get
-//! there (a collapsing step ends the run instead of hanging it). State has time, dt, dt_limit
-//! and step (MpmState, libcoupling's CoupledState).
+//! Steps `pipeline` until state.time is within `slack` [s] of t_end; returns true. With `stop`,
+//! asks it after every step and returns false, leaving the state after that step, when it says
+//! so (a graceful stop, core/stop_signals.h). NumericalError, naming the time-step stage, when a
+//! step is not positive or more than `max_steps` steps do not get there (a collapsing step ends
+//! the run instead of hanging it). State has time, dt, dt_limit and step (MpmState,
+//! libcoupling's CoupledState).
 template <class State>
-void advance(State& state, Pipeline<State>& pipeline, double t_end, std::int64_t max_steps = 1000000,
-             double slack = 0.0) {
+bool advance(State& state, Pipeline<State>& pipeline, double t_end, std::int64_t max_steps = 1000000,
+             double slack = 0.0, bool (*stop)() = nullptr) {
   std::int64_t steps = 0;
   while (state.time < t_end - slack) {
     step_towards(state, pipeline, t_end);
@@ -40,7 +42,9 @@ void advance(State& state, Pipeline<State>& pipeline, double t_end, std::int64_t
                     state.dt, state.time, static_cast<long long>(max_steps), t_end);
       throw NumericalError(why);
     }
+    if (stop && stop() && state.time < t_end - slack) return false;
   }
+  return true;
 }
 
 }  // namespace mpm

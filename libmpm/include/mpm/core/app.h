@@ -2,7 +2,8 @@
 //! The entry point shared by every app: parses the command line, runs the scene, and turns
 //! errors into one message on stderr and an exit code:
 //!   0 success, 1 --check failed, 2 input error (nothing written), 3 numerical error (the
-//!   message names stage, particle and quantity), 4 I/O error.
+//!   message names stage, particle and quantity), 4 I/O error, 130 / 143 stopped by SIGINT /
+//!   SIGTERM after writing a checkpoint to continue from (core/stop_signals.h).
 #include <mpm/core/command_line.h>
 
 #include <functional>

@@ -1,6 +1,7 @@
 #pragma once
 //! The command-line contract shared by every app:
 //!   APP scene.yaml [--set key.path=value]... [--out DIR] [--check] [--restart CHECKPOINT]
+//!       [--quiet] [--max-memory GB]
 #include <optional>
 #include <string>
 #include <vector>
@@ -9,11 +10,12 @@ namespace mpm {
 
 struct CommandLine {
   std::string scene_file;
-  std::vector<std::string> overrides;  //!< "key.path=value", in order
-  std::string out_dir;                 //!< default: "out/<app name>"
-  bool check = false;                  //!< compare the result against the app's reference; exit 1 on failure
-  std::optional<std::string> restart;  //!< checkpoint to continue from
-  bool quiet = false;                  //!< no progress line
+  std::vector<std::string> overrides;   //!< "key.path=value", in order
+  std::string out_dir;                  //!< default: "out/<app name>"
+  bool check = false;                   //!< compare the result against the app's reference; exit 1 on failure
+  std::optional<std::string> restart;   //!< checkpoint to continue from
+  bool quiet = false;                   //!< no progress line
+  std::optional<double> max_memory_gb;  //!< cap on the memory a scene may claim (core/memory_budget.h)
 };
 
 //! Parses argv. On --help prints usage and exits 0; on a malformed command line prints the

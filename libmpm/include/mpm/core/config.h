@@ -11,6 +11,7 @@
 //! "did you mean" suggestion among the keys that were read at the same level.
 #include <mpm/core/types.h>
 
+#include <filesystem>
 #include <memory>
 #include <optional>
 #include <string>
@@ -76,6 +77,10 @@ public:
   std::optional<Config> optional_child(const std::string& key) const;
   std::vector<Config> list(const std::string& key) const;  //!< sequence of maps (may be absent: empty)
 
+  //! A required file name, resolved against the scene file's folder when relative, and recorded
+  //! as an input of the run (input_files()): a restart verifies that its content is unchanged.
+  std::filesystem::path input_file(const std::string& key) const;
+
   //! Throws an InputError for `key` of this map with a custom reason (cross-field checks).
   [[noreturn]] void fail(const std::string& key, const std::string& reason) const;
   //! Throws on the first key anywhere in the file that no getter has read.
@@ -86,6 +91,8 @@ public:
   const std::string& file() const;
   //! Every key read so far as (full path, resolved value as YAML text), in reading order.
   std::vector<std::pair<std::string, std::string>> resolved() const;
+  //! Every file read through input_file() so far as (full key path, resolved path).
+  std::vector<std::pair<std::string, std::filesystem::path>> input_files() const;
 
 private:
   struct Shared;

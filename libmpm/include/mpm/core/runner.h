@@ -13,11 +13,23 @@
 //! diagnostics over the phases and adds a mass_<phase> column per phase, and stores every
 //! phase in one checkpoint. The definitions are in runner_impl.h; libmpm instantiates
 //! Runner<dim> for MpmState, libcoupling for its state.
+//!
+//! Integrity (docs/reliability.md): every run has a run id, stored in each HDF5 file, in the
+//! run_id column of diagnostics.csv and in summary.json. A fresh run into a folder that holds an
+//! earlier run's output first removes that run's files (frames, checkpoints, diagnostics,
+//! summary; nothing else). A restart verifies the checkpoint (checksums, scene digest, input file
+//! digests) and that diagnostics.csv belongs to the same run and holds every frame up to the
+//! checkpoint's, before it changes anything; then it removes the outputs of later frames, which
+//! the continued run writes again. Checkpoints are written every output.checkpoint_every frames,
+//! at the first frame end after output.checkpoint_minutes of wall-clock time, and after the last
+//! frame; the newest output.checkpoints_kept are kept. SIGINT and SIGTERM stop the run after the
+//! current step with a checkpoint (core/stop_signals.h).
 #include <mpm/core/command_line.h>
 #include <mpm/core/config.h>
 #include <mpm/core/pipeline.h>
 #include <mpm/core/scene_settings.h>
 #include <mpm/core/state.h>
+#include <mpm/io/checkpoint.h>
 #include <mpm/io/diagnostics_csv.h>
 
 #include <chrono>
@@ -54,12 +66,20 @@ public:
 
   const std::filesystem::path& out_dir() const { return out_; }
 
+  //! The id of this run: a new one for a fresh run, the checkpoint's for a restart.
+  const std::string& run_id() const { return run_id_; }
+
 private:
   std::vector<std::string> columns(State& state, const Pipeline<State>& pipeline) const;
   std::string scene_digest() const;
   int open_output(State& state, Pipeline<State>& pipeline);  // returns the first frame to run
+  void verify_restart(const io::CheckpointHeader& header) const;
   void append_diagnostics(State& state, int frame, const Pipeline<State>& pipeline);
   void write_frame(State& state, int frame);
+  void write_checkpoint(State& state, const Pipeline<State>& pipeline, int frame, const std::filesystem::path& path);
+  void prune_checkpoints() const;
+  void warn_output_size(int frame) const;
+  [[noreturn]] void stop(State& state, const Pipeline<State>& pipeline, int frame, bool mid_frame);
   void progress(const State& state, int frame, bool last) const;
 
   std::string app_;
@@ -70,6 +90,10 @@ private:
   Column elastic_energy_;
   std::vector<std::pair<std::string, Column>> extra_;
   io::DiagnosticsCsv csv_;
+  std::string run_id_;
+  std::string state_checksum_;  //!< of the particles in the last checkpoint written
+  std::vector<io::InputFile> inputs_;
+  std::chrono::steady_clock::time_point last_checkpoint_;
   std::vector<std::pair<int, double>> frames_written_;
   std::vector<double> stage_seconds_at_last_frame_;
   Index steps_at_last_frame_ = 0;

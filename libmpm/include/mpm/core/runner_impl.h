@@ -6,9 +6,11 @@
 #include <mpm/core/advance.h>
 #include <mpm/core/error.h>
 #include <mpm/core/runner.h>
+#include <mpm/core/stop_signals.h>
 #include <mpm/io/atomic_file.h>
 #include <mpm/io/cell_output.h>
 #include <mpm/io/checkpoint.h>
+#include <mpm/io/checksum.h>
 #include <mpm/io/diagnostics_csv.h>
 #include <mpm/io/particle_output.h>
 #include <mpm/io/png_preview.h>
@@ -16,9 +18,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <iostream>
 #include <map>
+#include <random>
 #include <set>
 #include <stdexcept>
 
@@ -44,6 +48,48 @@ inline std::string series_stem(const std::string& phase) { return phase.empty() 
 inline std::string phase_column(const std::string& name, const std::string& phase) {
   return phase.empty() ? name : name + "_" + phase;
 }
+
+//! Above this many bytes of expected output, a run warns at its start.
+inline constexpr double kOutputWarningBytes = 20e9;
+
+//! The checkpoint a stopped run writes when the stop came between two frames.
+inline constexpr const char* kStoppedCheckpoint = "checkpoint_stopped.h5";
+
+//! A new run id: 48 random bits as a decimal integer, so that diagnostics.csv holds it exactly.
+inline std::string new_run_id() {
+  std::random_device device;
+  const auto now = static_cast<std::uint64_t>(std::chrono::system_clock::now().time_since_epoch().count());
+  const std::uint64_t bits = (std::uint64_t(device()) << 32) ^ device() ^ (now * 0x9e3779b97f4a7c15ull);
+  return std::to_string(bits & ((std::uint64_t(1) << 48) - 1));
+}
+
+//! The frame number NNNN of a per-frame output "<stem>_NNNN.<h5|xdmf|png>", or -1.
+inline int output_frame(const std::string& name) {
+  const std::size_t dot = name.rfind('.'), bar = name.rfind('_', dot);
+  if (dot == std::string::npos || bar == std::string::npos || dot - bar < 5) return -1;
+  const std::string ext = name.substr(dot + 1), digits = name.substr(bar + 1, dot - bar - 1);
+  if ((ext != "h5" && ext != "xdmf" && ext != "png") || digits.size() > 9 ||
+      digits.find_first_not_of("0123456789") != std::string::npos)
+    return -1;
+  return std::stoi(digits);
+}
+
+//! The files a run writes in its folder: per-frame outputs, time series, the stopped checkpoint,
+//! diagnostics and summary. Anything else in the folder is not the runner's.
+inline bool is_run_output(const std::string& name) {
+  return output_frame(name) >= 0 || name == "diagnostics.csv" || name == "summary.json" || name == kStoppedCheckpoint ||
+         (name.size() > 5 && name.ends_with(".xdmf"));
+}
+
+//! Removes the files of `folder` for which `doomed(name)` holds; returns how many.
+template <class Predicate>
+std::size_t remove_files(const std::filesystem::path& folder, Predicate doomed) {
+  std::vector<std::filesystem::path> files;
+  for (const auto& entry : std::filesystem::directory_iterator(folder))
+    if (entry.is_regular_file() && doomed(entry.path().filename().string())) files.push_back(entry.path());
+  for (const auto& file : files) std::filesystem::remove(file);
+  return files.size();
+}
 }  // namespace runner_detail
 
 template <int dim, class State>
@@ -58,6 +104,7 @@ std::vector<std::string> Runner<dim, State>::columns(State& state, const Pipelin
       "mass",  "momentum_x", "momentum_y"};
   if (dim == 3) c.push_back("momentum_z");
   c.push_back("max_speed");
+  c.push_back("run_id");
   const auto all = phases(state);
   if (all.size() > 1)
     for (const PhaseRef<dim>& phase : all) c.push_back(runner_detail::phase_column("mass", phase.name));
@@ -86,16 +133,12 @@ std::vector<double> Runner<dim, State>::history_or_zero(const std::string& colum
 
 template <int dim, class State>
 std::string Runner<dim, State>::scene_digest() const {
-  // FNV-1a over the resolved keys that determine the solution: time.end and output.* may
-  // change between a run and its restart.
-  std::uint64_t h = 1469598103934665603ull;
-  for (const auto& [key, value] : scene_.resolved()) {
-    if (key == "time.end" || key.rfind("output.", 0) == 0) continue;
-    for (const char c : key + "=" + value + ";") h = (h ^ static_cast<unsigned char>(c)) * 1099511628211ull;
-  }
-  char text[17];
-  std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(h));
-  return text;
+  // Over the resolved keys that determine the solution: time.end and output.* may change between
+  // a run and its restart. The content of input files has its own digests (verify_restart).
+  io::Checksum digest;
+  for (const auto& [key, value] : scene_.resolved())
+    if (key != "time.end" && key.rfind("output.", 0) != 0) digest.add(key + "=" + value + ";");
+  return digest.hex();
 }
 
 template <int dim, class State>
@@ -104,32 +147,88 @@ int Runner<dim, State>::open_output(State& state, Pipeline<State>& pipeline) {
   io::remove_stale_temporaries(out_);
   if (!cl_.restart) {
     std::filesystem::create_directories(out_);
+    // A folder with diagnostics.csv holds an earlier run: its files go, so that none of its
+    // frames or checkpoints are mistaken for this run's.
+    if (std::filesystem::exists(out_ / "diagnostics.csv")) {
+      const std::size_t removed = runner_detail::remove_files(out_, runner_detail::is_run_output);
+      if (!cl_.quiet)
+        std::cerr << app_ << ": removed " << removed << " files of the earlier run in '" << out_.string() << "'\n";
+    }
+    run_id_ = runner_detail::new_run_id();
     csv_.open(out_ / "diagnostics.csv", columns(state, pipeline));
+    steps_at_last_frame_ = state.step;
     return 0;
   }
   verify<InputError>(std::filesystem::exists(out_ / "diagnostics.csv"),
                      "--restart continues a run in its output folder, but '" + out_.string() +
                          "' holds no diagnostics.csv: pass --out with the folder of the run that wrote '" +
                          *cl_.restart + "'");
-  // Each phase's particles, as the scene built them, declare the channels the checkpoint must hold.
+  // Everything is read and verified before any file of the folder changes, so a refused or
+  // failed restart leaves the run's files as they were.
   io::CheckpointHeader header;
   for (const PhaseRef<dim>& phase : phases(state))
     io::load_checkpoint<dim>(*cl_.restart, header, *phase.particles, phase.name);
-  verify<InputError>(header.dim == dim, "checkpoint '" + *cl_.restart + "' is " + std::to_string(header.dim) +
-                                            "D, the scene is " + std::to_string(dim) + "D");
-  verify<InputError>(header.scene_digest == scene_digest(),
-                     "checkpoint '" + *cl_.restart + "' was written by another scene (digest " + header.scene_digest +
-                         ", this scene " + scene_digest() +
-                         "): a restart needs the same keys and values, except time.end and output.*");
+  verify_restart(header);
+  csv_.load(out_ / "diagnostics.csv", columns(state, pipeline));
+  const std::vector<double> frames = csv_.column("frame"), runs = csv_.column("run_id");
+  const double run = static_cast<double>(std::stoull(header.run_id));
+  std::set<int> kept;
+  for (std::size_t r = 0; r < frames.size(); ++r) {
+    if (frames[r] > header.frame) continue;
+    verify<InputError>(runs[r] == run, "'" + (out_ / "diagnostics.csv").string() + "' holds frame " +
+                                           runner_detail::number(frames[r]) + " of run " +
+                                           std::to_string(static_cast<long long>(runs[r])) + ", but checkpoint '" +
+                                           *cl_.restart + "' belongs to run " + header.run_id +
+                                           ": --out must be the folder of the run that wrote the checkpoint");
+    kept.insert(static_cast<int>(frames[r]));
+  }
+  verify<InputError>(static_cast<int>(kept.size()) == header.frame + 1 && *kept.begin() == 0,
+                     "'" + (out_ / "diagnostics.csv").string() + "' holds " + std::to_string(kept.size()) +
+                         " of the frames 0-" + std::to_string(header.frame) + " that checkpoint '" + *cl_.restart +
+                         "' continues: restart from an earlier checkpoint of this folder");
+
+  // Verified: the folder continues from the checkpoint. Later frames are written again.
+  const std::filesystem::path from = std::filesystem::weakly_canonical(*cl_.restart);
+  runner_detail::remove_files(out_, [&](const std::string& name) {
+    if (name == runner_detail::kStoppedCheckpoint) return std::filesystem::weakly_canonical(out_ / name) != from;
+    return name == "summary.json" || runner_detail::output_frame(name) > header.frame;
+  });
+  csv_.keep_until(header.frame);
+  run_id_ = header.run_id;
   state.time = header.time;
   state.step = header.step;
+  state.dt = header.dt_previous;
+  steps_at_last_frame_ = header.frame_step;
   pipeline.restore(header.stage_data);
-  csv_.open_for_restart(out_ / "diagnostics.csv", columns(state, pipeline), header.frame);
   const std::string first_series = runner_detail::series_stem(phases(state).front().name);
   for (int f = 0; f <= header.frame; ++f)
     if (std::filesystem::exists(out_ / io::particle_file_name(f, first_series)))
       frames_written_.emplace_back(f, f * settings_.frame_dt);
   return header.frame;
+}
+
+template <int dim, class State>
+void Runner<dim, State>::verify_restart(const io::CheckpointHeader& header) const {
+  const std::string checkpoint = "checkpoint '" + *cl_.restart + "'";
+  verify<InputError>(header.dim == dim,
+                     checkpoint + " is " + std::to_string(header.dim) + "D, the scene is " + std::to_string(dim) + "D");
+  verify<InputError>(header.scene_digest == scene_digest(),
+                     checkpoint + " was written by another scene (digest " + header.scene_digest + ", this scene " +
+                         scene_digest() + "): a restart needs the same keys and values, except time.end and output.*");
+  for (const io::InputFile& now : inputs_) {
+    const auto then = std::find_if(header.inputs.begin(), header.inputs.end(),
+                                   [&](const io::InputFile& f) { return f.key == now.key; });
+    verify<InputError>(then != header.inputs.end(), checkpoint + " does not record the input file of " + now.key +
+                                                        " ('" + now.path + "'): it was written by another scene");
+    verify<InputError>(then->digest == now.digest, "the input file '" + now.path + "' (" + now.key +
+                                                       ") changed since " + checkpoint +
+                                                       " was written (content digest " + then->digest + ", now " +
+                                                       now.digest + "): restore the file, or start a new run");
+  }
+  verify<InputError>(header.inputs.size() == inputs_.size(),
+                     checkpoint + " depends on " + std::to_string(header.inputs.size()) +
+                         " input files, the scene on " + std::to_string(inputs_.size()) +
+                         ": it was written by another scene");
 }
 
 template <int dim, class State>
@@ -156,6 +255,7 @@ void Runner<dim, State>::append_diagnostics(State& state, int frame, const Pipel
                            potential,     mass};
   for (int a = 0; a < dim; ++a) r.push_back(momentum[a]);
   r.push_back(std::sqrt(max_speed2));
+  r.push_back(static_cast<double>(std::stoull(run_id_)));
   if (phase_mass.size() > 1) r.insert(r.end(), phase_mass.begin(), phase_mass.end());
   for (const auto& [name, fn] : extra_) r.push_back(fn(state));
   for (const Diagnostic& d : pipeline.diagnostics()) r.push_back(d.value);
@@ -174,31 +274,41 @@ void Runner<dim, State>::run(State& state, Pipeline<State>& pipeline) {
     std::cerr << app_ << ": " << cl_.scene_file << " (" << dim << "D), resolved parameters:\n";
     for (const auto& [key, value] : scene_.resolved()) std::cerr << "  " << key << " = " << value << "\n";
   }
-  start_ = std::chrono::steady_clock::now();
+  start_ = last_checkpoint_ = std::chrono::steady_clock::now();
+  inputs_.clear();
+  for (const auto& [key, path] : scene_.input_files()) inputs_.push_back({key, path.string(), io::file_digest(path)});
+  const StopSignals signals;  // from here on, SIGINT and SIGTERM stop the run with a checkpoint
   const int first_frame = open_output(state, pipeline);
   stage_seconds_at_last_frame_.assign(pipeline.stage_names().size(), 0.0);
-  steps_at_last_frame_ = state.step;
   if (!cl_.restart) {
     append_diagnostics(state, 0, pipeline);
     write_frame(state, 0);
+    warn_output_size(0);
   }
 
   const int frames = settings_.frame_count();
+  const auto& out = settings_.output;
   for (int frame = first_frame + 1; frame <= frames; ++frame) {
-    advance(state, pipeline, std::min(frame * settings_.frame_dt, settings_.end_time), settings_.max_steps_per_frame,
-            1e-12 * settings_.frame_dt);
+    if (!advance(state, pipeline, std::min(frame * settings_.frame_dt, settings_.end_time),
+                 settings_.max_steps_per_frame, 1e-12 * settings_.frame_dt,
+                 [] { return StopSignals::received() != 0; }))
+      stop(state, pipeline, frame - 1, true);
     append_diagnostics(state, frame, pipeline);
     write_frame(state, frame);
-    const bool checkpoint =
-        frame == frames || (settings_.output.checkpoint_every > 0 && frame % settings_.output.checkpoint_every == 0);
-    if (checkpoint) {
-      std::vector<io::CheckpointPhase<dim>> stored;
-      for (const PhaseRef<dim>& phase : phases(state)) stored.push_back({phase.name, phase.particles});
-      io::CheckpointHeader h{dim, frame, state.step, state.time, state.dt, scene_digest(), pipeline.carried()};
-      io::save_checkpoint<dim>(out_ / runner_detail::numbered("checkpoint", frame, ".h5"), stored, h);
-    }
+    if (frame == first_frame + 1 && cl_.restart) warn_output_size(frame);
+    const double minutes =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - last_checkpoint_).count() / 60.0;
+    const bool stopping = StopSignals::received() != 0 && frame < frames;
+    if (frame == frames || stopping || (out.checkpoint_every > 0 && frame % out.checkpoint_every == 0) ||
+        (out.checkpoint_minutes > 0 && minutes >= out.checkpoint_minutes))
+      write_checkpoint(state, pipeline, frame, out_ / runner_detail::numbered("checkpoint", frame, ".h5"));
+    if (stopping) stop(state, pipeline, frame, false);
     if (!cl_.quiet) progress(state, frame, frame == frames);
   }
+  // A restart from the last frame's checkpoint runs no frame: the checkpoint is written again
+  // (the same state), so that summary.json names the state's checksum as after any run.
+  if (state_checksum_.empty())
+    write_checkpoint(state, pipeline, first_frame, out_ / runner_detail::numbered("checkpoint", first_frame, ".h5"));
 
   wall_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
   stage_names_ = pipeline.stage_names();
@@ -223,18 +333,82 @@ void Runner<dim, State>::run(State& state, Pipeline<State>& pipeline) {
 }
 
 template <int dim, class State>
+void Runner<dim, State>::write_checkpoint(State& state, const Pipeline<State>& pipeline, int frame,
+                                          const std::filesystem::path& path) {
+  std::vector<io::CheckpointPhase<dim>> stored;
+  for (const PhaseRef<dim>& phase : phases(state)) stored.push_back({phase.name, phase.particles});
+  io::CheckpointHeader h{dim,        frame,
+                         state.step, state.time,
+                         state.dt,   scene_digest(),
+                         run_id_,    steps_at_last_frame_,
+                         inputs_,    pipeline.carried()};
+  state_checksum_ = io::save_checkpoint<dim>(path, stored, h);
+  last_checkpoint_ = std::chrono::steady_clock::now();
+  if (path.filename() != runner_detail::kStoppedCheckpoint) prune_checkpoints();
+}
+
+template <int dim, class State>
+void Runner<dim, State>::prune_checkpoints() const {
+  // The newest checkpoints_kept numbered checkpoints stay; a stopped run's checkpoint is older
+  // than the one just written.
+  std::vector<int> numbered;
+  for (const auto& entry : std::filesystem::directory_iterator(out_)) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind("checkpoint_", 0) == 0 && runner_detail::output_frame(name) >= 0)
+      numbered.push_back(runner_detail::output_frame(name));
+  }
+  std::sort(numbered.begin(), numbered.end());
+  const std::size_t kept = static_cast<std::size_t>(settings_.output.checkpoints_kept);
+  for (std::size_t i = 0; i + kept < numbered.size(); ++i)
+    std::filesystem::remove(out_ / runner_detail::numbered("checkpoint", numbered[i], ".h5"));
+  std::filesystem::remove(out_ / runner_detail::kStoppedCheckpoint);
+}
+
+template <int dim, class State>
+void Runner<dim, State>::warn_output_size(int frame) const {
+  // The files of one frame times the frames still to come: a run that would fill a disk says so
+  // at its start.
+  std::uintmax_t bytes = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(out_))
+    if (runner_detail::output_frame(entry.path().filename().string()) == frame &&
+        entry.path().filename().string().rfind("checkpoint_", 0) != 0)
+      bytes += entry.file_size();
+  const double total = double(bytes) * (settings_.frame_count() - frame + 1);
+  if (total > runner_detail::kOutputWarningBytes)
+    std::fprintf(stderr,
+                 "%s: warning: the output of this run will take about %.3g GB (%.3g MB a frame, %d frames) in '%s'; "
+                 "raise time.frame_dt or turn off output.particles / output.png to write less\n",
+                 app_.c_str(), total / 1e9, bytes / 1e6, settings_.frame_count() - frame + 1, out_.c_str());
+}
+
+template <int dim, class State>
+void Runner<dim, State>::stop(State& state, const Pipeline<State>& pipeline, int frame, bool mid_frame) {
+  const std::filesystem::path path =
+      out_ / (mid_frame ? runner_detail::kStoppedCheckpoint : runner_detail::numbered("checkpoint", frame, ".h5"));
+  if (mid_frame) write_checkpoint(state, pipeline, frame, path);
+  const int signal = StopSignals::received();
+  char where[160];
+  std::snprintf(where, sizeof where, "at t = %.6g s (step %lld, after frame %d)", state.time,
+                static_cast<long long>(state.step), frame);
+  throw StopRequested(signal, std::string("stopped by ") + (signal == SIGINT ? "SIGINT" : "SIGTERM") + " " + where +
+                                  "; checkpoint '" + path.string() + "' written: continue with --restart '" +
+                                  path.string() + "'");
+}
+
+template <int dim, class State>
 void Runner<dim, State>::write_frame(State& state, int frame) {
   const auto all = phases(state);
   if (settings_.output.particles) {
     frames_written_.emplace_back(frame, state.time);
     for (const PhaseRef<dim>& phase : all) {
       const std::string stem = runner_detail::series_stem(phase.name);
-      io::write_particles(out_ / io::particle_file_name(frame, stem), *phase.particles, state.time, frame);
+      io::write_particles(out_ / io::particle_file_name(frame, stem), *phase.particles, state.time, frame, run_id_);
       io::write_time_series_xdmf(out_, frames_written_, stem);
     }
     if constexpr (requires { state.adaptive; })  // the leaves of an adaptive grid (io/cell_output.h)
       if (state.adaptive) {
-        io::write_cells(out_ / io::particle_file_name(frame, "cells"), state.adaptive->tree(), state.time, frame);
+        io::write_cells(out_ / io::particle_file_name(frame, "cells"), state.adaptive->tree(), state.time, frame,
+                        run_id_);
         io::write_cells_time_series<dim>(out_, frames_written_);
       }
   }
@@ -278,6 +452,8 @@ void Runner<dim, State>::write_summary(const std::vector<std::pair<std::string, 
   std::vector<std::pair<std::string, std::string>> info = {{"app", app_},
                                                            {"scene_file", cl_.scene_file},
                                                            {"dim", std::to_string(dim)},
+                                                           {"run_id", run_id_},
+                                                           {"state_checksum", "0x" + state_checksum_},
                                                            {"wall_seconds", std::to_string(wall_seconds_)}};
   std::string stages;
   for (const auto& s : stage_names_) stages += (stages.empty() ? "" : ",") + s;

@@ -17,7 +17,9 @@ struct OutputSettings {
   bool png = true;                 //!< preview_NNNN.png per frame
   std::string color_by = "speed";  //!< attribute coloured in previews
   int png_width = 640;             //!< [px]
-  int checkpoint_every = 0;        //!< frames between checkpoints, 0 = only the last frame
+  int checkpoint_every = 0;        //!< frames between checkpoints, 0 = by wall-clock time only
+  double checkpoint_minutes = 10;  //!< wall-clock minutes between checkpoints (at a frame's end), 0 = off
+  int checkpoints_kept = 2;        //!< the newest checkpoint_NNNN.h5 kept; older ones are removed
 };
 
 template <int dim>

@@ -33,6 +33,11 @@ private:
   bool committed_ = false;
 };
 
+//! Writes `content` to `path` (created or truncated) with POSIX I/O, not atomically: for the
+//! temporary file of an AtomicFile. Throws IoError naming the path and errno's reason (ENOSPC,
+//! EACCES, ...).
+void write_whole_file(const std::filesystem::path& path, std::string_view content);
+
 //! Writes `content` to `path` atomically; throws IoError naming the path and the reason.
 void write_file_atomically(const std::filesystem::path& path, std::string_view content);
 

@@ -15,7 +15,8 @@
 namespace mpm::io {
 
 template <int dim>
-void write_cells(const std::filesystem::path& h5_path, const adaptive::CellTree<dim>& tree, double time, int frame);
+void write_cells(const std::filesystem::path& h5_path, const adaptive::CellTree<dim>& tree, double time, int frame,
+                 const std::string& run_id = "");
 
 //! Writes dir/cells.xdmf over the frames (frame, time [s]); each dir/cells_NNNN.h5 must exist.
 template <int dim>

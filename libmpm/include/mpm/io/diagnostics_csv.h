@@ -6,7 +6,7 @@
 //! This is the one output file that is not replaced atomically: it grows during the run, and
 //! rewriting it whole each frame would cost O(frames^2). Instead every row is flushed as it is
 //! appended, so a crashed run keeps all its complete rows; a row cut short by the crash is
-//! dropped by open_for_restart.
+//! ignored by load.
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -21,10 +21,14 @@ public:
   //! and free of commas, quotes and line breaks (InputError otherwise).
   void open(const std::filesystem::path& path, std::vector<std::string> columns);
 
-  //! Reopens the file of an earlier run for appending, keeping only the rows whose "frame"
-  //! column is <= last_frame_kept: a restart from that frame's checkpoint writes the later
-  //! rows again. `columns` must contain "frame" and equal the file's header (IoError otherwise).
-  void open_for_restart(const std::filesystem::path& path, std::vector<std::string> columns, int last_frame_kept);
+  //! Reads the file of an earlier run without changing it: every complete row (a row cut short
+  //! by a crash is ignored). `columns` must contain "frame" and equal the file's header (IoError
+  //! otherwise). column() then reads its values; keep_until() continues it.
+  void load(const std::filesystem::path& path, std::vector<std::string> columns);
+  //! After load(): rewrites the file (atomically) with the rows whose "frame" is <= last_frame_kept
+  //! and reopens it for appending, so a restart from that frame's checkpoint writes the later
+  //! rows again.
+  void keep_until(int last_frame_kept);
 
   //! Appends one row and flushes it; throws IoError when the row's length differs from the
   //! header or the write fails.

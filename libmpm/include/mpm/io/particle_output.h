@@ -7,7 +7,8 @@
 //! double channel as it is (N). That is position [m] and velocity [m/s] (x and v), mass [kg],
 //! volume0 [m^dim] and material (int32 index) for every particle set, J = det F^E and plastic
 //! (the Drucker-Prager volume correction) for solid particles (solid/solid_channels.h); and the
-//! derived speed = |v| [m/s]. Root attributes: time [s], frame, dim and "attributes" (the
+//! derived speed = |v| [m/s]. Root attributes: time [s], frame, dim, run_id (the
+//! run that wrote it, when given) and "attributes" (the
 //! datasets besides position, one a line, in the order the XDMF lists them).
 //! particles_0007.xdmf next to it describes the frame as a Polyvertex grid, and particles.xdmf
 //! gathers the frames as a time series. All files are replaced atomically (io/atomic_file.h).
@@ -26,7 +27,8 @@ std::string particle_file_name(int frame, const std::string& stem = "particles")
 
 //! Writes h5_path and its sidecar (same stem, .xdmf); time in [s].
 template <int dim>
-void write_particles(const std::filesystem::path& h5_path, const Particles<dim>& p, double time, int frame);
+void write_particles(const std::filesystem::path& h5_path, const Particles<dim>& p, double time, int frame,
+                     const std::string& run_id = "");
 
 //! Writes dir/<stem>.xdmf, a temporal collection of `frames` (frame number, time [s]). Each
 //! frame's grid is described from dir/particle_file_name(frame, stem), which must exist.

@@ -259,7 +259,7 @@ TEST_CASE_TEMPLATE("a checkpoint round trip with an extra channel of each type i
   constexpr int dim = Dim::value;
   const ScratchDir dir("round_trip" + std::to_string(dim));
   const Particles<dim> saved = with_extras<dim>(40, 7);
-  io::save_checkpoint(dir / "c.h5", saved, {dim, 1, 2, 0.5, 1e-3, "d", {}});
+  io::save_checkpoint(dir / "c.h5", saved, {dim, 1, 2, 0.5, 1e-3, "d", "1", 0, {}, {}});
 
   // Into a set that declares the same channels, seeded with other particles (they are replaced),
   // and one channel more that checkpoints do not keep: it restarts from its initial value.
@@ -281,7 +281,7 @@ TEST_CASE_TEMPLATE("a checkpoint round trip with an extra channel of each type i
 TEST_CASE("loading a checkpoint that lacks a declared channel or stores an undeclared one throws InputError") {
   const ScratchDir dir("mismatch");
   const fs::path file = dir / "c.h5";
-  io::save_checkpoint(file, with_extras<2>(6, 3), {2, 1, 2, 0.5, 1e-3, "d", {}});
+  io::save_checkpoint(file, with_extras<2>(6, 3), {2, 1, 2, 0.5, 1e-3, "d", "1", 0, {}, {}});
   io::CheckpointHeader header;
 
   Particles<2> fewer;  // declares none of the extra channels
@@ -307,7 +307,8 @@ TEST_CASE("loading a checkpoint that lacks a declared channel or stores an undec
 
   // A phase: the message names it.
   const Particles<2> grains = with_extras<2>(4, 4);
-  io::save_checkpoint<2>(dir / "two.h5", {{"fluid", &fewer}, {"sediment", &grains}}, {2, 1, 2, 0.5, 1e-3, "d", {}});
+  io::save_checkpoint<2>(dir / "two.h5", {{"fluid", &fewer}, {"sediment", &grains}},
+                         {2, 1, 2, 0.5, 1e-3, "d", "1", 0, {}, {}});
   const std::string phase =
       error_of<InputError>([&] { io::load_checkpoint(dir / "two.h5", header, fewer, "sediment"); });
   CHECK(contains(phase, "phase 'sediment' stores the particle channel 'age'"));

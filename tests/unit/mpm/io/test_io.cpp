@@ -5,6 +5,7 @@
 #include <mpm/io/atomic_file.h>
 #include <mpm/io/cell_output.h>
 #include <mpm/io/checkpoint.h>
+#include <mpm/io/checksum.h>
 #include <mpm/io/diagnostics_csv.h>
 #include <mpm/io/particle_output.h>
 #include <mpm/io/png_preview.h>
@@ -232,7 +233,11 @@ TEST_CASE("every writer throws IoError naming its target and leaves no file when
   };
   CHECK(throws_naming([&] { io::write_particles(folder / "particles_0000.h5", p, 0.0, 0); },
                       folder / "particles_0000.h5"));
-  CHECK(throws_naming([&] { io::save_checkpoint(folder / "c.h5", p, {2, 0, 0, 0.0, 0.0, "", {}}); }, folder / "c.h5"));
+  CHECK(throws_naming(
+      [&] {
+        io::save_checkpoint(folder / "c.h5", p, {2, 0, 0, 0.0, 0.0, "", "1", 0, {}, {}});
+      },
+      folder / "c.h5"));
   CHECK(throws_naming([&] { io::write_png_preview(folder / "p.png", p, {}); }, folder / "p.png"));
   CHECK(throws_naming([&] { io::write_summary(folder / "s.json", {}, {}, {}); }, folder / "s.json"));
   CHECK(throws_naming([&] { io::DiagnosticsCsv().open(folder / "d.csv", {"frame"}); }, folder / "d.csv"));
@@ -252,6 +257,9 @@ TEST_CASE_TEMPLATE("checkpoint round trip is bit-identical", Dim, std::integral_
                                      0.1 + 0.2,
                                      1.0 / 3.0,
                                      "sha256:abc",
+                                     "123456789",
+                                     3456789012000,
+                                     {{"obstacles.0.file", "/data/pipe.obj", "00ff00ff00ff00ff"}},
                                      {{"3.pressure/p", {0.1, -2.5e-300, 7.0}}, {"empty", {}}}};
     io::save_checkpoint(dir / "c.h5", p, saved);
     io::CheckpointHeader loaded;
@@ -277,12 +285,15 @@ TEST_CASE_TEMPLATE("checkpoint round trip is bit-identical", Dim, std::integral_
     CHECK(loaded.dt_previous == saved.dt_previous);
     CHECK(loaded.scene_digest == saved.scene_digest);
     CHECK(loaded.stage_data == saved.stage_data);
+    CHECK(loaded.run_id == saved.run_id);
+    CHECK(loaded.frame_step == saved.frame_step);
+    CHECK(loaded.inputs == saved.inputs);
     CHECK(dir.entries() == std::vector<std::string>{"c.h5"});
   }
   SUBCASE("several phases in one file, each in its group") {
     const Particles<dim> fluid = random_particles<dim>(30, false, 8), grains = random_particles<dim>(20, true, 9);
     io::save_checkpoint<dim>(dir / "two.h5", {{"fluid", &fluid}, {"sediment", &grains}},
-                             {dim, 1, 2, 0.5, 1e-3, "d", {}});
+                             {dim, 1, 2, 0.5, 1e-3, "d", "1", 0, {}, {}});
     io::CheckpointHeader header;
     Particles<dim> f = declared<dim>(false), g = declared<dim>(true);
     io::load_checkpoint(dir / "two.h5", header, f, "fluid");
@@ -304,7 +315,7 @@ TEST_CASE_TEMPLATE("checkpoint round trip is bit-identical", Dim, std::integral_
   }
   SUBCASE("an empty particle set keeps its channels") {
     for (const bool deformation : {false, true}) {
-      io::save_checkpoint(dir / "empty.h5", declared<dim>(deformation), {dim, 0, 0, 0.0, 0.0, "", {}});
+      io::save_checkpoint(dir / "empty.h5", declared<dim>(deformation), {dim, 0, 0, 0.0, 0.0, "", "1", 0, {}, {}});
       io::CheckpointHeader header;
       Particles<dim> q = random_particles<dim>(4, deformation, 12);
       io::load_checkpoint(dir / "empty.h5", header, q);
@@ -322,7 +333,7 @@ TEST_CASE("loading a wrong, missing or corrupt checkpoint throws naming the file
     return std::string(e.what()).find(file.string()) != std::string::npos;
   };
   io::CheckpointHeader header;
-  io::save_checkpoint(dir / "3d.h5", random_particles<3>(10, true, 1), {3, 1, 2, 0.5, 1e-3, "d", {}});
+  io::save_checkpoint(dir / "3d.h5", random_particles<3>(10, true, 1), {3, 1, 2, 0.5, 1e-3, "d", "1", 0, {}, {}});
   Particles<2> in_2d = declared<2>(true);
   Particles<3> in_3d = declared<3>(true);
 
@@ -355,6 +366,55 @@ TEST_CASE("loading a wrong, missing or corrupt checkpoint throws naming the file
 
   io::write_particles(dir / "particles_0000.h5", random_particles<3>(4, false, 2), 0.0, 0);
   CHECK_THROWS_AS(io::load_checkpoint(dir / "particles_0000.h5", header, in_3d), InputError);
+}
+
+TEST_CASE("a checkpoint changed after it was written is refused by its checksums") {
+  const ScratchDir dir("changed_checkpoint");
+  const Particles<3> p = random_particles<3>(10, true, 1);
+  io::save_checkpoint(dir / "c.h5", p, {3, 1, 2, 0.5, 1e-3, "d", "1", 0, {}, {{"stage/x", {4.25}}}});
+  const std::string whole = read_text(dir / "c.h5");
+  // The bytes of a double, found in the file and replaced in place: the file stays a valid HDF5
+  // file with the same datasets, only one value differs (as an edit with an HDF5 tool would).
+  const auto changed = [&](double from, double to) {
+    std::string bytes(sizeof(double), '\0'), replacement(sizeof(double), '\0');
+    std::memcpy(bytes.data(), &from, sizeof(double));
+    std::memcpy(replacement.data(), &to, sizeof(double));
+    const std::size_t at = whole.find(bytes);
+    REQUIRE(at != std::string::npos);
+    REQUIRE(whole.find(bytes, at + 1) == std::string::npos);
+    std::string text = whole;
+    text.replace(at, sizeof(double), replacement);
+    return text;
+  };
+  io::CheckpointHeader header;
+  Particles<3> into = declared<3>(true);
+  io::load_checkpoint(dir / "c.h5", header, into);  // the original loads
+  write_text(dir / "mass.h5", changed(p.mass[3], 1000 * p.mass[3]));
+  CHECK_THROWS_WITH_AS(io::load_checkpoint(dir / "mass.h5", header, into),
+                       doctest::Contains("checksum of its particle data"), IoError);
+  write_text(dir / "stage.h5", changed(4.25, 4.5));
+  CHECK_THROWS_WITH_AS(io::load_checkpoint(dir / "stage.h5", header, into), doctest::Contains("header checksum"),
+                       IoError);
+  CHECK(header.stage_data.front().second == std::vector<double>{4.25});  // untouched by the refused loads
+}
+
+TEST_CASE("the content checksum sees one changed bit, the order of pieces and their lengths") {
+  const auto of = [](std::initializer_list<std::string_view> pieces) {
+    io::Checksum sum;
+    for (const auto piece : pieces) sum.add(piece);
+    return sum.value();
+  };
+  CHECK(of({"abcdefghij"}) == of({"abcdefghij"}));
+  CHECK(of({"abcdefghij"}) != of({"abcdefghik"}));
+  CHECK(of({"ab", "c"}) != of({"a", "bc"}));
+  CHECK(of({""}) != of({"", ""}));
+  std::vector<double> values(1000, 1.0);
+  io::Checksum a, b;
+  a.add(values.data(), values.size() * sizeof(double));
+  values[517] = std::nextafter(1.0, 2.0);
+  b.add(values.data(), values.size() * sizeof(double));
+  CHECK(a.value() != b.value());
+  CHECK(a.hex().size() == 16);
 }
 
 TEST_CASE("particle HDF5 file holds the documented datasets") {
@@ -555,18 +615,24 @@ TEST_CASE("diagnostics CSV: full precision, fixed row length, restart truncation
   CHECK(std::signbit(rows[6][1]));
   CHECK(rows[6][2] == std::numeric_limits<double>::denorm_min());
 
-  // A crash mid-row leaves an incomplete last line; the restart drops it with the later frames.
+  // A crash mid-row leaves an incomplete last line; load ignores it and changes nothing, the
+  // restart then drops the later frames.
   std::ofstream(dir / "d.csv", std::ios::app) << "7,0.7000";
+  const std::string before = read_text(dir / "d.csv");
   io::DiagnosticsCsv restarted;
-  restarted.open_for_restart(dir / "d.csv", columns, 2);
+  restarted.load(dir / "d.csv", columns);
+  CHECK(restarted.column("frame").size() == 7);
+  CHECK(read_text(dir / "d.csv") == before);
+  restarted.keep_until(2);
+  CHECK(restarted.column("frame") == std::vector<double>{0, 1, 2});
   restarted.append(row(3));
   CHECK(read_text(dir / "d.csv") ==
         "frame,time,energy\n0,0,0.33333333333333331\n"
         "1,0.10000000000000001,0.25\n2,0.20000000000000001,0.20000000000000001\n"
         "3,0.30000000000000004,0.16666666666666666\n");
 
-  CHECK_THROWS_AS(io::DiagnosticsCsv().open_for_restart(dir / "d.csv", {"frame", "time"}, 2), IoError);
-  CHECK_THROWS_AS(io::DiagnosticsCsv().open_for_restart(dir / "none.csv", columns, 2), IoError);
+  CHECK_THROWS_AS(io::DiagnosticsCsv().load(dir / "d.csv", {"frame", "time"}), IoError);
+  CHECK_THROWS_AS(io::DiagnosticsCsv().load(dir / "none.csv", columns), IoError);
   CHECK_THROWS_AS(io::DiagnosticsCsv().open(dir / "e.csv", {"a,b"}), InputError);
 }
 
