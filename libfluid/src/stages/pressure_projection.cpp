@@ -177,6 +177,7 @@ void PressureProjection<dim>::run(mpm::MpmState<dim>& s) {
               << s.step << "; said once per run, diagnostics.csv flags every such solve (pressure_round_off = 1)\n";
   }
   if (!result_.converged) {
+    ++unconverged_;
     if (settings_.on_failure == OnFailure::stop) throw mpm::NumericalError(failure(s, *solved_by));
     std::cerr << "warning: " << failure(s, *solved_by) << "\n";
   }

@@ -16,7 +16,8 @@ int run_app(int argc, char** argv, const std::string& app_name, const std::strin
   const CommandLine cl = parse_command_line(argc, argv, app_name, description);
   if (cl.max_memory_gb) cap_memory(*cl.max_memory_gb * 1e9);
   try {
-    return body(cl);
+    const int code = body(cl);
+    return code == 0 && cl.check && any_check_failed() ? 1 : code;
   } catch (const StopRequested& e) {
     std::cerr << "\n" << app_name << ": " << e.what() << "\n";
     return 128 + e.signal();
@@ -43,8 +44,15 @@ int run_scene_app(int argc, char** argv, const std::string& app_name, const std:
   });
 }
 
+namespace {
+bool g_check_failed = false;
+}  // namespace
+
+bool any_check_failed() { return g_check_failed; }
+
 bool check_value(const std::string& name, double value, double expected, double tolerance) {
   const bool ok = std::fabs(value - expected) <= tolerance;
+  if (!ok) g_check_failed = true;
   std::fprintf(stderr, "check %s: %.6g (expected %.6g, tolerance %.3g) %s\n", name.c_str(), value, expected, tolerance,
                ok ? "ok" : "FAILED");
   return ok;

@@ -57,11 +57,12 @@ public:
     std::vector<double> box;
     for (int a = 0; a < dim; ++a) box.push_back(box_lo_[a]);
     for (int a = 0; a < dim; ++a) box.push_back(op_.cells[a]);
-    return {{"pressure", p_}, {"box", box}};
+    return {{"pressure", p_}, {"box", box}, {"unconverged", {double(unconverged_)}}};
   }
   void restore(const mpm::CarriedData& data) override {
     for (const auto& [name, values] : data) {
       if (name == "pressure") p_ = values;
+      if (name == "unconverged" && values.size() == 1) unconverged_ = static_cast<std::int64_t>(values[0]);
       if (name == "box" && values.size() == 2 * dim)
         for (int a = 0; a < dim; ++a) {
           box_lo_[a] = static_cast<int>(values[a]);
@@ -89,11 +90,14 @@ public:
   bool stopped_at_round_off() const { return stopped_at_round_off_; }
   const PressureSettings& settings() const { return settings_; }
   //! pressure_iterations, pressure_residual (relative) and pressure_round_off (1 when the solve
-  //! stopped at its round-off floor above the tolerance) of the last solve.
+  //! stopped at its round-off floor above the tolerance) of the last solve; pressure_unconverged:
+  //! the solves so far (a restart included) that did not converge (pressure.on_failure: warn).
+  //! An app's --check fails when it is not 0.
   std::vector<mpm::Diagnostic> diagnostics() const override {
     return {{"pressure_iterations", double(result_.iterations)},
             {"pressure_residual", result_.relative_residual},
-            {"pressure_round_off", stopped_at_round_off_ ? 1.0 : 0.0}};
+            {"pressure_round_off", stopped_at_round_off_ ? 1.0 : 0.0},
+            {"pressure_unconverged", double(unconverged_)}};
   }
 
 private:
@@ -113,6 +117,7 @@ private:
   std::vector<Vec<dim>> u_;
   SolveResult result_;
   bool stopped_at_round_off_ = false;
+  std::int64_t unconverged_ = 0;  //!< solves that did not converge, over the run
   bool round_off_reported_ = false;
 };
 

@@ -23,7 +23,11 @@ int run_scene_app(int argc, char** argv, const std::string& app_name, const std:
                   SceneRunner run_2d, SceneRunner run_3d);
 
 //! Prints "check <name>: value (expected ..., tolerance ...) ok|FAILED" and returns whether
-//! |value - expected| <= tolerance.
+//! |value - expected| <= tolerance. A failed check is also recorded: run_app then exits with 1
+//! under --check even when the app's own verdict was 0, so checks made outside the app (the
+//! Runner's solves_converged) cannot be lost.
 bool check_value(const std::string& name, double value, double expected, double tolerance);
+//! Whether a check_value of this process failed.
+bool any_check_failed();
 
 }  // namespace mpm

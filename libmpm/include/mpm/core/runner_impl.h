@@ -4,6 +4,7 @@
 //! for CoupledState (`template class mpm::Runner<dim, MyState>;` in one translation unit, with a
 //! `phases(MyState&)` found by argument-dependent lookup, state.h).
 #include <mpm/core/advance.h>
+#include <mpm/core/app.h>
 #include <mpm/core/error.h>
 #include <mpm/core/runner.h>
 #include <mpm/core/stop_signals.h>
@@ -309,6 +310,12 @@ void Runner<dim, State>::run(State& state, Pipeline<State>& pipeline) {
   // (the same state), so that summary.json names the state's checksum as after any run.
   if (state_checksum_.empty())
     write_checkpoint(state, pipeline, first_frame, out_ / runner_detail::numbered("checkpoint", first_frame, ".h5"));
+
+  // Under --check, every solve of the run must have converged: a stage that may go on past a
+  // failed solve (on_failure: warn) counts them in a column "<solve>_unconverged".
+  if (cl_.check)
+    for (const std::string& column : csv_.columns())
+      if (column.ends_with("_unconverged")) check_value(column, csv_.column(column).back(), 0.0, 0.0);
 
   wall_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
   stage_names_ = pipeline.stage_names();

@@ -55,7 +55,8 @@ template <int dim>
 std::vector<Diagnostic> ImplicitUpdate<dim>::diagnostics() const {
   return {{"newton_iterations", double(last_.newton_iterations)},
           {"linear_iterations", double(last_.linear_iterations)},
-          {"newton_residual", last_.residual}};
+          {"newton_residual", last_.residual},
+          {"newton_unconverged", double(unconverged_)}};
 }
 
 namespace {
@@ -420,6 +421,7 @@ void ImplicitUpdate<dim>::run(MpmState<dim>& s) {
   }
 
   if (!last_.converged) {
+    ++unconverged_;
     std::ostringstream why;
     why << "stage '" << name() << "': Newton did not converge in " << last_.newton_iterations << " iterations ("
         << (stalled.empty() ? "iteration cap" : stalled) << "; relative residual " << last_.residual << ", tolerance "

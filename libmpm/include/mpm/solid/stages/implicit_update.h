@@ -41,8 +41,15 @@ public:
   std::vector<std::string> writes() const override { return {"grid.velocity"}; }
   void run(MpmState<dim>& s) override;
   //! newton_iterations, linear_iterations (CG or GMRES, summed over the step's Newton iterations) and
-  //! newton_residual (the last step's final relative residual, compare with `tolerance`).
+  //! newton_residual (the last step's final relative residual, compare with `tolerance`);
+  //! newton_unconverged: steps so far (a restart included) whose Newton solve did not converge
+  //! (implicit.on_failure: warn). An app's --check fails when it is not 0.
   std::vector<Diagnostic> diagnostics() const override;
+  CarriedData carried() const override { return {{"unconverged", {double(unconverged_)}}}; }
+  void restore(const CarriedData& data) override {
+    for (const auto& [key, values] : data)
+      if (key == "unconverged" && values.size() == 1) unconverged_ = static_cast<std::int64_t>(values[0]);
+  }
   //! The line search's merit at the start and after each Newton iteration of the last step:
   //! the incremental potential, or |g|^2_{M^-1} / 2 when a material is plastic.
   const std::vector<double>& merit_history() const { return history_; }
@@ -79,6 +86,7 @@ private:
   geometry::ColliderSet<dim> colliders_;
   ImplicitSettings settings_;
   Outcome last_;
+  std::int64_t unconverged_ = 0;
   std::vector<double> history_;
   // Per-particle work arrays, kept between steps to avoid reallocation.
   std::vector<Mat<dim>> grad_, trial_F_, weighted_stress_, differential_stress_;
