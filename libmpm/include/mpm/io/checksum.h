@@ -22,7 +22,7 @@ public:
       mix(word);
     }
     std::uint64_t tail = 0;
-    std::memcpy(&tail, p + i, bytes - i);
+    if (i < bytes) std::memcpy(&tail, p + i, bytes - i);   // no memcpy from the null data of an empty vector
     mix(tail ^ (static_cast<std::uint64_t>(bytes) << 3));  // the length separates "ab" + "c" from "a" + "bc"
   }
   void add(std::string_view text) { add(text.data(), text.size()); }
