@@ -55,11 +55,8 @@ class Faults:
         return [app or self.collapse, str(scene or self.scene), "--out", str(out)] + BASE + list(extra)
 
     def run(self, out, extra=(), **kw):
-        done = subprocess.run(self.command(out, extra, **kw), capture_output=True, text=True, **self.limits())
+        done = subprocess.run(self.command(out, extra, **kw), capture_output=True, text=True)
         return done.returncode, done.stderr.strip().splitlines()[-1] if done.stderr.strip() else ""
-
-    def limits(self):
-        return {}
 
     def start(self, out, extra=()):
         return subprocess.Popen(self.command(out, extra), stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
@@ -97,12 +94,10 @@ class Faults:
         return stopped if stopped.exists() else (numbered[-1] if numbered else None)
 
     def continue_run(self, out, extra=()):
-        """Restarts from the newest checkpoint (a fresh run when there is none) until one finishes."""
-        for _ in range(5):
-            checkpoint = self.newest_checkpoint(out)
-            code, line = self.run(out, list(extra) + (["--restart", str(checkpoint)] if checkpoint else []))
-            if code == 0:
-                return checkpoint
+        """Restarts from the newest checkpoint (a fresh run when there is none) to the end."""
+        checkpoint = self.newest_checkpoint(out)
+        code, line = self.run(out, list(extra) + (["--restart", str(checkpoint)] if checkpoint else []))
+        if code != 0:
             raise RuntimeError(f"the continued run failed ({code}): {line}")
 
     # --- the cases -----------------------------------------------------------------------------
@@ -185,12 +180,14 @@ class Faults:
 
     @staticmethod
     def scale_one_mass(data):
-        # Every particle of the column has the same mass: find its bytes (the first double in the
-        # file that occurs once per particle) and scale the first occurrence by 1000.
+        # Every particle of the column has the same mass and the same volume0: the two doubles
+        # that occur once per particle. The mass is the larger (density > 1 kg/m^3); its first
+        # occurrence is scaled by 1000.
         counts = {}
         for i in range(0, len(data) - 8, 8):
             counts[bytes(data[i:i + 8])] = counts.get(bytes(data[i:i + 8]), 0) + 1
-        value = max((v for v in counts if 1e-6 < abs(struct.unpack("<d", v)[0]) < 1e3), key=counts.get)
+        candidates = [v for v in counts if 1e-9 < abs(struct.unpack("<d", v)[0]) < 1e6]
+        value = max(candidates, key=lambda v: (counts[v], abs(struct.unpack("<d", v)[0])))
         at = bytes(data).find(value)
         data[at:at + 8] = struct.pack("<d", struct.unpack("<d", value)[0] * 1000)
 
