@@ -11,8 +11,10 @@
 // normalized_runout (L_inf - L0)/L0, duration (time until the kinetic energy falls below 1e-6
 // of its peak), runout_law_error |normalized - law| / law, particles (the final count).
 // --check compares normalized_runout with the 2D runout law of Lube et al. 2005 (PRE 72,
-// 041301): 1.2 a for a < 2.3, 1.9 a^(2/3) above, within +-50 % (the spread between published
-// experiments; data/reference/lube2005.md).
+// 041301): 1.2 a for a < 2.3, 1.9 a^(2/3) above, within +-25 % (data/reference/lube2005.md:
+// the smoke run a = 1, 10 cells per width is 15 % below the law at friction angle 32 deg and
+// 46 % below at 45 deg; +-50 % passed both). The default scene (a = 2, 20 cells) runs out 44 %
+// beyond the law and fails this check: data/reference/lube2005.md.
 #include <mpm/core/app.h>
 #include <mpm/core/runner.h>
 #include <mpm/geometry/body_config.h>
@@ -31,6 +33,8 @@ using namespace mpm;
 namespace {
 
 double lube_runout_law(double a) { return a < 2.3 ? 1.2 * a : 1.9 * std::cbrt(a * a); }
+//! --check: |normalized runout - law| <= runout_tolerance * law (measurements in lube2005.md).
+constexpr double runout_tolerance = 0.25;
 
 //! The deposit front [m]: the far edge of the contiguous run of dx-wide slabs, from the back
 //! wall, that each hold at least half a layer of material (`layer` [m^dim] of initial
@@ -141,7 +145,7 @@ int run(const CommandLine& cl, const Config& scene) {
                         {"runout_law_error", std::fabs(normalized - lube_runout_law(a)) / lube_runout_law(a)}});
   if (cl.check) {
     const double law = lube_runout_law(a);
-    return check_value("normalized_runout", normalized, law, 0.5 * law) ? 0 : 1;
+    return check_value("normalized_runout", normalized, law, runout_tolerance * law) ? 0 : 1;
   }
   return 0;
 }
