@@ -2,7 +2,7 @@
 // a closed column of fluid settles under gravity (coupling/settling_column.h for the keys).
 //
 //   settling data/scenes/settling.yaml
-//   settling data/scenes/settling.yaml --set sediment.volume_fraction=0.2 --set drag.law=schiller_naumann
+//   settling data/scenes/settling.yaml --set sediment.volume_fraction=0.3 --set drag.law=stokes
 //
 // Output as every app (mpm/core/runner.h; fluid_ and sediment_NNNN.h5, previews, checkpoints);
 // diagnostics.csv adds settling_velocity (mean downward velocity of the grains above the
@@ -13,10 +13,14 @@
 //   terminal_velocity_stokes = (rho_s - rho_w) g d^2 / (18 mu), hindered_velocity (the speed
 //   the drag law implies, settling_column.h), reynolds_number = rho_w v d / mu, the relative
 //   errors hindered_velocity_error = |v / hindered_velocity - 1| and richardson_zaki_error =
-//   |v / richardson_zaki_velocity - 1|, richardson_zaki_velocity = n_w^4.65 v_St (Richardson &
-//   Zaki 1954, low-Re exponent; data/reference/richardson_zaki1954.md).
-// --check: settling_velocity within 10 % of hindered_velocity. For the Stokes and the
-// Schiller-Naumann laws at low Re this is n_w^2 v_St (n_w = 1 - phi; docs/coupling.md).
+//   |v / richardson_zaki_velocity - 1|; richardson_zaki_velocity = n_w^n v_t, the measurement
+//   of Richardson & Zaki 1954 (n_w = 1 - phi, terminal_velocity v_t of one grain on the
+//   standard drag curve, richardson_zaki_exponent n from their correlation at its Reynolds
+//   number; data/reference/richardson_zaki1954.md).
+// --check: settling_velocity within 10 % of hindered_velocity (the column solves its drag law)
+// and, for phi <= 0.4, within 10 % of richardson_zaki_velocity (the law reproduces the
+// experiment: the default richardson_zaki law does, the dilute stokes and schiller_naumann laws
+// only while phi is small).
 #include <coupling/coupled_runner.h>
 #include <coupling/settling_column.h>
 #include <mpm/core/app.h>
@@ -24,12 +28,15 @@
 #include <mpm/core/error.h>
 
 #include <cmath>
+#include <cstdio>
 #include <string>
 #include <vector>
 
 using namespace mpm;
 
 namespace {
+
+constexpr double richardson_zaki_max_fraction = 0.4;  //!< --check compares with Richardson-Zaki up to here
 
 template <int dim>
 int run(const CommandLine& cl, const Config& scene) {
@@ -71,19 +78,31 @@ int run(const CommandLine& cl, const Config& scene) {
   const double settling = sum_v / n;
   const double interface = -(n * sth - st * sh) / (n * stt - st * st);
   const double hindered = col.column.hindered_velocity();
-  const double richardson_zaki = std::pow(1.0 - col.column.volume_fraction, 4.65) * col.column.stokes_velocity();
-  runner.write_summary({{"settling_velocity", settling},
-                        {"interface_velocity", interface},
-                        {"terminal_velocity_stokes", col.column.stokes_velocity()},
-                        {"hindered_velocity", hindered},
-                        {"hindered_velocity_error", std::abs(settling / hindered - 1.0)},
-                        {"richardson_zaki_velocity", richardson_zaki},
-                        {"richardson_zaki_error", std::abs(settling / richardson_zaki - 1.0)},
-                        {"reynolds_number", col.column.reynolds(settling)},
-                        {"window_frames", double(n)}});
+  const double richardson_zaki = col.column.richardson_zaki_velocity(), terminal = col.column.terminal_velocity();
+  runner.write_summary(
+      {{"settling_velocity", settling},
+       {"interface_velocity", interface},
+       {"terminal_velocity_stokes", col.column.stokes_velocity()},
+       {"hindered_velocity", hindered},
+       {"hindered_velocity_error", std::abs(settling / hindered - 1.0)},
+       {"terminal_velocity", terminal},
+       {"richardson_zaki_exponent", coupling::drag::richardson_zaki_exponent(col.column.reynolds(terminal))},
+       {"richardson_zaki_velocity", richardson_zaki},
+       {"richardson_zaki_error", std::abs(settling / richardson_zaki - 1.0)},
+       {"reynolds_number", col.column.reynolds(settling)},
+       {"window_frames", double(n)}});
   if (cl.check) {
     const bool converged = check_pressure_converged(runner);
-    return check_value("settling_velocity", settling, hindered, 0.1 * hindered) && converged ? 0 : 1;
+    const bool law = check_value("settling_velocity", settling, hindered, 0.1 * hindered);
+    // Richardson-Zaki is checked over the fractions this code is verified for (docs/accuracy.md);
+    // near packing the kernel's fractions reach the clamp n_min and the comparison means little.
+    const bool compared = col.column.volume_fraction <= richardson_zaki_max_fraction;
+    const bool experiment =
+        !compared || check_value("settling_velocity_richardson_zaki", settling, richardson_zaki, 0.1 * richardson_zaki);
+    if (!compared)
+      std::fprintf(stderr, "check settling_velocity_richardson_zaki: not compared (phi = %g > %g)\n",
+                   col.column.volume_fraction, richardson_zaki_max_fraction);
+    return law && experiment && converged ? 0 : 1;
   }
   return 0;
 }

@@ -180,6 +180,35 @@ TEST_CASE("dilute Stokes suspension settles at the velocity of the drag law") {
   CHECK(std::abs(v / expected - 1.0) < 0.05);
 }
 
+TEST_CASE("hindered settling: the default drag law reproduces Richardson-Zaki for phi = 0.01 to 0.4") {
+  // d = 0.1 mm (terminal Re 0.8, Richardson-Zaki exponent 4.38), 16 cells across. The
+  // richardson_zaki law (the scene default) must settle within 10 % of n_w^n v_t at every
+  // fraction; the dilute Stokes law must miss it in the dense suspensions (n_w^2 instead of
+  // n_w^4.4), which shows that the comparison can fail.
+  const auto settle = [](double phi, const std::string& law) {
+    SettlingScene<2> col = load_settling_column<2>(settling_scene(
+        {"drag.law=" + law, "sediment.volume_fraction=" + std::to_string(phi), "column.cells_per_width=16"}));
+    auto pipeline = make_coupled_pipeline(col.scene);
+    CoupledState<2>& s = col.scene.state;
+    double sum = 0.0;
+    int n = 0;
+    for (double t = 0.1; t <= 0.4 + 1e-12; t += 0.05) {
+      mpm::advance(s, pipeline, t);
+      sum += mean_sediment_velocity(s, 2.0 * s.fluid.grid.dx());
+      ++n;
+    }
+    return std::pair{-sum / n, col.column.richardson_zaki_velocity()};
+  };
+  for (const double phi : {0.01, 0.1, 0.2, 0.3, 0.4}) {
+    const auto [v, v_rz] = settle(phi, "richardson_zaki");
+    MESSAGE("phi " << phi << ": settling " << v << " m/s, Richardson-Zaki " << v_rz << " m/s");
+    CHECK(std::abs(v / v_rz - 1.0) < 0.10);
+  }
+  const auto [v, v_rz] = settle(0.3, "stokes");
+  MESSAGE("stokes drag, phi 0.3: settling " << v << " m/s, Richardson-Zaki " << v_rz << " m/s");
+  CHECK(v > 1.5 * v_rz);
+}
+
 TEST_CASE("the settling column is closed: a periodic axis is refused with its key") {
   const std::vector<std::string> open_sides = {"walls.x_min=open", "walls.x_max=open", "periodic=[true, false]"};
   CHECK_THROWS_WITH_AS(load_settling_column<2>(settling_scene(open_sides)),

@@ -36,6 +36,12 @@ struct SettlingColumn {
   //! n_w v_w + n_s v_s = 0, so the slip is u = v_s / n_w (docs/coupling.md): v_s = n_w u, u the
   //! root of beta(n_w, u) u = n_s n_w (rho_s - rho_w) g (bisection; beta u grows with u).
   double hindered_velocity() const;
+  //! Terminal velocity of one grain in unbounded fluid with the standard drag curve
+  //! (Schiller-Naumann Cd) [m/s]: the root of (3/4) (mu / d^2) Cd Re v = (rho_s - rho_w) g.
+  double terminal_velocity() const;
+  //! The measured settling speed of Richardson & Zaki (1954), n_w^n v_t, with v_t the terminal
+  //! velocity above and n their correlation at Re_t = reynolds(v_t) (drag/richardson_zaki.h) [m/s].
+  double richardson_zaki_velocity() const;
   //! Grain Reynolds number rho_w v d / mu of a settling speed v [m/s].
   double reynolds(double velocity) const;
 };

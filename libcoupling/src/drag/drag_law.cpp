@@ -33,13 +33,16 @@ DragLaw make_drag_law(const std::string& name, const DragParameters& p) { return
 
 DragLaw parse_drag_law(const mpm::Config& scene) {
   const mpm::Config drag = scene.child("drag");
-  const std::string name = drag.choice("law", std::string(SchillerNaumann::name), drag_law_names());
+  const std::string name = drag.choice("law", std::string(RichardsonZaki::name), drag_law_names());
   DragParameters p;
   p.diameter = drag.number("grain_diameter", mpm::Range::positive());
   const mpm::Config fluid = scene.child("fluid");
   p.density = fluid.number("density", mpm::Range::positive());
   p.viscosity = fluid.number("viscosity", mpm::Range::positive());
-  return make_drag_law(name, p);
+  DragLaw law = make_drag_law(name, p);
+  if (auto* hindered = std::get_if<RichardsonZaki>(&law))
+    hindered->exponent = drag.number("exponent", RichardsonZaki::low_reynolds_exponent, mpm::Range::closed(2.0, 6.0));
+  return law;
 }
 
 double beta(const DragLaw& law, double n_w, double slip) {

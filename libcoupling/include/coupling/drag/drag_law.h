@@ -5,14 +5,17 @@
 //!   double beta(double n_w, double slip) const;   // [kg/(m^3 s)], >= 0
 //! (conventions in drag_parameters.h). Scene keys:
 //!   drag:
-//!     law: schiller_naumann   # stokes | schiller_naumann (default) | di_felice | gidaspow
+//!     law: richardson_zaki    # richardson_zaki (default) | stokes | schiller_naumann |
+//!                             # di_felice | gidaspow
 //!     grain_diameter: 2.0e-4  # d [m] > 0
+//!     exponent: 4.65          # n in [2, 6], richardson_zaki only
 //!   fluid:
 //!     density: 1000           # rho_w [kg/m^3] > 0 (the fluid scene's key)
 //!     viscosity: 1.0e-3       # mu [Pa s] > 0 (the fluid scene's key; drag needs mu > 0)
 #include <coupling/drag/di_felice.h>
 #include <coupling/drag/drag_parameters.h>
 #include <coupling/drag/gidaspow.h>
+#include <coupling/drag/richardson_zaki.h>
 #include <coupling/drag/schiller_naumann.h>
 #include <coupling/drag/stokes.h>
 #include <mpm/core/config.h>
@@ -23,7 +26,7 @@
 
 namespace coupling::drag {
 
-using DragLaw = std::variant<Stokes, SchillerNaumann, DiFelice, Gidaspow>;
+using DragLaw = std::variant<RichardsonZaki, Stokes, SchillerNaumann, DiFelice, Gidaspow>;
 
 //! Scene-file names of the alternatives, in variant order.
 std::vector<std::string> drag_law_names();
@@ -31,7 +34,8 @@ std::vector<std::string> drag_law_names();
 //! The law called `name` (one of drag_law_names()) with parameters `p`; InputError otherwise.
 DragLaw make_drag_law(const std::string& name, const DragParameters& p);
 
-//! Reads `drag.law`, `drag.grain_diameter`, `fluid.density` and `fluid.viscosity` of a scene;
+//! Reads `drag.law`, `drag.grain_diameter` (and `drag.exponent` of richardson_zaki),
+//! `fluid.density` and `fluid.viscosity` of a scene;
 //! a missing key, an unknown law or a value out of range is an InputError naming the file,
 //! line, key, value and accepted range.
 DragLaw parse_drag_law(const mpm::Config& scene);

@@ -47,6 +47,17 @@ TEST_CASE("each law reproduces its published formula at hand-computed points") {
   CHECK(Gidaspow{kSand}.beta(0.6, 0.05) == doctest::Approx(1175000.0).epsilon(1e-13));
   // Gidaspow, Wen-Yu branch: n_w = 0.9, u = 0.05: Schiller-Naumann value above times 0.9^-2.65.
   CHECK(Gidaspow{kSand}.beta(0.9, 0.05) == doctest::Approx(99869.77358843542).epsilon(1e-13));
+  // Richardson-Zaki with n = 4.65: the same Wen-Yu value, now also below n_w = 0.8 (n_w = 0.6,
+  // u = 0.05 -> Re = 6, Cd = 24/6 (1 + 0.15 6^0.687), times 0.6^-2.65); with n = 3: 0.6^-1.
+  CHECK(RichardsonZaki{kSand}.beta(0.9, 0.05) == doctest::Approx(99869.77358843542).epsilon(1e-13));
+  CHECK(RichardsonZaki{kSand}.beta(0.6, 0.05) == doctest::Approx(1054877.1024892002).epsilon(1e-12));
+  CHECK(RichardsonZaki{kSand, 3.0}.beta(0.6, 0.05) == doctest::Approx(454099.92338210373).epsilon(1e-12));
+  // Their exponent correlation (wide column): 4.65 below Re_t = 0.2, 4.35 Re^-0.03 to 1,
+  // 4.45 Re^-0.1 to 500, 2.39 above.
+  CHECK(richardson_zaki_exponent(0.1) == 4.65);
+  CHECK(richardson_zaki_exponent(0.5) == doctest::Approx(4.35 * std::pow(0.5, -0.03)).epsilon(1e-15));
+  CHECK(richardson_zaki_exponent(10.0) == doctest::Approx(3.5347606445230526).epsilon(1e-13));
+  CHECK(richardson_zaki_exponent(1000.0) == 2.39);
 }
 
 TEST_CASE("the Stokes limit of every law has the documented n_w factors") {
@@ -73,6 +84,13 @@ TEST_CASE("hindered settling implied at low Re: v_s / v_Stokes = n_w^2 beta_Stok
     CHECK(ratio(Gidaspow{kSand}.beta(n_w, 0.0)) == doctest::Approx(std::pow(n_w, 4.65)).epsilon(1e-14));
     CHECK(ratio(DiFelice{kSand}.beta(n_w, 0.0)) == doctest::Approx(std::pow(n_w, 4.7) * 24.0 / 23.04).epsilon(1e-14));
   }
+  // Richardson-Zaki: n_w^n at every fraction, the dense ones included.
+  for (const double n_w : {0.99, 0.8, 0.6, 0.4})
+    for (const double n : {4.65, 2.39, 5.1}) {
+      const double stokes = Stokes{kSand}.beta(n_w, 0.0);
+      CHECK(n_w * n_w * stokes / RichardsonZaki{kSand, n}.beta(n_w, 0.0) ==
+            doctest::Approx(std::pow(n_w, n)).epsilon(1e-14));
+    }
 }
 
 TEST_CASE("beta is finite and non-negative, zero without sediment, and nondecreasing in slip") {
@@ -119,8 +137,21 @@ TEST_CASE("parse_drag_law reads the law and validates every key") {
   CHECK(parameters(law).diameter == 3.0e-4);
   CHECK(parameters(law).density == 998.0);
   CHECK(parameters(law).viscosity == 1.1e-3);
-  CHECK(std::holds_alternative<SchillerNaumann>(parse_drag_law(mpm::Config::parse(
-      "drag: {grain_diameter: 1.0e-3}\nfluid: {density: 1000, viscosity: 1.0e-3}\n", "scene.yaml"))));
+  // The default law: Richardson-Zaki with the low-Re exponent, or the scene's exponent.
+  const DragLaw fallback = parse_drag_law(
+      mpm::Config::parse("drag: {grain_diameter: 1.0e-3}\nfluid: {density: 1000, viscosity: 1.0e-3}\n", "scene.yaml"));
+  REQUIRE(std::holds_alternative<RichardsonZaki>(fallback));
+  CHECK(std::get<RichardsonZaki>(fallback).exponent == 4.65);
+  CHECK(std::get<RichardsonZaki>(parse_drag_law(mpm::Config::parse("drag: {grain_diameter: 1.0e-3, exponent: 3.5}\n"
+                                                                   "fluid: {density: 1000, viscosity: 1.0e-3}\n",
+                                                                   "scene.yaml")))
+            .exponent == 3.5);
+  const std::string exponent = input_error(
+      "drag:\n  law: richardson_zaki\n  grain_diameter: 1.0e-3\n  exponent: 1.5\nfluid: {density: 1000, viscosity: "
+      "1.0e-3}\n");
+  CHECK(exponent.find("scene.yaml:4") != std::string::npos);
+  CHECK(exponent.find("drag.exponent") != std::string::npos);
+  CHECK(exponent.find("[2, 6]") != std::string::npos);
 
   const std::string unknown =
       input_error("drag: {law: ergun, grain_diameter: 1.0e-3}\nfluid: {density: 1000, viscosity: 1.0e-3}\n");
