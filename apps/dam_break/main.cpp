@@ -98,6 +98,7 @@ int run(const CommandLine& cl, const Config& scene) {
   if constexpr (dim == 3) hi[2] = depth;
   fluid::add_fluid_particles<dim>(water, geometry::seed_box<dim>(Vec<dim>::Zero(), hi, dx, ppc, 0.0, 1),
                                   geometry::particle_volume<dim>(dx, ppc), Vec<dim>::Zero(), "column");
+  water.solver->start_at_rest(water.state.particles, settings);
   scene.reject_unknown_keys();
 
   // 3. Run.

@@ -52,6 +52,7 @@ int run(const CommandLine& cl, const Config& scene) {
   hi[1] = h;
   fluid::add_fluid_particles<dim>(liquid, geometry::seed_box<dim>(Vec<dim>::Zero(), hi, dx, ppc, 0.0, 1),
                                   geometry::particle_volume<dim>(dx, ppc), Vec<dim>::Zero(), "tank");
+  liquid.solver->start_at_rest(liquid.state.particles, settings);
   scene.reject_unknown_keys();
 
   // 3. Run.

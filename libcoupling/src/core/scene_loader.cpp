@@ -147,6 +147,7 @@ CoupledScene<dim> load_coupled_scene(const mpm::Config& scene) {
       add_fluid_particles(out, in_pores[j], b.volume, 1.0 - pores[j].packing(), v, body.path());
   }
 
+  if (out.fluid_solver) out.fluid_solver->start_at_rest(out.state.fluid.particles, out.settings);
   if (out.flow.inflow)
     out.fluid_sources.push_back(mpm::geometry::inflow_source(*out.flow.inflow, out.settings, water->density));
   for (const mpm::Config& emitter : scene.list("emitters")) {

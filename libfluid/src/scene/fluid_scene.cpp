@@ -33,6 +33,7 @@ FluidSolverSettings parse_fluid_solver(const Config& fluid) {
   if (s.name == "weakly_compressible") {
     s.speed_of_sound = fluid.number("speed_of_sound", s.speed_of_sound, Range::positive());
     s.eos_exponent = fluid.number("eos_exponent", s.eos_exponent, Range::closed(1.0, 100.0));
+    s.hydrostatic_start = fluid.choice("initial_pressure", "hydrostatic", {"hydrostatic", "zero"}) == "hydrostatic";
   }
   return s;
 }
@@ -97,6 +98,7 @@ FluidScene<dim> load_fluid_scene(const Config& scene) {
                                        std::move(colliders), parse_fluid_solver(fluid));
   s.flow = std::move(flow);
   seed_fluid_bodies(s, scene);
+  s.solver->start_at_rest(s.state.particles, s.settings);
   return s;
 }
 

@@ -25,8 +25,8 @@ std::shared_ptr<const FluidSolver<dim>> make_fluid_solver(const FluidSolverSetti
                "weakly compressible fluid: speed of sound " + std::to_string(solver.speed_of_sound) +
                    " m/s and exponent " + std::to_string(solver.eos_exponent) + ": expected c > 0 and gamma >= 1");
     const TaitEquationOfState eos{fluid.density, solver.speed_of_sound, solver.eos_exponent};
-    return std::make_shared<WeaklyCompressibleSolver<dim>>(fluid, eos, colliders,
-                                                           std::max(solver.speed_of_sound, free_surface));
+    return std::make_shared<WeaklyCompressibleSolver<dim>>(
+        fluid, eos, colliders, std::max(solver.speed_of_sound, free_surface), solver.hydrostatic_start);
   }
   std::string names;
   for (const std::string& n : fluid_solver_names()) names += (names.empty() ? "" : ", ") + n;

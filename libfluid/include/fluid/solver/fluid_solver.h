@@ -31,6 +31,7 @@ struct FluidSolverSettings {
   std::string name = "projection";  //!< one of fluid_solver_names()
   double speed_of_sound = 20.0;     //!< weakly_compressible: c [m/s] (equation_of_state.h)
   double eos_exponent = 7.0;        //!< weakly_compressible: gamma of the Tait equation
+  bool hydrostatic_start = true;    //!< weakly_compressible: start_at_rest compresses to equilibrium
 };
 
 template <int dim>
@@ -44,6 +45,10 @@ public:
   virtual bool incompressible() const = 0;
   //! Gives `particles` the channels the solver's stages read (idempotent).
   virtual void add_channels(mpm::Particles<dim>& particles) const = 0;
+  //! Puts the seeded liquid at rest under gravity into the solver's equilibrium, once, before the
+  //! first step (not on a restart: the checkpoint holds the state). Only a solver whose
+  //! pressure is particle state needs it (the weakly compressible liquid's J).
+  virtual void start_at_rest(mpm::Particles<dim>& /*particles*/, const mpm::SceneSettings<dim>& /*settings*/) const {}
   //! The fastest signal the explicit part must resolve [m/s] (dt <= wave_cfl dx / c).
   virtual double wave_speed() const = 0;
   //! From the transferred momentum to the velocity before the boundary conditions.

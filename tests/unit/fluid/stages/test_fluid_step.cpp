@@ -316,6 +316,38 @@ TEST_CASE("weakly compressible tank: hydrostatic pressure from the equation of s
   CHECK(deviation < 0.02);
 }
 
+TEST_CASE("weakly compressible liquid starts at hydrostatic equilibrium, not at J = 1") {
+  // The tank's surface is at y = 0.2 (the box 0.05 .. 0.2 seeded on a lattice): after loading,
+  // every particle's p(J) is rho g (0.2 - y). Then the first 0.05 s: the liquid seeded at J = 1
+  // (fluid.initial_pressure: zero) falls into its own weight; the one at equilibrium stays
+  // almost still (what is left moves next to the walls, whose support the particles do not fill).
+  const double rho = 1000.0, g = 9.81, surface = 0.2, depth = 0.15;
+  const fluid::TaitEquationOfState eos{rho, 15.0, 7.0};
+  const auto tank = [](const std::string& start) {
+    return fluid::load_fluid_scene<2>(Config::parse(
+        tank_yaml<2>(), "tank.yaml",
+        {"fluid.solver=weakly_compressible", "fluid.speed_of_sound=15", "fluid.initial_pressure=" + start}));
+  };
+  fluid::FluidScene<2> at_rest = tank("hydrostatic"), released = tank("zero");
+  const std::vector<double>& J = at_rest.state.particles.channel<double>(fluid::kVolumeRatio);
+  double worst = 0.0;
+  for (std::size_t p = 0; p < J.size(); ++p)
+    worst = std::max(worst, std::abs(eos.pressure(J[p]) - rho * g * (surface - at_rest.state.particles.x[p][1])));
+  CHECK(worst <= 1e-9 * rho * g * depth);
+  for (const double j : released.state.particles.channel<double>(fluid::kVolumeRatio)) REQUIRE(j == 1.0);
+
+  const auto fastest_after = [](fluid::FluidScene<2>& scene, double t) {
+    auto pipeline = fluid::make_fluid_pipeline(scene);
+    mpm::advance(scene.state, pipeline, t);
+    double speed = 0.0;
+    for (const Vec<2>& v : scene.state.particles.v) speed = std::max(speed, v.norm());
+    return speed;
+  };
+  const double still = fastest_after(at_rest, 0.05), falling = fastest_after(released, 0.05);
+  MESSAGE("fastest particle after 0.05 s: " << still << " m/s at equilibrium, " << falling << " m/s from J = 1");
+  CHECK(still < 0.3 * falling);
+}
+
 TEST_CASE("implicit viscosity: (I - dt nu L) v = v* on the nodes, walls as Dirichlet data") {
   fluid::FluidScene<2> scene = stirred_tank<2>(5);
   MpmState<2>& s = scene.state;
