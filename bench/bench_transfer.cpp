@@ -5,7 +5,7 @@
 //   bench_transfer                                     (the paper's sizes, double and float)
 //   bench_transfer --particles-spacing 0.0078125 --dx 0.015625 --repeat 1   (quick run)
 //
-// For each precision, input order and thread count it prints the median seconds of the
+// For each precision, input order and thread count (--threads, default 1 2) it prints the median seconds of the
 // solver's transfers and of a textbook reference run in the same process: a dense uniform
 // grid of (mass, momentum) and a plain loop over the particles in input order (one thread).
 //   sorted:   particles stored in the solver's bucket order (as after a solver's first sort);
@@ -51,6 +51,7 @@ struct Options {
   int repeat = 3;
   int steps = 10;  //!< steps of the short simulation (0: none)
   std::string precision = "both";
+  std::vector<int> threads = {1, 2};  //!< thread counts timed; 1 (the baseline) always first
 };
 
 constexpr double dt = 1e-4;  // [s]; G2P advects x by dt v
@@ -436,28 +437,36 @@ void report(const char* name, std::size_t n, const Options& o, const std::vector
                 t.sort, t.p2g, t.g2p, t.sort + t.p2g, t.step(), r.reference.p2g, r.reference.g2p,
                 r.reference.p2g / t.p2g, r.reference.g2p / t.g2p);
   }
-  // rows: sorted 1, sorted 2, shuffled 1, shuffled 2
-  const Timings &s1 = rows[0].solver, &s2 = rows[1].solver, &h1 = rows[2].solver, &h2 = rows[3].solver;
-  const double p2g_x = rows[0].reference.p2g / s1.p2g, g2p_x = rows[0].reference.g2p / s1.g2p;
+  // rows: the sorted input at each of o.threads, then the shuffled input at each.
+  const std::size_t counts = o.threads.size();
+  const Row& one = rows[0];
+  const double p2g_x = one.reference.p2g / one.solver.p2g, g2p_x = one.reference.g2p / one.solver.g2p;
   std::printf("targets (%s):\n", name);
   std::printf("  1 thread, sorted: P2G %.2fx, G2P %.2fx faster than the reference (>= 2): %s\n", p2g_x, g2p_x,
               verdict(p2g_x >= 2 && g2p_x >= 2));
-  for (int i = 0; i < 2; ++i) {
-    const Timings &s = i ? s2 : s1, &h = i ? h2 : h1;
+  for (std::size_t i = 0; i < counts; ++i) {
+    const Timings &s = rows[i].solver, &h = rows[counts + i].solver;
     const double step = h.step() / s.step(), p2g = (h.sort + h.p2g) / (s.sort + s.p2g);
     std::printf(
         "  %d thread%s, shuffled / sorted: step %.2f, sort+P2G %.2f, sort+P2G / P2G %.2f "
         "(<= 1.3): %s\n",
-        i + 1, i ? "s" : "", step, p2g, (h.sort + h.p2g) / s.p2g, verdict(step <= 1.3 && p2g <= 1.3));
+        rows[i].threads, rows[i].threads > 1 ? "s" : "", step, p2g, (h.sort + h.p2g) / s.p2g,
+        verdict(step <= 1.3 && p2g <= 1.3));
   }
-  const double sp = s1.p2g / s2.p2g, sg = s1.g2p / s2.g2p, ss = s1.step() / s2.step();
-  std::printf("  2 threads vs 1, sorted: P2G %.2fx, G2P %.2fx, step %.2fx (>= 1.7): %s\n", sp, sg, ss,
-              verdict(sp >= 1.7 && sg >= 1.7));
-  const Timings &f1 = rows[0].solver_fastest, &f2 = rows[1].solver_fastest;
-  std::printf(
-      "  the same from the fastest of the %d runs: P2G %.2fx, G2P %.2fx, step %.2fx "
-      "(1 thread P2G %.3f s, G2P %.3f s; 2 threads %.3f s, %.3f s)\n",
-      o.repeat, f1.p2g / f2.p2g, f1.g2p / f2.g2p, f1.step() / f2.step(), f1.p2g, f1.g2p, f2.p2g, f2.g2p);
+  // Scaling against 1 thread, sorted input: speed-ups of the medians and of the fastest runs,
+  // and the parallel efficiency (speed-up / threads) of the whole step. The target is stated
+  // for 2 threads (>= 1.7); other counts are reported.
+  for (std::size_t i = 1; i < counts; ++i) {
+    const Timings &s1 = one.solver, &st = rows[i].solver, &f1 = one.solver_fastest, &ft = rows[i].solver_fastest;
+    const int t = rows[i].threads;
+    const double sp = s1.p2g / st.p2g, sg = s1.g2p / st.g2p, ss = s1.step() / st.step();
+    std::printf("  %d threads vs 1, sorted: P2G %.2fx, G2P %.2fx, step %.2fx (efficiency %.2f)%s%s\n", t, sp, sg, ss,
+                ss / t, t == 2 ? " (>= 1.7): " : "", t == 2 ? verdict(sp >= 1.7 && sg >= 1.7) : "");
+    std::printf(
+        "    from the fastest of the %d runs: P2G %.2fx, G2P %.2fx, step %.2fx "
+        "(1 thread P2G %.3f s, G2P %.3f s; %d threads %.3f s, %.3f s)\n",
+        o.repeat, f1.p2g / ft.p2g, f1.g2p / ft.g2p, f1.step() / ft.step(), f1.p2g, f1.g2p, t, ft.p2g, ft.g2p);
+  }
 }
 
 // The target's case, shuffled input with the solver's ordering included, over a simulation:
@@ -466,7 +475,7 @@ void report(const char* name, std::size_t n, const Options& o, const std::vector
 template <class Solver>
 void report_steps(const Options& o, const char* name, const Particles<3>& sorted_input,
                   const Particles<3>& shuffled_input, Solver& solver) {
-  for (int threads : {1, 2}) {
+  for (int threads : o.threads) {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
     std::vector<double> sorted, shuffled, ratio;
     for (int r = 0; r < o.repeat; ++r) {
@@ -501,21 +510,22 @@ bool run_precision(const Options& o, const char* name, const Particles<3>& sorte
   }
   if (!ok) return false;
 
-  // The runs of one order alternate reference, 1 thread, 2 threads, so that load from other
-  // processes on a shared machine spreads over all three alike.
+  // The runs of one order alternate the reference and each thread count, so that load from
+  // other processes on a shared machine spreads over all of them alike.
   std::vector<Row> rows;
   for (const auto* input : {&sorted_input, &shuffled_input}) {
-    std::vector<Timings> reference, one, two;
+    std::vector<Timings> reference;
+    std::vector<std::vector<Timings>> solver_runs(o.threads.size());
     for (int r = 0; r < o.repeat; ++r) {
       reference.push_back(time_reference(*input, ref));
-      for (int threads : {1, 2}) {
-        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
-        (threads == 1 ? one : two).push_back(time_solver(*input, solver));
+      for (std::size_t i = 0; i < o.threads.size(); ++i) {
+        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, o.threads[i]);
+        solver_runs[i].push_back(time_solver(*input, solver));
       }
     }
     const std::string order = input == &sorted_input ? "sorted" : "shuffled";
-    rows.push_back({order, 1, median(one), median(reference), fastest(one)});
-    rows.push_back({order, 2, median(two), median(reference), fastest(two)});
+    for (std::size_t i = 0; i < o.threads.size(); ++i)
+      rows.push_back({order, o.threads[i], median(solver_runs[i]), median(reference), fastest(solver_runs[i])});
   }
   report(name, sorted_input.size(), o, rows);
   if (o.steps > 0) report_steps(o, name, sorted_input, shuffled_input, solver);
@@ -536,7 +546,12 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0, 1000));
   app.add_option("--precision", o.precision, "float, double or both")
       ->check(CLI::IsMember({"float", "double", "both"}));
+  app.add_option("--threads", o.threads,
+                 "thread counts to time, e.g. --threads 1 2 4 16 (default 1 2); 1 is added first when missing")
+      ->check(CLI::Range(1, 4096));
   CLI11_PARSE(app, argc, argv);
+  o.threads.erase(std::remove(o.threads.begin(), o.threads.end(), 1), o.threads.end());
+  o.threads.insert(o.threads.begin(), 1);  // the baseline of every ratio
 
   const Particles<3> input = lattice(o);
   bool ok = true;
