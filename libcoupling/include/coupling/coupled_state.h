@@ -19,6 +19,11 @@ struct CoupledState {
   bool has_sediment = false;    //!< false: clear fluid, `sediment` holds no grid
   //! n_s and n_w per storage node of the sediment grid (written every step by the fractions stage).
   VolumeFractions fractions;
+  //! The drag coefficient beta [kg/(m^3 s)] per storage node of the sediment grid, evaluated
+  //! once per step by the exchange stage from the slip entering it (0 where a phase is
+  //! missing); the mixture projection uses the same, so that the step's steady state is the
+  //! drag law's for any dt.
+  std::vector<double> drag;
   double time = 0.0;        //!< [s]
   double dt = 0.0;          //!< step being taken [s]
   double dt_limit = 1e300;  //!< largest step allowed now (frame end) [s]

@@ -12,6 +12,9 @@
 //! no time-step limit from drag); K -> inf gives v_w' = v_s' = V. A node with only one phase
 //! is left unchanged. beta is evaluated with the slip entering the exchange (lagged
 //! coefficient), which keeps the solve linear; conservation and stability hold for any beta.
+//! The same beta must serve the rest of the step (the mixture projection): evaluated again at
+//! the slip the exchange leaves, about a sixth of it at the fluid's step (c beta dt ~ 5), a
+//! beta that grows with the slip came out too small and the grains settled 6-8 % fast.
 #include <coupling/drag/drag_law.h>
 #include <mpm/core/sparse_grid.h>
 #include <mpm/core/types.h>
@@ -38,7 +41,8 @@ void exchange_momentum(const std::vector<double>& m_w, std::vector<mpm::Vec<dim>
                        std::vector<mpm::Vec<dim>>& v_s, const std::vector<double>& K);
 
 //! The exchange as a coupled stage calls it: on the fluid and sediment grids after
-//! momentum_to_velocity (grid.velocity holds velocities), K_i = beta(n_w,i, |v_s - v_w|_i) dx^dim dt.
+//! momentum_to_velocity (grid.velocity holds velocities), K_i = beta_i dx^dim dt with
+//! beta_i = beta(n_w,i, |v_s - v_w|_i) at the slip entering the exchange.
 template <int dim>
 class MomentumExchange {
 public:
@@ -47,10 +51,11 @@ public:
   const drag::DragLaw& law() const { return law_; }
 
   //! Updates grid.velocity of both grids at every node allocated in both. `fluid_fraction`
-  //! n_w per storage node of `sediment` (VolumeFractions::fluid); dt [s] >= 0. InputError
+  //! n_w per storage node of `sediment` (VolumeFractions::fluid); dt [s] >= 0. `beta` gets
+  //! beta_i per storage node of `sediment` (0 where the fluid grid has no node). InputError
   //! when the grids do not share their lattice or the fractions do not match the grid.
   void apply(mpm::SparseGrid<dim>& fluid, mpm::SparseGrid<dim>& sediment, const std::vector<double>& fluid_fraction,
-             double dt) const;
+             double dt, std::vector<double>& beta) const;
 
 private:
   drag::DragLaw law_;

@@ -140,7 +140,7 @@ mpm::Pipeline<CoupledState<dim>> make_coupled_pipeline(const CoupledScene<dim>& 
   if (wet && sandy) p.add(std::make_unique<stages::ExchangeStage<dim>>(*scene.drag));
   both([&] { return std::make_unique<ms::GridBoundary<dim>>(scene.colliders); });
   if (wet && sandy) {
-    p.add(std::make_unique<stages::MixtureProjection<dim>>(scene.fluid->density, scene.sediment->density, *scene.drag,
+    p.add(std::make_unique<stages::MixtureProjection<dim>>(scene.fluid->density, scene.sediment->density,
                                                            scene.colliders, scene.pressure));
     // The sediment correction reaches nodes next to walls that the fluid's prescribed
     // nodes do not shield: impose the sediment's wall conditions again.

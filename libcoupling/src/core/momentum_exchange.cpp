@@ -21,19 +21,21 @@ void exchange_momentum(const std::vector<double>& m_w, std::vector<mpm::Vec<dim>
 
 template <int dim>
 void MomentumExchange<dim>::apply(mpm::SparseGrid<dim>& fluid, mpm::SparseGrid<dim>& sediment,
-                                  const std::vector<double>& fluid_fraction, double dt) const {
+                                  const std::vector<double>& fluid_fraction, double dt,
+                                  std::vector<double>& beta) const {
   require_same_lattice(fluid, sediment, "momentum exchange");
   mpm::verify<mpm::InputError>(fluid_fraction.size() == sediment.node_storage(),
                                "momentum exchange: " + std::to_string(fluid_fraction.size()) + " fluid fractions for " +
                                    std::to_string(sediment.node_storage()) + " sediment grid nodes");
   const double volume_dt = std::pow(sediment.dx(), dim) * dt;  // V_i dt [m^3 s]
+  beta.assign(sediment.node_storage(), 0.0);
   std::visit(
       [&](const auto& law) {
         for_each_shared_node(sediment, fluid, [&](std::size_t ks, std::size_t kw) {
           mpm::Vec<dim>& v_s = sediment.velocity[ks];
           mpm::Vec<dim>& v_w = fluid.velocity[kw];
-          const double K = law.beta(fluid_fraction[ks], (v_s - v_w).norm()) * volume_dt;
-          exchange_node<dim>(fluid.mass[kw], sediment.mass[ks], K, v_w, v_s);
+          beta[ks] = law.beta(fluid_fraction[ks], (v_s - v_w).norm());
+          exchange_node<dim>(fluid.mass[kw], sediment.mass[ks], beta[ks] * volume_dt, v_w, v_s);
         });
       },
       law_);

@@ -1,16 +1,16 @@
 #include <coupling/stages/mixture_projection.h>
 
 #include <coupling/shared_nodes.h>
+#include <mpm/core/error.h>
 
 namespace coupling::stages {
 
 template <int dim>
-MixtureProjection<dim>::MixtureProjection(double fluid_density, double sediment_density, drag::DragLaw law,
+MixtureProjection<dim>::MixtureProjection(double fluid_density, double sediment_density,
                                           mpm::geometry::ColliderSet<dim> colliders,
                                           fluid::stages::PressureSettings settings)
     : rho_w_(fluid_density),
       rho_s_(sediment_density),
-      law_(law),
       projection_(fluid_density, std::move(colliders), std::move(settings), "mixture_pressure") {}
 
 template <int dim>
@@ -18,6 +18,8 @@ void MixtureProjection<dim>::run(CoupledState<dim>& s) {
   mpm::SparseGrid<dim>& gw = s.fluid.grid;
   mpm::SparseGrid<dim>& gs = s.sediment.grid;
   require_same_lattice(gw, gs, name());
+  mpm::verify<mpm::Error>(s.drag.size() == gs.node_storage(),
+                          "stage '" + name() + "': no drag coefficients of this step (the exchange stage runs first)");
 
   // Per fluid storage node: n_w, n_s v_s*, the coupled coefficients c_w, c_s and the mobility
   // that makes the projection's beta the mixture mobility B (class comment). Fluid nodes the
@@ -34,7 +36,7 @@ void MixtureProjection<dim>::run(CoupledState<dim>& s) {
     sediment_node_[kw] = static_cast<mpm::Index>(ks);
     const double n_s = s.fractions.sediment[ks], n_w = s.fractions.fluid[ks];
     if (!(gs.mass[ks] > 0.0) || !(n_s > 0.0)) return;
-    const double b = drag::beta(law_, n_w, (gs.velocity[ks] - gw.velocity[kw]).norm()) * dt;
+    const double b = s.drag[ks] * dt;
     const double a_w = n_w * rho_w_ + b, a_s = n_s * rho_s_ + b;
     const double det = a_w * a_s - b * b;
     c_w_[kw] = dt * (a_s * n_w + b * n_s) / det;

@@ -18,8 +18,10 @@ public:
   std::vector<std::string> reads() const override {
     return {"fractions", "fluid.grid.velocity", "sediment.grid.velocity"};
   }
-  std::vector<std::string> writes() const override { return {"fluid.grid.velocity", "sediment.grid.velocity"}; }
-  void run(CoupledState<dim>& s) override { exchange_.apply(s.fluid.grid, s.sediment.grid, s.fractions.fluid, s.dt); }
+  std::vector<std::string> writes() const override { return {"fluid.grid.velocity", "sediment.grid.velocity", "drag"}; }
+  void run(CoupledState<dim>& s) override {
+    exchange_.apply(s.fluid.grid, s.sediment.grid, s.fractions.fluid, s.dt, s.drag);
+  }
 
 private:
   MomentumExchange<dim> exchange_;

@@ -1,7 +1,6 @@
 #pragma once
 //! The pressure projection of the mixture, drag implicit in the correction (docs/coupling.md).
 #include <coupling/coupled_state.h>
-#include <coupling/drag/drag_law.h>
 #include <fluid/stages/pressure_projection.h>
 #include <mpm/core/stage.h>
 
@@ -12,8 +11,8 @@ namespace coupling::stages {
 
 //! The mixture projection with the drag implicit in the pressure correction. The pressure
 //! impulse and the drag of the same step are solved together per node, in the LANS form per
-//! unit volume with b = beta dt [kg/m^3] (beta the drag coefficient at the slip after the
-//! exchange):
+//! unit volume with b = beta dt [kg/m^3] (beta the drag coefficient of the step,
+//! CoupledState::drag, which the exchange evaluated at the slip entering the step):
 //!   [n_w rho_w + b, -b; -b, n_s rho_s + b] (v' - v*) = dt [n_w; n_s] D^T p,
 //! so v_w' = v_w* + c_w D^T p and v_s' = v_s* + c_s D^T p with (c_w, c_s) = dt M^-1 (n_w, n_s).
 //! The constraint D (n_w v_w' + n_s v_s') = 0 then reads D B D^T p = -D (n_w v_w* + n_s v_s*)
@@ -31,11 +30,11 @@ namespace coupling::stages {
 template <int dim>
 class MixtureProjection final : public mpm::Stage<CoupledState<dim>> {
 public:
-  MixtureProjection(double fluid_density, double sediment_density, drag::DragLaw law,
-                    mpm::geometry::ColliderSet<dim> colliders, fluid::stages::PressureSettings settings);
+  MixtureProjection(double fluid_density, double sediment_density, mpm::geometry::ColliderSet<dim> colliders,
+                    fluid::stages::PressureSettings settings);
   std::string name() const override { return "mixture_pressure"; }
   std::vector<std::string> reads() const override {
-    return {"fractions", "fluid.grid.velocity", "sediment.grid.velocity", "fluid.particle.x"};
+    return {"fractions", "drag", "fluid.grid.velocity", "sediment.grid.velocity", "fluid.particle.x"};
   }
   std::vector<std::string> writes() const override {
     return {"fluid.grid.velocity", "sediment.grid.velocity", "fluid.cell.pressure"};
@@ -49,7 +48,6 @@ public:
 
 private:
   double rho_w_, rho_s_;
-  drag::DragLaw law_;
   fluid::stages::PressureProjection<dim> projection_;
   fluid::stages::MixtureNodes<dim> mixture_;
   std::vector<mpm::Index> sediment_node_;  // per fluid storage node: sediment storage or -1

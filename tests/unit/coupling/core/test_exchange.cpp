@@ -133,19 +133,24 @@ TEST_CASE("MomentumExchange on two grids with different allocated blocks") {
   const Vec<2> before = total(fluid) + total(sediment);
   const Grid fluid0 = fluid, sediment0 = sediment;
   const coupling::drag::DragLaw law = coupling::drag::Gidaspow{{2e-4, 1e-3, 1000.0}};
-  coupling::MomentumExchange<2>(law).apply(fluid, sediment, n_w, dt);
+  std::vector<double> beta;  // the step's coefficients, for the mixture projection
+  coupling::MomentumExchange<2>(law).apply(fluid, sediment, n_w, dt, beta);
   CHECK((total(fluid) + total(sediment) - before).norm() <= 1e-14 * 64.0);
+  REQUIRE(beta.size() == sediment.node_storage());
 
   int exchanged = 0;
   for (std::size_t ks = 0; ks < sediment.node_storage(); ++ks) {
     const mpm::Index kw = fluid.node_index(sediment.node_coord(ks));
     if (kw < 0) {  // block 2: sediment only
       CHECK(sediment.velocity[ks] == sediment0.velocity[ks]);
+      CHECK(beta[ks] == 0.0);
       continue;
     }
     const auto w = static_cast<std::size_t>(kw);
     Vec<2> v_w = fluid0.velocity[w], v_s = sediment0.velocity[ks];
-    const double K = coupling::drag::beta(law, n_w[ks], (v_s - v_w).norm()) * dx * dx * dt;
+    // beta at the slip entering the exchange (not the relaxed slip it leaves).
+    CHECK(beta[ks] == coupling::drag::beta(law, n_w[ks], (v_s - v_w).norm()));
+    const double K = beta[ks] * dx * dx * dt;
     exchange_node<2>(fluid0.mass[w], sediment0.mass[ks], K, v_w, v_s);
     CHECK((fluid.velocity[w] - v_w).norm() <= 1e-14);
     CHECK((sediment.velocity[ks] - v_s).norm() <= 1e-14);
@@ -164,7 +169,7 @@ TEST_CASE("MomentumExchange on two grids with different allocated blocks") {
 
   Grid other(Vec<2>::Zero(), Vec<2>::Constant(0.3), 2 * dx);
   other.activate({0});
-  CHECK_THROWS_AS(coupling::MomentumExchange<2>(law).apply(other, sediment, n_w, dt), mpm::InputError);
+  CHECK_THROWS_AS(coupling::MomentumExchange<2>(law).apply(other, sediment, n_w, dt, beta), mpm::InputError);
   n_w.pop_back();
-  CHECK_THROWS_AS(coupling::MomentumExchange<2>(law).apply(fluid, sediment, n_w, dt), mpm::InputError);
+  CHECK_THROWS_AS(coupling::MomentumExchange<2>(law).apply(fluid, sediment, n_w, dt, beta), mpm::InputError);
 }
