@@ -107,7 +107,7 @@ int main(int argc, char** argv) {
   std::mt19937_64 rng(2011);
   const std::vector<std::pair<std::string, std::vector<Mat<3>>>> inputs = {
       {"entries in [-2, 2]", uniform_entries(count, rng)},
-      {"R (I + E), |E_ij| <= 0.1", deformation_gradients(count, rng)},
+      {"R (I + E), E_ij in [-0.1, 0.1]", deformation_gradients(count, rng)},
   };
 
   double checksum = 0.0;
