@@ -156,11 +156,10 @@ int run2(const CommandLine& cl, const Config& scene) {
                                  {"ghia1982_rms_error", std::sqrt(0.5 * (u_error * u_error + v_error * v_error))}});
   runner.write_summary(results);
   if (!cl.check) return 0;
-  const bool converged = check_pressure_converged(runner);
   const bool a = check_value("u_min", *u_min, ghia_u_min, 0.15 * std::abs(ghia_u_min));
   const bool b = check_value("v_max", *v_max, ghia_v_max, 0.15 * ghia_v_max);
   const bool c = check_value("v_min", *v_min, ghia_v_min, 0.15 * std::abs(ghia_v_min));
-  return a && b && c && converged ? 0 : 1;
+  return a && b && c ? 0 : 1;
 }
 
 int run3(const CommandLine&, const Config& scene) { scene.fail("dim", "lid_driven_cavity is a 2D scene (dim: 2)"); }

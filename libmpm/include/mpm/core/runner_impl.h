@@ -312,10 +312,17 @@ void Runner<dim, State>::run(State& state, Pipeline<State>& pipeline) {
     write_checkpoint(state, pipeline, first_frame, out_ / runner_detail::numbered("checkpoint", first_frame, ".h5"));
 
   // Under --check, every solve of the run must have converged: a stage that may go on past a
-  // failed solve (on_failure: warn) counts them in a column "<solve>_unconverged".
+  // failed solve (on_failure: warn) counts them in a column "<solve>_unconverged", and a solve
+  // that flags its round-off floor must have met check_max_solve_residual (core/app.h).
   if (cl_.check)
-    for (const std::string& column : csv_.columns())
+    for (const std::string& column : csv_.columns()) {
       if (column.ends_with("_unconverged")) check_value(column, csv_.column(column).back(), 0.0, 0.0);
+      if (column.ends_with("_round_off")) {
+        const std::string solve = column.substr(0, column.size() - std::string("_round_off").size());
+        check_solve_residuals(solve, history_or_zero(solve + "_residual"), csv_.column(column),
+                              check_max_solve_residual);
+      }
+    }
 
   wall_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
   stage_names_ = pipeline.stage_names();
