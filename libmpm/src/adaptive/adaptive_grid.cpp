@@ -67,7 +67,7 @@ void AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
   irregular_.clear();
 
   // Transfer level of every particle (in parallel: the tree walk is the cost).
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 1024), [&](const auto& range) {
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 4096), [&](const auto& range) {
     for (std::size_t p = range.begin(); p != range.end(); ++p) {
       const double half = 0.5 * particle_size(std::min<int>(type[p], L - 1));
       transfer_level_[p] = x[p].allFinite() ? tree_.finest_level_in(x[p].array() - half, x[p].array() + half) : -1;
@@ -146,10 +146,8 @@ void AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
   // a real node of another level (one link of weight 1) is an embedded ghost: its bit is set
   // in its block's mask. The statuses depend on the tree only: they are kept per block while
   // the tree stays the same (a static refinement: always), and computed for new blocks.
-  if (!(tree_ == status_tree_)) {
-    status_tree_ = tree_;
-    status_.assign(L, LevelStatus{});
-  }
+  const bool same_tree = tree_ == status_tree_;
+  if (!same_tree) forget_changed_statuses();
   for (int n = 0; n < L; ++n) {
     std::vector<BlockKey>& own = own_blocks[n];
     std::sort(own.begin(), own.end());
@@ -160,7 +158,8 @@ void AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
     for (BlockKey key : own) {
       if (status.index.find(key) >= 0) continue;
       status.index.insert(key, static_cast<int>(status.blocks.size()));
-      BlockStatus block{static_cast<std::uint32_t>(status.ghosts.size()), 0, 0};
+      BlockStatus block{static_cast<std::uint32_t>(status.ghosts.size()), 0, 0, 0, 0};
+      const std::size_t first_block_link = status.links.size();
       const IVec<dim> origin = g.block_coord(key) * B;
       for (int local = 0; local < SparseGrid<dim>::nodes_per_block; ++local) {
         IVec<dim> node;
@@ -175,57 +174,67 @@ void AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
           block.embedded |= std::uint64_t{1} << SparseGrid<dim>::local_index(node);
       }
       block.end_ghost = static_cast<std::uint32_t>(status.ghosts.size());
+      // The blocks of the real nodes its ghosts reach, once each.
+      block.first_reached = static_cast<std::uint32_t>(status.reached.size());
+      for (std::size_t l = first_block_link; l < status.links.size(); ++l) {
+        const NodeWeight<dim>& link = status.links[l];
+        status.reached.push_back({link.level, levels_[link.level].block_id(link.point / tree_.scale(link.level))});
+      }
+      std::sort(status.reached.begin() + block.first_reached, status.reached.end());
+      status.reached.erase(std::unique(status.reached.begin() + block.first_reached, status.reached.end()),
+                           status.reached.end());
+      block.end_reached = static_cast<std::uint32_t>(status.reached.size());
       status.blocks.push_back(block);
     }
     blocks[n].insert(blocks[n].end(), own.begin(), own.end());
     for (BlockKey key : own) {
       const BlockStatus& block = status.blocks[static_cast<std::size_t>(status.index.find(key))];
-      for (std::uint32_t j = block.first_ghost; j < block.end_ghost; ++j)
-        for (std::size_t l = status.ghosts[j].first_link; l < status.ghosts[j].end_link; ++l)
-          blocks[status.links[l].level].push_back(
-              levels_[status.links[l].level].block_id(status.links[l].point / tree_.scale(status.links[l].level)));
+      for (std::uint32_t r = block.first_reached; r < block.end_reached; ++r)
+        blocks[status.reached[r].first].push_back(status.reached[r].second);
     }
   }
 
-  // A particle whose stencil holds an embedded ghost goes the general way (the uniform loops
-  // know nothing of APIC's correction there); the others stay in the buckets.
+  // Every bucketed particle stays in the buckets. Those whose stencil holds an embedded ghost
+  // are also listed: APIC adds the ghosts' affine terms for them (adaptive_transfer.cpp).
+  near_embedded_.clear();
   for (int n = 0; n < L; ++n) {
     const SparseGrid<dim>& g = levels_[n];
-    auto embedded = [&](const IVec<dim>& node) {
-      const int m = status_[n].index.find(g.block_id(node));
-      return m >= 0 &&
-             (status_[n].blocks[static_cast<std::size_t>(m)].embedded >> SparseGrid<dim>::local_index(node)) & 1;
-    };
-    // Whether the patch of a block holds an embedded ghost: else its particles need no check.
-    auto patch_embedded = [&](BlockKey block) {
-      const IVec<dim> c = g.block_coord(block);
-      for (int corner = 0; corner < (1 << dim); ++corner) {
-        IVec<dim> nb = c;
-        for (int a = 0; a < dim; ++a) nb[a] += (corner >> a) & 1;
-        const int m = status_[n].index.find(g.block_id(nb * B));
-        if (m >= 0 && status_[n].blocks[static_cast<std::size_t>(m)].embedded) return true;
-      }
-      return false;
+    const LevelStatus& status = status_[n];
+    auto embedded_mask = [&](const IVec<dim>& block_coord) -> std::uint64_t {
+      const int m = status.index.find(g.block_id(block_coord * B));
+      return m >= 0 ? status.blocks[static_cast<std::size_t>(m)].embedded : 0;
     };
     ParticleBuckets<dim>& b = regular_[n];
     b = ParticleBuckets<dim>{};
     BlockKey checked = ~BlockKey{0};
+    std::uint64_t patch_mask[1 << dim] = {};  // embedded masks of the patch's blocks
     bool check_nodes = false;
     for (const auto& [block, p] : bucketed[n]) {
       if (block != checked) {
         checked = block;
-        check_nodes = patch_embedded(block);
+        check_nodes = false;
+        const IVec<dim> c = g.block_coord(block);
+        for (int corner = 0; corner < (1 << dim); ++corner) {
+          IVec<dim> nb = c;
+          for (int a = 0; a < dim; ++a) nb[a] += (corner >> a) & 1;
+          patch_mask[corner] = embedded_mask(nb);
+          check_nodes = check_nodes || patch_mask[corner] != 0;
+        }
       }
-      const IVec<dim> base = check_nodes ? uniform_base(n, x[p]) : IVec<dim>::Zero();
-      bool regular = true;
-      for (int i = 0; i < ipow(3, dim) && regular && check_nodes; ++i) {
-        IVec<dim> node;
-        for (int a = 0, r = i; a < dim; ++a, r /= 3) node[a] = base[a] + r % 3;
-        regular = !embedded(node);
-      }
-      if (!regular) {
-        irregular_.push_back(p);
-        continue;
+      if (check_nodes) {  // the 3^dim stencil nodes lie in the patch: test their bits
+        const IVec<dim> base = uniform_base(n, x[p]);
+        const IVec<dim> first = g.block_coord(block) * B;
+        bool near = false;
+        for (int i = 0; i < ipow(3, dim) && !near; ++i) {
+          int corner = 0, local = 0;
+          for (int a = 0, r = i; a < dim; ++a, r /= 3) {
+            const int offset = base[a] + r % 3 - first[a];  // in [0, 2B)
+            corner |= (offset >= B) << a;
+            local |= (offset & (B - 1)) << (a * SparseGrid<dim>::block_bits);
+          }
+          near = (patch_mask[corner] >> local) & 1;
+        }
+        if (near) near_embedded_.push_back(p);
       }
       if (b.block.empty() || b.block.back() != block) {
         const IVec<dim> c = g.block_coord(block);
@@ -241,11 +250,17 @@ void AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
   }
   std::sort(irregular_.begin(), irregular_.end());
 
+  // The grids and ghost tables follow from the tree and the blocks alone: while neither changes
+  // (most steps: particles seldom cross into new blocks), the previous ones stand.
+  bool same_blocks = same_tree && own_blocks == own_blocks_;
   for (int n = 0; n < L; ++n) {
     std::sort(blocks[n].begin(), blocks[n].end());
     blocks[n].erase(std::unique(blocks[n].begin(), blocks[n].end()), blocks[n].end());
-    levels_[n].activate(blocks[n]);
+    same_blocks = same_blocks && blocks[n] == levels_[n].active_blocks();
   }
+  if (same_blocks) return;
+  own_blocks_ = own_blocks;
+  for (int n = 0; n < L; ++n) levels_[n].activate(blocks[n]);
 
   // Ghost tables in storage indices.
   for (int n = 0; n < L; ++n) {
@@ -262,9 +277,9 @@ void AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
         Mat<dim> spread = Mat<dim>::Zero();
         for (std::size_t l = ghost.first_link; l < ghost.end_link; ++l) {
           const NodeWeight<dim>& link = status.links[l];
-          g.link.push_back(
-              {link.level, levels_[link.level].node_index(link.point / tree_.scale(link.level)), link.weight});
           const Vec<dim> r = tree_.position(link.point) - xk;
+          g.link.push_back(
+              {link.level, levels_[link.level].node_index(link.point / tree_.scale(link.level)), link.weight, r});
           spread.noalias() += link.weight * r * r.transpose();
         }
         g.of_node[static_cast<std::size_t>(k)] = static_cast<int>(g.node.size());
@@ -277,19 +292,75 @@ void AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
 }
 
 template <int dim>
+void AdaptiveGrid<dim>::forget_changed_statuses() {
+  const int L = levels();
+  if (static_cast<int>(status_.size()) != L || !status_tree_.same_domain(tree_)) {
+    status_tree_ = tree_;
+    status_.assign(L, LevelStatus{});
+    return;
+  }
+  // A node's status is read off the cells its embedding walks through: leaves of strictly
+  // decreasing levels chained from the node, each chain within dx_0 (1 + 1/2 + ...) < 2 dx_0
+  // of it, and the cells touching them (constrained_basis.cpp). The statuses of the blocks
+  // farther than that from every changed cell stand; so do only those of the last step's blocks.
+  const int reach = 2 * tree_.scale(0) + 1;  // lattice units, one finest cell to spare
+  std::vector<std::pair<IVec<dim>, IVec<dim>>> changed;
+  for (const CellId<dim>& c : tree_.refined_difference(status_tree_)) {
+    const int s = tree_.scale(c.level);
+    changed.push_back(
+        {c.cell * s - IVec<dim>::Constant(reach), (c.cell + IVec<dim>::Ones()) * s + IVec<dim>::Constant(reach)});
+  }
+  status_tree_ = tree_;
+  constexpr int B = SparseGrid<dim>::block_size;
+  for (int n = 0; n < L; ++n) {
+    const LevelStatus old = std::move(status_[n]);
+    LevelStatus& kept = status_[n] = LevelStatus{};
+    if (static_cast<int>(own_blocks_.size()) != L) continue;
+    const int s = tree_.scale(n);
+    for (BlockKey key : own_blocks_[n]) {
+      const int m = old.index.find(key);
+      if (m < 0) continue;
+      const IVec<dim> first = levels_[n].block_coord(key) * (B * s);  // lattice span of its nodes
+      const IVec<dim> last = first + IVec<dim>::Constant((B - 1) * s);
+      bool near = false;
+      for (std::size_t i = 0; i < changed.size() && !near; ++i)
+        near = (first.array() <= changed[i].second.array()).all() && (last.array() >= changed[i].first.array()).all();
+      if (near) continue;
+      BlockStatus block = old.blocks[static_cast<std::size_t>(m)];
+      const std::uint32_t first_ghost = static_cast<std::uint32_t>(kept.ghosts.size());
+      for (std::uint32_t j = block.first_ghost; j < block.end_ghost; ++j) {
+        const PendingGhost& ghost = old.ghosts[j];
+        const std::size_t first_link = kept.links.size();
+        kept.links.insert(kept.links.end(), old.links.begin() + static_cast<std::ptrdiff_t>(ghost.first_link),
+                          old.links.begin() + static_cast<std::ptrdiff_t>(ghost.end_link));
+        kept.ghosts.push_back({ghost.node, first_link, kept.links.size()});
+      }
+      const std::uint32_t first_reached = static_cast<std::uint32_t>(kept.reached.size());
+      kept.reached.insert(kept.reached.end(), old.reached.begin() + block.first_reached,
+                          old.reached.begin() + block.end_reached);
+      block.first_ghost = first_ghost;
+      block.end_ghost = static_cast<std::uint32_t>(kept.ghosts.size());
+      block.first_reached = first_reached;
+      block.end_reached = static_cast<std::uint32_t>(kept.reached.size());
+      kept.index.insert(key, static_cast<int>(kept.blocks.size()));
+      kept.blocks.push_back(block);
+    }
+  }
+}
+
+template <int dim>
 void AdaptiveGrid<dim>::push_momentum(const std::vector<std::vector<Mat<dim>>>& affine) {
   for (int n = 0; n < levels(); ++n) {
     const Ghosts& g = ghosts_[n];
     SparseGrid<dim>& from = levels_[n];
     for (std::size_t j = 0; j < g.node.size(); ++j) {
       const std::size_t k = static_cast<std::size_t>(g.node[j]);
-      const Vec<dim> xk = from.node_position(k);
       for (std::uint32_t l = g.begin[j]; l < g.begin[j + 1]; ++l) {
-        const GhostLink& link = g.link[l];
+        const GhostLink<dim>& link = g.link[l];
         SparseGrid<dim>& to = levels_[link.level];
         const std::size_t i = static_cast<std::size_t>(link.index);
         to.mass[i] += link.weight * from.mass[k];
-        to.velocity[i] += link.weight * (from.velocity[k] + affine[n][j] * (to.node_position(i) - xk));
+        to.velocity[i] += link.weight * (from.velocity[k] + affine[n][j] * link.offset);
       }
       from.mass[k] = 0.0;
       from.velocity[k].setZero();
@@ -305,15 +376,14 @@ void AdaptiveGrid<dim>::pull_velocity(bool old) {
     g.velocity_moment.assign(g.node.size(), Mat<dim>::Zero());
     for (std::size_t j = 0; j < g.node.size(); ++j) {
       const std::size_t k = static_cast<std::size_t>(g.node[j]);
-      const Vec<dim> xk = to.node_position(k);
       Vec<dim> v = Vec<dim>::Zero(), v_old = Vec<dim>::Zero();
       for (std::uint32_t l = g.begin[j]; l < g.begin[j + 1]; ++l) {
-        const GhostLink& link = g.link[l];
+        const GhostLink<dim>& link = g.link[l];
         const SparseGrid<dim>& from = levels_[link.level];
         const std::size_t i = static_cast<std::size_t>(link.index);
         v += link.weight * from.velocity[i];
         if (old) v_old += link.weight * from.velocity_old[i];
-        g.velocity_moment[j].noalias() += link.weight * from.velocity[i] * (from.node_position(i) - xk).transpose();
+        g.velocity_moment[j].noalias() += link.weight * from.velocity[i] * link.offset.transpose();
       }
       to.velocity[k] = v;
       if (old) to.velocity_old[k] = v_old;
@@ -325,17 +395,19 @@ template <int dim>
 std::size_t AdaptiveGrid<dim>::memory_bytes() const {
   std::size_t bytes = tree_.memory_bytes() + transfer_level_.capacity() * sizeof(int);
   for (const SparseGrid<dim>& g : levels_) bytes += g.memory_bytes();
-  bytes += half_cells_.capacity() * sizeof(double) + irregular_.capacity() * sizeof(std::uint32_t);
+  bytes += half_cells_.capacity() * sizeof(double) +
+           (irregular_.capacity() + near_embedded_.capacity()) * sizeof(std::uint32_t);
   for (const Ghosts& g : ghosts_)
     bytes += g.node.capacity() * sizeof(Index) + g.begin.capacity() * sizeof(std::uint32_t) +
-             g.link.capacity() * sizeof(GhostLink) + g.spread.capacity() * sizeof(Mat<dim>) +
+             g.link.capacity() * sizeof(GhostLink<dim>) + g.spread.capacity() * sizeof(Mat<dim>) +
              g.of_node.capacity() * sizeof(int) + g.velocity_moment.capacity() * sizeof(Mat<dim>);
   for (const ParticleBuckets<dim>& b : regular_)
     bytes += b.particle.capacity() * sizeof(std::uint32_t) + b.begin.capacity() * sizeof(std::uint32_t) +
              b.block.capacity() * sizeof(BlockKey);
   for (const LevelStatus& s : status_)
     bytes += s.index.bytes() + s.blocks.capacity() * sizeof(BlockStatus) + s.ghosts.capacity() * sizeof(PendingGhost) +
-             s.links.capacity() * sizeof(NodeWeight<dim>);
+             s.links.capacity() * sizeof(NodeWeight<dim>) + s.reached.capacity() * sizeof(s.reached[0]);
+  for (const std::vector<BlockKey>& own : own_blocks_) bytes += own.capacity() * sizeof(BlockKey);
   return bytes;
 }
 

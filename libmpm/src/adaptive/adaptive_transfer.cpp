@@ -1,5 +1,6 @@
 #include <mpm/adaptive/adaptive_transfer.h>
 
+#include <mpm/core/detail/bucket_loops.h>
 #include <mpm/core/error.h>
 
 #include <tbb/parallel_for.h>
@@ -11,11 +12,12 @@
 namespace mpm::adaptive {
 
 namespace {
-// fn(p, n, k, w, grad_w, x_k) over the stencil of every irregular particle, serially (P2G
-// scatters); the regular ones go through the uniform loops of transfer.h.
+// fn(p, n, k, w, grad_w, x_k) over the stencil of every particle of `list` (transfer level n),
+// serially (P2G scatters); the regular ones go through the uniform loops of transfer.h.
 template <int dim, class Fn>
-void scatter_irregular(const Particles<dim>& P, const AdaptiveGrid<dim>& grid, Fn&& fn) {
-  for (const std::uint32_t p : grid.irregular()) {
+void scatter_each(const std::vector<std::uint32_t>& list, const Particles<dim>& P, const AdaptiveGrid<dim>& grid,
+                  Fn&& fn) {
+  for (const std::uint32_t p : list) {
     const int n = grid.transfer_level(p);
     grid.for_each_weight(
         n, grid.half_cells(p), P.x[p],
@@ -23,12 +25,36 @@ void scatter_irregular(const Particles<dim>& P, const AdaptiveGrid<dim>& grid, F
   }
 }
 
-// fn(p, n) for every irregular particle p (transfer level n), in parallel (G2P-like gathers).
+// fn(i, p, n) for every particle p = list[i] (transfer level n), in parallel (G2P-like gathers).
 template <int dim, class Fn>
-void gather_irregular(const AdaptiveGrid<dim>& grid, Fn&& fn) {
-  const std::vector<std::uint32_t>& irregular = grid.irregular();
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, irregular.size(), 256), [&](const auto& range) {
-    for (std::size_t i = range.begin(); i != range.end(); ++i) fn(irregular[i], grid.transfer_level(irregular[i]));
+void gather_each(const std::vector<std::uint32_t>& list, const AdaptiveGrid<dim>& grid, Fn&& fn) {
+  detail::for_each_range(list.size(), std::size_t{256}, list.size() < detail::serial_below_particles,
+                         [&](const tbb::blocked_range<std::size_t>& range) {
+                           for (std::size_t i = range.begin(); i != range.end(); ++i)
+                             fn(i, list[i], grid.transfer_level(list[i]));
+                         });
+}
+
+// APIC's B_p and D_p of particle p on level n through its ghosts (adaptive_transfer.h): the
+// sums over the stencil plus each ghost's velocity moment Q_k and spread R_k.
+template <int dim>
+void apic_moments(const AdaptiveGrid<dim>& grid, int n, double h, const Vec<dim>& xp, Vec<dim>& v, Mat<dim>& B,
+                  Mat<dim>& D) {
+  const SparseGrid<dim>& g = grid.level(n);
+  const auto& ghosts = grid.ghosts(n);
+  v.setZero();
+  B.setZero();
+  D.setZero();
+  grid.for_each_weight(n, h, xp, [&](Index k, double w, const Vec<dim>&, const Vec<dim>& xk) {
+    const Vec<dim>& vk = g.velocity[k];
+    const Vec<dim> r = xk - xp;
+    v += w * vk;
+    B.noalias() += w * vk * r.transpose();
+    D.noalias() += w * r * r.transpose();
+    if (const int j = ghosts.of_node[k]; j >= 0) {
+      B += w * ghosts.velocity_moment[j];
+      D += w * ghosts.spread[j];
+    }
   });
 }
 
@@ -49,17 +75,25 @@ void particles_to_grid(const Particles<dim>& P, const TransferScheme& scheme, Ad
     mpm::particles_to_grid(P, grid.regular(n), grid.regular_kernel(), scheme, grid.level(n));  // zeroes first
     affine[n].assign(grid.ghosts(n).node.size(), Mat<dim>::Zero());
   }
-  scatter_irregular(P, grid, [&](std::size_t p, int n, Index k, double w, const Vec<dim>&, const Vec<dim>& xk) {
-    SparseGrid<dim>& g = grid.level(n);
-    const double wm = w * P.mass[p];
-    g.mass[k] += wm;
-    if (apic) {
-      g.velocity[k] += wm * (P.v[p] + P.C[p] * (xk - P.x[p]));
-      if (const int j = grid.ghosts(n).of_node[k]; j >= 0) affine[n][j] += wm * P.C[p];
-    } else {
-      g.velocity[k] += wm * P.v[p];
-    }
-  });
+  scatter_each(grid.irregular(), P, grid,
+               [&](std::size_t p, int n, Index k, double w, const Vec<dim>&, const Vec<dim>& xk) {
+                 SparseGrid<dim>& g = grid.level(n);
+                 const double wm = w * P.mass[p];
+                 g.mass[k] += wm;
+                 if (apic) {
+                   g.velocity[k] += wm * (P.v[p] + P.C[p] * (xk - P.x[p]));
+                   if (const int j = grid.ghosts(n).of_node[k]; j >= 0) affine[n][j] += wm * P.C[p];
+                 } else {
+                   g.velocity[k] += wm * P.v[p];
+                 }
+               });
+  // The uniform loops gave the particles near embedded ghosts their mass and momentum; APIC's
+  // G_k of those ghosts is added here.
+  if (apic)
+    scatter_each(grid.near_embedded(), P, grid,
+                 [&](std::size_t p, int n, Index k, double w, const Vec<dim>&, const Vec<dim>&) {
+                   if (const int j = grid.ghosts(n).of_node[k]; j >= 0) affine[n][j] += w * P.mass[p] * P.C[p];
+                 });
   grid.push_momentum(affine);
 }
 
@@ -73,9 +107,10 @@ void stress_to_grid_forces(const std::vector<Mat<dim>>& S, const Particles<dim>&
   MPM_ASSERT(grid.particle_count() == P.size());
   for (int n = 0; n < grid.levels(); ++n)  // zeroes first
     mpm::stress_to_grid_forces(S, P, grid.regular(n), grid.regular_kernel(), grid.level(n));
-  scatter_irregular(P, grid, [&](std::size_t p, int n, Index k, double, const Vec<dim>& grad, const Vec<dim>&) {
-    grid.level(n).force[k] -= S[p] * grad;
-  });
+  scatter_each(grid.irregular(), P, grid,
+               [&](std::size_t p, int n, Index k, double, const Vec<dim>& grad, const Vec<dim>&) {
+                 grid.level(n).force[k] -= S[p] * grad;
+               });
   grid.push(per_level(grid, &SparseGrid<dim>::force));
 }
 
@@ -88,33 +123,34 @@ template <int dim>
 void grid_to_particles(Particles<dim>& P, const TransferScheme& scheme, const AdaptiveGrid<dim>& grid, double dt) {
   MPM_ASSERT(grid.particle_count() == P.size());
   const bool apic = scheme.type == TransferScheme::Type::apic;
+  // The uniform loops' C_p assumes the uniform D_p: the particles near embedded ghosts get
+  // theirs through the ghosts, from their positions before the advection.
+  std::vector<Mat<dim>> C_near(apic ? grid.near_embedded().size() : 0);
+  if (apic)
+    gather_each(grid.near_embedded(), grid, [&](std::size_t i, std::size_t p, int n) {
+      Vec<dim> v;
+      Mat<dim> B, D;
+      apic_moments(grid, n, grid.half_cells(p), P.x[p], v, B, D);
+      C_near[i] = B * D.inverse();
+    });
   for (int n = 0; n < grid.levels(); ++n)
     mpm::grid_to_particles(P, grid.regular(n), grid.regular_kernel(), scheme, grid.level(n), dt);
-  gather_irregular(grid, [&](std::size_t p, int n) {
+  for (std::size_t i = 0; i < C_near.size(); ++i) P.C[grid.near_embedded()[i]] = C_near[i];
+  gather_each(grid.irregular(), grid, [&](std::size_t, std::size_t p, int n) {
     const SparseGrid<dim>& g = grid.level(n);
-    const auto& ghosts = grid.ghosts(n);
     const Vec<dim> xp = P.x[p];
-    Vec<dim> v_pic = Vec<dim>::Zero(), dv = Vec<dim>::Zero();
-    Mat<dim> B = Mat<dim>::Zero(), D = Mat<dim>::Zero();
-    grid.for_each_weight(n, grid.half_cells(p), xp, [&](Index k, double w, const Vec<dim>&, const Vec<dim>& xk) {
-      const Vec<dim>& vk = g.velocity[k];
-      v_pic += w * vk;
-      if (apic) {
-        const Vec<dim> r = xk - xp;
-        B.noalias() += w * vk * r.transpose();
-        D.noalias() += w * r * r.transpose();
-        if (const int j = ghosts.of_node[k]; j >= 0) {
-          B += w * ghosts.velocity_moment[j];
-          D += w * ghosts.spread[j];
-        }
-      } else {
-        dv += w * (vk - g.velocity_old[k]);
-      }
-    });
+    Vec<dim> v_pic = Vec<dim>::Zero();
     if (apic) {
+      Mat<dim> B, D;
+      apic_moments(grid, n, grid.half_cells(p), xp, v_pic, B, D);
       P.v[p] = v_pic;
       P.C[p] = B * D.inverse();
     } else {
+      Vec<dim> dv = Vec<dim>::Zero();
+      grid.for_each_weight(n, grid.half_cells(p), xp, [&](Index k, double w, const Vec<dim>&, const Vec<dim>&) {
+        v_pic += w * g.velocity[k];
+        dv += w * (g.velocity[k] - g.velocity_old[k]);
+      });
       P.v[p] = scheme.flip_ratio * (P.v[p] + dv) + (1.0 - scheme.flip_ratio) * v_pic;
       P.C[p].setZero();
     }
@@ -128,7 +164,7 @@ void velocity_gradient(const Particles<dim>& P, const AdaptiveGrid<dim>& grid, s
   grad_v.resize(P.size());
   for (int n = 0; n < grid.levels(); ++n)
     mpm::velocity_gradient(P, grid.regular(n), grid.regular_kernel(), grid.level(n), grad_v);
-  gather_irregular(grid, [&](std::size_t p, int n) {
+  gather_each(grid.irregular(), grid, [&](std::size_t, std::size_t p, int n) {
     const SparseGrid<dim>& g = grid.level(n);
     Mat<dim> G = Mat<dim>::Zero();
     grid.for_each_weight(n, grid.half_cells(p), P.x[p], [&](Index k, double, const Vec<dim>& grad, const Vec<dim>&) {

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 
 namespace mpm::adaptive {
@@ -171,6 +172,20 @@ int CellTree<dim>::finest_level_in(int level, const IVec<dim>& cell, const Vec<d
 
 template <int dim>
 int CellTree<dim>::finest_level_in(const Vec<dim>& lo, const Vec<dim>& hi) const {
+  // The leaf at the box's centre is the answer when it is of the finest level, or when the box
+  // keeps clear of its faces by more than the rounding of the walk below (most particles' boxes,
+  // their own sub-cells, do one or the other).
+  if (const CellId<dim> leaf = leaf_at(0.5 * (lo + hi)); leaf.level >= 0) {
+    if (leaf.level == finest()) return leaf.level;
+    const Vec<dim> leaf_lo = origin_ + dx(leaf.level) * leaf.cell.template cast<double>();
+    bool inside = true;
+    for (int a = 0; a < dim && inside; ++a) {
+      const double margin = 1e-12 * dx(finest()) +
+                            16 * std::numeric_limits<double>::epsilon() * std::max(std::abs(lo[a]), std::abs(hi[a]));
+      inside = lo[a] > leaf_lo[a] + margin && hi[a] < leaf_lo[a] + dx(leaf.level) - margin;
+    }
+    if (inside) return leaf.level;
+  }
   int finest_found = -1;
   for_each_base_cell(lo, hi, [&](const IVec<dim>& cell) {
     if (finest_found < finest()) finest_found = std::max(finest_found, finest_level_in(0, cell, lo, hi));
@@ -200,8 +215,7 @@ void CellTree<dim>::for_each_leaf(const std::function<void(int, const IVec<dim>&
 
 template <int dim>
 bool CellTree<dim>::operator==(const CellTree& other) const {
-  if (origin_ != other.origin_ || base_cells_ != other.base_cells_ || dx0_ != other.dx0_ || levels_ != other.levels_)
-    return false;
+  if (!same_domain(other)) return false;
   for (int l = 0; l < levels_; ++l) {
     if (refined_[l].size() != other.refined_[l].size()) return false;
     bool same = true;
@@ -209,6 +223,30 @@ bool CellTree<dim>::operator==(const CellTree& other) const {
     if (!same) return false;
   }
   return true;
+}
+
+template <int dim>
+bool CellTree<dim>::same_domain(const CellTree& other) const {
+  return origin_ == other.origin_ && base_cells_ == other.base_cells_ && dx0_ == other.dx0_ && levels_ == other.levels_;
+}
+
+template <int dim>
+std::vector<CellId<dim>> CellTree<dim>::refined_difference(const CellTree& other) const {
+  MPM_VERIFY(same_domain(other), InputError, "adaptive grid: trees of different domains or levels");
+  std::vector<CellId<dim>> out;
+  auto unmatched = [&](const CellTree& a, const CellTree& b) {
+    for (int l = 0; l < levels_; ++l)
+      a.refined_[l].for_each([&](BlockKey k, int) {
+        if (b.refined_[l].find(k) >= 0) return;
+        IVec<dim> cell;
+        for (int axis = 0; axis < dim; ++axis)
+          cell[axis] = static_cast<int>((k >> (axis * kBits)) & ((BlockKey{1} << kBits) - 1));
+        out.push_back({l, cell});
+      });
+  };
+  unmatched(*this, other);
+  unmatched(other, *this);
+  return out;
 }
 
 template <int dim>

@@ -15,7 +15,9 @@
 //!
 //! prepare() allocates, per level, the blocks of the stencils of the particles that transfer
 //! there and the blocks of the real nodes their ghosts reach, and builds the ghost tables.
-//! Memory and time follow the allocated blocks, not the domain.
+//! Memory and time follow the allocated blocks, not the domain. Between steps it keeps what
+//! still holds: the node statuses of the blocks a tree change cannot reach, and the grids and
+//! ghost tables while neither the tree nor the blocks change.
 #include <mpm/adaptive/cell_tree.h>
 #include <mpm/adaptive/constrained_basis.h>
 #include <mpm/core/error.h>
@@ -42,11 +44,14 @@ struct GimpAxis {
   void compute(double xi, double h);
 };
 
-//! A ghost's link to one real node: value_ghost += weight * value(level, index).
+//! A ghost's link to one real node: value_ghost += weight * value(level, index); `offset` is
+//! the real node's position minus the ghost's [m] (APIC's affine terms).
+template <int dim>
 struct GhostLink {
   int level;
   Index index;
   double weight;
+  Vec<dim> offset;
 };
 
 template <int dim>
@@ -83,10 +88,13 @@ public:
   void prepare(const std::vector<Vec<dim>>& x, const std::vector<std::uint16_t>& type,
                const std::string& stage = "prepare");
   std::size_t particle_count() const { return transfer_level_.size(); }
-  //! The particles that transfer on level n as on a uniform grid: on their own level
-  //! (regular_kernel()) and with no embedded ghost in their stencil. The uniform loops
-  //! (transfer.h) serve them, in parallel.
+  //! The particles that transfer on level n as on a uniform grid: on their own level, with
+  //! regular_kernel()'s stencil inside the level. The uniform loops (transfer.h) serve them, in
+  //! parallel.
   const ParticleBuckets<dim>& regular(int n) const { return regular_[n]; }
+  //! The regular particles whose stencil holds an embedded ghost, by index: APIC adds the
+  //! ghosts' affine terms for them beside the uniform loops (adaptive_transfer.h).
+  const std::vector<std::uint32_t>& near_embedded() const { return near_embedded_; }
   //! The other particles, by index: they take the general path (for_each_weight).
   const std::vector<std::uint32_t>& irregular() const { return irregular_; }
   //! Transfer level of particle p (after prepare).
@@ -121,7 +129,7 @@ public:
   struct Ghosts {
     std::vector<Index> node;
     std::vector<std::uint32_t> begin{0};
-    std::vector<GhostLink> link;
+    std::vector<GhostLink<dim>> link;
     std::vector<Mat<dim>> spread;
     std::vector<int> of_node;  //!< per storage node: its ghost index, or -1
     //! Q_k = sum_i E_ik v_i (x_i - x_k)^T [m^2/s], filled by pull_velocity for APIC's B_p.
@@ -156,8 +164,10 @@ private:
   std::vector<double> half_cells_;
   std::vector<ParticleBuckets<dim>> regular_;
   std::vector<std::uint32_t> irregular_;
+  std::vector<std::uint32_t> near_embedded_;
 
-  // Node statuses per block, kept while the tree stays status_tree_ (prepare()).
+  // Node statuses per block for the tree status_tree_; a tree change keeps those of the blocks
+  // it cannot reach (forget_changed_statuses()).
   struct PendingGhost {
     IVec<dim> node;  // level coordinate
     std::size_t first_link, end_link;
@@ -165,15 +175,20 @@ private:
   struct BlockStatus {
     std::uint32_t first_ghost, end_ghost;
     std::uint64_t embedded;  // bit l: node l of the block is an embedded ghost
+    std::uint32_t first_reached, end_reached;
   };
   struct LevelStatus {
     BlockTable index;  // block key -> blocks[]
     std::vector<BlockStatus> blocks;
     std::vector<PendingGhost> ghosts;
     std::vector<NodeWeight<dim>> links;
+    std::vector<std::pair<int, BlockKey>> reached;  // (level, block) of a block's ghosts' links
   };
   CellTree<dim> status_tree_;
   std::vector<LevelStatus> status_;
+  //! After a tree change: drops the statuses the change can reach and those of unused blocks.
+  void forget_changed_statuses();
+  std::vector<std::vector<BlockKey>> own_blocks_;  // per level: the blocks of the ghost tables
 };
 
 template <int dim>

@@ -78,6 +78,10 @@ public:
   void for_each_leaf(const std::function<void(int, const IVec<dim>&)>& fn) const;
   //! Same domain, levels and refined cells.
   bool operator==(const CellTree& other) const;
+  //! Same domain (origin, level-0 cells, dx0) and levels.
+  bool same_domain(const CellTree& other) const;
+  //! The cells refined in exactly one of the two trees (same_domain required).
+  std::vector<CellId<dim>> refined_difference(const CellTree& other) const;
   std::size_t memory_bytes() const;
 
 private:

@@ -91,6 +91,8 @@ public:
   int slot(BlockKey key) const { return slot_.find(key); }
   int block_count() const { return static_cast<int>(active_.size()); }
   BlockKey active_block_id(int s) const { return active_[s]; }
+  //! The allocated blocks, by storage slot.
+  const std::vector<BlockKey>& active_blocks() const { return active_; }
   //! Bytes held by the block table and the node channels: proportional to the allocated blocks.
   std::size_t memory_bytes() const;
   std::size_t node_storage() const { return mass.size(); }

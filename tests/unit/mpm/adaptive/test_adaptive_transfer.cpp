@@ -8,7 +8,8 @@
 //    stresses (sum_i grad w_ip = 0, sum_i x_i grad w_ip^T = I);
 //  - a one-level tree reproduces the uniform grid's quadratic B-spline transfers;
 //  - the memory of a grid whose finest level spans 2^13 cells per axis in 3D follows the
-//    particles' blocks, not the domain.
+//    particles' blocks, not the domain;
+//  - after a tree change, the grids and ghost tables equal those built from scratch.
 #include <mpm/adaptive/adaptive_transfer.h>
 #include <mpm/core/particle_buckets.h>
 
@@ -19,6 +20,7 @@
 #include "random_tree.h"
 
 #include <random>
+#include <utility>
 
 using namespace mpm;
 using namespace mpm::adaptive;
@@ -70,6 +72,10 @@ void check_conservation(unsigned seed) {
   int transitions = 0;
   for (std::size_t p = 0; p < P.size(); ++p) transitions += grid.transfer_level(p) != type[p];
   CHECK(transitions > 0);
+  // Both adaptive paths are exercised: the general one, and the uniform loops with the
+  // ghosts' APIC terms (the plain uniform loops: the one-level test below).
+  CHECK(!grid.irregular().empty());
+  CHECK(!grid.near_embedded().empty());
   particles_to_grid(P, TransferScheme{}, grid);
   adaptive::momentum_to_velocity(grid, TransferScheme{});
 
@@ -124,6 +130,7 @@ void check_affine(unsigned seed) {
     P.C[p] = B;
   }
   grid.prepare(P.x, type);
+  CHECK(!grid.near_embedded().empty());
   particles_to_grid(P, TransferScheme{}, grid);
   adaptive::momentum_to_velocity(grid, TransferScheme{});
   double worst_grid = 0.0;
@@ -260,4 +267,54 @@ TEST_CASE("a 3D grid spanning 2^13 finest cells per axis holds memory for the pa
   for (int n = 0; n < grid.levels(); ++n)
     for (double mi : grid.level(n).mass) m += mi;
   CHECK(m == doctest::Approx(P.total_mass()).epsilon(1e-13));
+}
+
+namespace {
+// prepare() after a tree change keeps the node statuses the change cannot reach: its grids and
+// ghost tables equal those of a grid prepared on the new tree from scratch.
+template <int dim>
+void check_tree_change(unsigned seed) {
+  const CellTree<dim> coarse = test::random_tree<dim>(seed, 4, 4);
+  CellTree<dim> fine = coarse;  // coarse with a few more cells refined
+  std::mt19937 rng(seed);
+  int refined = 0;
+  std::vector<std::pair<int, IVec<dim>>> leaves;
+  coarse.for_each_leaf([&](int level, const IVec<dim>& cell) { leaves.emplace_back(level, cell); });
+  for (const auto& [level, cell] : leaves)
+    if (level < fine.finest() && rng() % 6 == 0 && ++refined) fine.refine(level, cell);
+  REQUIRE(refined > 0);
+  std::vector<std::uint16_t> type;
+  const Particles<dim> P = random_particles(coarse, dim == 2 ? 400 : 150, seed, type);
+
+  AdaptiveGrid<dim> changing(coarse);
+  changing.prepare(P.x, type);
+  for (const CellTree<dim>* tree :
+       {&std::as_const(fine), &coarse, &std::as_const(fine)}) {  // refinement added, removed, added
+    changing.tree() = *tree;
+    changing.prepare(P.x, type);
+    AdaptiveGrid<dim> fresh(*tree);
+    fresh.prepare(P.x, type);
+    CHECK(changing.irregular() == fresh.irregular());
+    CHECK(changing.near_embedded() == fresh.near_embedded());
+    for (int n = 0; n < fresh.levels(); ++n) {
+      CHECK(changing.level(n).active_blocks() == fresh.level(n).active_blocks());
+      const auto& a = changing.ghosts(n);
+      const auto& b = fresh.ghosts(n);
+      REQUIRE(a.node == b.node);
+      REQUIRE(a.begin == b.begin);
+      REQUIRE(a.link.size() == b.link.size());
+      for (std::size_t l = 0; l < a.link.size(); ++l) {
+        CHECK(a.link[l].level == b.link[l].level);
+        CHECK(a.link[l].index == b.link[l].index);
+        CHECK(a.link[l].weight == b.link[l].weight);
+      }
+      for (std::size_t j = 0; j < a.spread.size(); ++j) CHECK(a.spread[j] == b.spread[j]);
+    }
+  }
+}
+}  // namespace
+
+TEST_CASE("after a tree change the adaptive grid keeps only the node statuses the change cannot reach") {
+  for (unsigned seed : {1u, 2u, 3u}) check_tree_change<2>(seed);
+  check_tree_change<3>(4u);
 }

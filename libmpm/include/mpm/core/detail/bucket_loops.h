@@ -155,27 +155,40 @@ struct PatchFrame {
   }
 };
 
+//! Loops over buckets of fewer particles than this run on the calling thread: waking the
+//! workers costs tens of microseconds a loop, more than the work (an adaptive grid's levels).
+inline constexpr std::size_t serial_below_particles = 2048;
+
+//! body(range) over [0, n) with grain `grain`: on the calling thread when `serial`.
+template <class I, class Body>
+void for_each_range(I n, I grain, bool serial, Body&& body) {
+  if (serial)
+    body(tbb::blocked_range<I>(0, n, grain));
+  else
+    tbb::parallel_for(tbb::blocked_range<I>(0, n, grain), body);
+}
+
 //! bucket_body(first, last, const PatchFrame&, T* patch) adds Ch values per node of the
 //! particles with indices [first, last) (a range of ParticleBuckets::particle: one bucket)
 //! into patch[node * Ch + c]; the sums are added into `channels` afterwards.
 template <int dim, int Ch, class T, class BucketBody>
 void scatter_buckets(const SparseGrid<dim>& grid, const ParticleBuckets<dim>& buckets,
                      const std::array<BasicChannelView<T>, Ch>& channels, BucketBody&& bucket_body) {
+  const bool serial = buckets.particle.size() < serial_below_particles;
   for (const std::vector<int>& same_color : buckets.by_color) {
-    tbb::parallel_for(
-        tbb::blocked_range<std::size_t>(0, same_color.size(), 4), [&](const tbb::blocked_range<std::size_t>& range) {
-          alignas(64) std::array<T, patch_nodes<dim> * Ch> patch;
-          for (std::size_t r = range.begin(); r != range.end(); ++r) {
-            const int b = same_color[r];
-            patch.fill(T(0));
-            bucket_body(buckets.particle.data() + buckets.begin[b], buckets.particle.data() + buckets.begin[b + 1],
-                        PatchFrame<dim>(grid, buckets.block[b]), patch.data());
-            for_each_patch_node(grid, buckets.block[b], [&](int node, std::size_t k) {
-              for (int c = 0; c < Ch; ++c)
-                channels[c].data[k * channels[c].stride + channels[c].offset] += patch[node * Ch + c];
-            });
-          }
+    for_each_range(same_color.size(), std::size_t{4}, serial, [&](const tbb::blocked_range<std::size_t>& range) {
+      alignas(64) std::array<T, patch_nodes<dim> * Ch> patch;
+      for (std::size_t r = range.begin(); r != range.end(); ++r) {
+        const int b = same_color[r];
+        patch.fill(T(0));
+        bucket_body(buckets.particle.data() + buckets.begin[b], buckets.particle.data() + buckets.begin[b + 1],
+                    PatchFrame<dim>(grid, buckets.block[b]), patch.data());
+        for_each_patch_node(grid, buckets.block[b], [&](int node, std::size_t k) {
+          for (int c = 0; c < Ch; ++c)
+            channels[c].data[k * channels[c].stride + channels[c].offset] += patch[node * Ch + c];
         });
+      }
+    });
   }
 }
 
@@ -195,7 +208,8 @@ void scatter(const SparseGrid<dim>& grid, const ParticleBuckets<dim>& buckets,
 template <int dim, int Ch, class T, class BucketBody>
 void gather_buckets(const SparseGrid<dim>& grid, const ParticleBuckets<dim>& buckets,
                     const std::array<BasicChannelView<T>, Ch>& channels, BucketBody&& bucket_body) {
-  tbb::parallel_for(tbb::blocked_range<int>(0, buckets.count(), 4), [&](const tbb::blocked_range<int>& range) {
+  const bool serial = buckets.particle.size() < serial_below_particles;
+  for_each_range(buckets.count(), 4, serial, [&](const tbb::blocked_range<int>& range) {
     alignas(64) std::array<T, patch_nodes<dim> * Ch> patch;
     for (int b = range.begin(); b != range.end(); ++b) {
       for_each_patch_node(grid, buckets.block[b], [&](int node, std::size_t k) {
