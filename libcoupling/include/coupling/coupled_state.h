@@ -35,8 +35,10 @@ struct CoupledState {
 template <int dim>
 std::vector<mpm::PhaseRef<dim>> phases(CoupledState<dim>& s) {
   std::vector<mpm::PhaseRef<dim>> out;
-  if (s.has_fluid) out.push_back({"fluid", &s.fluid.particles, {&s.fluid.grid}, !s.has_sediment});
-  if (s.has_sediment) out.push_back({"sediment", &s.sediment.particles, {&s.sediment.grid}, true});
+  if (s.has_fluid)
+    out.push_back({"fluid", &s.fluid.particles, {&s.fluid.grid}, !s.has_sediment, mpm::index_bytes(s.fluid)});
+  if (s.has_sediment)
+    out.push_back({"sediment", &s.sediment.particles, {&s.sediment.grid}, true, mpm::index_bytes(s.sediment)});
   return out;
 }
 

@@ -393,17 +393,21 @@ void AdaptiveGrid<dim>::pull_velocity(bool old) {
 
 template <int dim>
 std::size_t AdaptiveGrid<dim>::memory_bytes() const {
-  std::size_t bytes = tree_.memory_bytes() + transfer_level_.capacity() * sizeof(int);
+  std::size_t bytes = index_bytes();
   for (const SparseGrid<dim>& g : levels_) bytes += g.memory_bytes();
+  return bytes;
+}
+
+template <int dim>
+std::size_t AdaptiveGrid<dim>::index_bytes() const {
+  std::size_t bytes = tree_.memory_bytes() + transfer_level_.capacity() * sizeof(int);
   bytes += half_cells_.capacity() * sizeof(double) +
            (irregular_.capacity() + near_embedded_.capacity()) * sizeof(std::uint32_t);
   for (const Ghosts& g : ghosts_)
     bytes += g.node.capacity() * sizeof(Index) + g.begin.capacity() * sizeof(std::uint32_t) +
              g.link.capacity() * sizeof(GhostLink<dim>) + g.spread.capacity() * sizeof(Mat<dim>) +
              g.of_node.capacity() * sizeof(int) + g.velocity_moment.capacity() * sizeof(Mat<dim>);
-  for (const ParticleBuckets<dim>& b : regular_)
-    bytes += b.particle.capacity() * sizeof(std::uint32_t) + b.begin.capacity() * sizeof(std::uint32_t) +
-             b.block.capacity() * sizeof(BlockKey);
+  for (const ParticleBuckets<dim>& b : regular_) bytes += b.memory_bytes();
   for (const LevelStatus& s : status_)
     bytes += s.index.bytes() + s.blocks.capacity() * sizeof(BlockStatus) + s.ghosts.capacity() * sizeof(PendingGhost) +
              s.links.capacity() * sizeof(NodeWeight<dim>) + s.reached.capacity() * sizeof(s.reached[0]);

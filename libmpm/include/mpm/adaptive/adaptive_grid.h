@@ -153,7 +153,10 @@ public:
   //! real nodes: after the grid update, before G2P.
   void pull_velocity(bool old);
 
+  //! Memory held [B]: the level grids' fields plus index_bytes().
   std::size_t memory_bytes() const;
+  //! Memory of everything but the level grids' fields [B]: tree, ghost tables, transfer lists.
+  std::size_t index_bytes() const;
 
 private:
   CellTree<dim> tree_;

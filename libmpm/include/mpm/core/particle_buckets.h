@@ -33,6 +33,12 @@ struct ParticleBuckets {
   std::array<std::vector<int>, colors> by_color;
 
   int count() const { return static_cast<int>(block.size()); }
+  std::size_t memory_bytes() const {
+    std::size_t bytes =
+        (particle.capacity() + begin.capacity()) * sizeof(std::uint32_t) + block.capacity() * sizeof(BlockKey);
+    for (const std::vector<int>& c : by_color) bytes += c.capacity() * sizeof(int);
+    return bytes;
+  }
 };
 
 //! Position in cell units, xi = (x - origin) / dx, evaluated in the precision of x. The sort

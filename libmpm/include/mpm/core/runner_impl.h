@@ -339,6 +339,7 @@ void Runner<dim, State>::run(State& state, Pipeline<State>& pipeline) {
       for (const auto& [name, bytes] : phase.grids[n]->memory_per_field())
         memory_.emplace_back(prefix + level + name, bytes);
     }
+    memory_.emplace_back(prefix + "grid.index", phase.index_bytes);
   }
   std::cerr << "\n" << app_ << ": stages run, in order, with their total time\n" << stage_table_;
   std::cerr << "memory held per field (bytes)\n";

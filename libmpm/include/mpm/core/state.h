@@ -71,11 +71,19 @@ struct PhaseRef {
   //! Drawn coloured by output.color_by in previews; false: drawn in a plain tint beneath the
   //! coloured phases (the fluid around the grains).
   bool coloured = true;
+  //! Memory of the grid's indexing tables besides its fields [B]: the particle buckets, and on
+  //! an adaptive grid its tree, ghost tables and transfer lists (index_bytes below).
+  std::size_t index_bytes = 0;
 };
 
 template <int dim>
+std::size_t index_bytes(const MpmState<dim>& s) {
+  return s.buckets.memory_bytes() + (s.adaptive ? s.adaptive->index_bytes() : 0);
+}
+
+template <int dim>
 std::vector<PhaseRef<dim>> phases(MpmState<dim>& s) {
-  return {{"", &s.particles, grid_levels(std::as_const(s)), true}};
+  return {{"", &s.particles, grid_levels(std::as_const(s)), true, index_bytes(s)}};
 }
 
 }  // namespace mpm
