@@ -96,8 +96,10 @@ int run(const CommandLine& cl, const Config& scene) {
   std::vector<Material<dim>> sand = {parse_material<dim>(scene.child("material"))};
   auto colliders = geometry::parse_colliders<dim>(scene, domain.lo, domain.hi, layer);
   solid::SolidScene<dim> solid = solid::make_solid_scene(settings, sand, colliders);
-  if (const auto refinement = adaptive::parse_refinement<dim>(scene, settings))
+  if (const auto refinement = adaptive::parse_refinement<dim>(scene, settings)) {
+    adaptive::check_refinement_memory(scene, *refinement, settings, colliders);
     solid::make_adaptive(solid, *refinement);
+  }
   const int ppc = geometry::particles_per_cell<dim>(column);
   Vec<dim> hi = Vec<dim>::Zero();
   hi[0] = L0;

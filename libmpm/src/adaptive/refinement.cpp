@@ -1,7 +1,10 @@
 #include <mpm/adaptive/refinement.h>
 #include "../geometry/number_text.h"
 
+#include <mpm/core/memory_budget.h>
+
 #include <cmath>
+#include <functional>
 
 namespace mpm::adaptive {
 
@@ -63,29 +66,84 @@ std::optional<RefinementSettings<dim>> parse_refinement(const Config& scene, con
   return r;
 }
 
+namespace {
+
+//! True when the cell [lo, hi] meets the region.
 template <int dim>
-CellTree<dim> build_tree(const RefinementSettings<dim>& r, const SceneSettings<dim>& settings,
-                         const geometry::ColliderSet<dim>& colliders) {
+bool meets(const RefinementRegion<dim>& region, const Vec<dim>& lo, const Vec<dim>& hi,
+           const geometry::ColliderSet<dim>& colliders) {
+  if (region.kind == RefinementRegion<dim>::Kind::box)
+    return (lo.array() < region.hi.array()).all() && (hi.array() > region.lo.array()).all();
+  // The cell meets the band |phi| <= distance if its centre is within distance plus half its
+  // diagonal (phi is a distance).
+  const Vec<dim> centre = 0.5 * (lo + hi);
+  const double reach = region.distance + 0.5 * (hi - lo).norm();
+  for (const auto& c : colliders.colliders())
+    if (std::abs(c.phi(centre, 0.0)) <= reach) return true;
+  return false;
+}
+
+//! Level-0 cells of the tree over the scene's domain.
+template <int dim>
+IVec<dim> base_cells(const RefinementSettings<dim>& r, const SceneSettings<dim>& settings) {
   const double dx0 = r.coarsest_dx(settings.dx);
   IVec<dim> base;
   for (int a = 0; a < dim; ++a)
     base[a] = static_cast<int>(std::ceil((settings.domain_hi[a] - settings.domain_lo[a]) / dx0 - 1e-9));
-  CellTree<dim> tree(settings.domain_lo, base, dx0, r.levels);
+  return base;
+}
+
+}  // namespace
+
+template <int dim>
+void check_refinement_memory(const Config& scene, const RefinementSettings<dim>& r, const SceneSettings<dim>& settings,
+                             const geometry::ColliderSet<dim>& colliders) {
+  const IVec<dim> base = base_cells(r, settings);
+  const double dx0 = r.coarsest_dx(settings.dx);
+  // The tree may take half of what still fits: the rest is for the particles and grids that
+  // the refinement is for (seeding checks those when it has them).
+  const double budget = 0.5 * std::max(0.0, memory_headroom());
+  const double cap = budget / kBytesPerRefinedCell;
+  const std::vector<Config> entries = scene.child("adaptive").list("refine");
+  double count = 0.0;
+  for (std::size_t i = 0; i < r.regions.size(); ++i) {
+    const RefinementRegion<dim>& region = r.regions[i];
+    // The cells refine_where would refine for this region alone, top down, until over the cap.
+    std::function<void(int, const IVec<dim>&)> visit = [&](int level, const IVec<dim>& cell) {
+      if (level >= region.level || count > cap) return;
+      const double dx = dx0 / static_cast<double>(1 << level);
+      const Vec<dim> lo = settings.domain_lo + dx * cell.template cast<double>();
+      if (!meets(region, lo, Vec<dim>(lo + Vec<dim>::Constant(dx)), colliders)) return;
+      count += 1.0;
+      for (int c = 0; c < (1 << dim); ++c) {
+        IVec<dim> child;
+        for (int a = 0; a < dim; ++a) child[a] = 2 * cell[a] + ((c >> a) & 1);
+        visit(level + 1, child);
+      }
+    };
+    for_each_in_box<dim>(IVec<dim>::Zero(), (base.array() - 1).matrix(),
+                         [&](const IVec<dim>& cell) { visit(0, cell); });
+    if (count > cap)
+      entries[i].fail(region.kind == RefinementRegion<dim>::Kind::box ? "box" : "near_colliders",
+                      "refining to level " + std::to_string(region.level) + " (dx " +
+                          geometry::detail::number_text(settings.dx * (1 << (r.levels - 1 - region.level))) +
+                          " m) refines more than " + geometry::detail::number_text(count) +
+                          " cells with the regions before it, a tree of more than " +
+                          geometry::detail::number_text(count * kBytesPerRefinedCell / 1e9) +
+                          " GB: the tree may take half of the " + geometry::detail::number_text(2.0 * budget / 1e9) +
+                          " GB that still fit (the memory available, or --max-memory, less what is held): shrink the "
+                          "region, lower its level or coarsen grid.dx");
+  }
+}
+
+template <int dim>
+CellTree<dim> build_tree(const RefinementSettings<dim>& r, const SceneSettings<dim>& settings,
+                         const geometry::ColliderSet<dim>& colliders) {
+  CellTree<dim> tree(settings.domain_lo, base_cells(r, settings), r.coarsest_dx(settings.dx), r.levels);
   tree.refine_where([&](const Vec<dim>& lo, const Vec<dim>& hi) {
     int target = 0;
-    for (const RefinementRegion<dim>& region : r.regions) {
-      bool hit = false;
-      if (region.kind == RefinementRegion<dim>::Kind::box) {
-        hit = (lo.array() < region.hi.array()).all() && (hi.array() > region.lo.array()).all();
-      } else {
-        // The cell meets the band |phi| <= distance if its centre is within distance plus
-        // half its diagonal (phi is a distance).
-        const Vec<dim> centre = 0.5 * (lo + hi);
-        const double reach = region.distance + 0.5 * (hi - lo).norm();
-        for (const auto& c : colliders.colliders()) hit = hit || std::abs(c.phi(centre, 0.0)) <= reach;
-      }
-      if (hit) target = std::max(target, region.level);
-    }
+    for (const RefinementRegion<dim>& region : r.regions)
+      if (meets(region, lo, hi, colliders)) target = std::max(target, region.level);
     return target;
   });
   return tree;
@@ -103,5 +161,9 @@ template std::optional<RefinementSettings<2>> parse_refinement(const Config&, co
 template std::optional<RefinementSettings<3>> parse_refinement(const Config&, const SceneSettings<3>&);
 template CellTree<2> build_tree(const RefinementSettings<2>&, const SceneSettings<2>&, const geometry::ColliderSet<2>&);
 template CellTree<3> build_tree(const RefinementSettings<3>&, const SceneSettings<3>&, const geometry::ColliderSet<3>&);
+template void check_refinement_memory(const Config&, const RefinementSettings<2>&, const SceneSettings<2>&,
+                                      const geometry::ColliderSet<2>&);
+template void check_refinement_memory(const Config&, const RefinementSettings<3>&, const SceneSettings<3>&,
+                                      const geometry::ColliderSet<3>&);
 
 }  // namespace mpm::adaptive

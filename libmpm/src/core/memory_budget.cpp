@@ -42,6 +42,11 @@ std::string gigabytes(double bytes) {
 
 void cap_memory(double bytes) { g_cap = std::min(g_cap, bytes); }
 
+double memory_headroom() {
+  const double held = resident_memory();
+  return std::min(held + available_memory(), g_cap) - held;
+}
+
 std::string memory_shortfall(double bytes) {
   const double held = resident_memory(), available = held + available_memory();
   const double limit = std::min(available, g_cap);

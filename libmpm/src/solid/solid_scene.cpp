@@ -148,6 +148,7 @@ SolidScene<dim> load_solid_scene(const Config& scene) {
   const double wall_dx = refinement ? refinement->coarsest_dx(settings.dx) : settings.dx;
   auto colliders = geometry::parse_colliders<dim>(scene, settings.domain_lo, settings.domain_hi,
                                                   wall_layer(settings.kernel, wall_dx));
+  if (refinement) adaptive::check_refinement_memory(scene, *refinement, settings, colliders);
   const std::string solver = scene.choice("solver", "explicit", solid_solver_names());
   const stages::ImplicitSettings implicit = parse_implicit_settings(scene, solver);
   if (solver == "implicit" && refinement)

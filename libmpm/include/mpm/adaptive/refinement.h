@@ -55,6 +55,18 @@ struct RefinementSettings {
 template <int dim>
 std::optional<RefinementSettings<dim>> parse_refinement(const Config& scene, const SceneSettings<dim>& settings);
 
+//! Bytes the tree holds per refined cell: a key and a value in a hash table at most half full,
+//! after growth by doubling.
+inline constexpr double kBytesPerRefinedCell = 48.0;
+
+//! Refuses, through `scene` (file, line, key, value), a static refinement whose tree would not
+//! take more than half of the memory that still fits (core/memory_budget.h), before anything is
+//! allocated: counts the cells each region refines on its own (overlaps twice: an upper
+//! bound), and stops counting as soon as the sum is over.
+template <int dim>
+void check_refinement_memory(const Config& scene, const RefinementSettings<dim>& refinement,
+                             const SceneSettings<dim>& settings, const geometry::ColliderSet<dim>& colliders);
+
 //! The tree over the scene's domain (rounded up to whole coarse cells), refined in every region.
 //! The type-driven refinement comes on top of it, every step (stage 'refine').
 template <int dim>

@@ -16,6 +16,9 @@ void cap_memory(double bytes);
 //! the 24.8 GB available (MemAvailable)").
 std::string memory_shortfall(double bytes);
 
+//! Bytes that still fit: the lower of the memory available and the cap, less what is held.
+double memory_headroom();
+
 //! Estimated bytes per particle of a solid or fluid particle set, with the particle's share of
 //! the grid and of the sort buffers: the checkpointed channels (x, v, C, F, mass, volume0,
 //! plastic, material), seeding's temporary positions, and about one grid node of mass,
