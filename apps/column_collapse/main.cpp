@@ -83,9 +83,7 @@ int run(const CommandLine& cl, const Config& scene) {
       column.number("domain_length", L0 * (1.0 + 1.5 * lube_runout_law(a)) + 4 * dx, Range{L0, 1e308, true, false});
   const double depth = dim == 3 ? column.number("depth", L0, Range::positive()) : 0.0;
   // Walls at x = 0, y = 0, z = 0; on an adaptive grid they act on coarse nodes (dx 2^(levels-1)).
-  const std::optional<Config> adaptive_key = scene.optional_child("adaptive");
-  const int levels = adaptive_key ? adaptive_key->integer("levels", 2, 1, adaptive::max_levels) : 1;
-  const double layer = wall_layer(parse_kernel(scene), dx * (1 << (levels - 1)));
+  const double layer = wall_layer(parse_kernel(scene), dx * (1 << (adaptive::levels_of(scene) - 1)));
   DerivedDomain<dim> domain{Vec<dim>::Constant(-layer), Vec<dim>::Zero(), dx};
   domain.hi[0] = length + layer;
   domain.hi[1] = H0 + 2 * layer;
@@ -96,10 +94,7 @@ int run(const CommandLine& cl, const Config& scene) {
   std::vector<Material<dim>> sand = {parse_material<dim>(scene.child("material"))};
   auto colliders = geometry::parse_colliders<dim>(scene, domain.lo, domain.hi, layer);
   solid::SolidScene<dim> solid = solid::make_solid_scene(settings, sand, colliders);
-  if (const auto refinement = adaptive::parse_refinement<dim>(scene, settings)) {
-    adaptive::check_refinement_memory(scene, *refinement, settings, colliders);
-    solid::make_adaptive(solid, *refinement);
-  }
+  solid::read_adaptive_key(solid, scene);
   const int ppc = geometry::particles_per_cell<dim>(column);
   Vec<dim> hi = Vec<dim>::Zero();
   hi[0] = L0;

@@ -6,6 +6,8 @@
 //
 //   vibrating_bar data/scenes/vibrating_bar.yaml
 //   vibrating_bar data/scenes/vibrating_bar.yaml --set bar.cells=64 --set grid.kernel=cubic
+//   vibrating_bar data/scenes/vibrating_bar.yaml --set adaptive.levels=2
+//       --set 'adaptive.refine=[{box: {lo: [0, 0], hi: [0.5, 0.01]}}]'   (fine for x < L/2)
 //
 // diagnostics.csv adds com_velocity and com_velocity_exact; summary.json adds error, the
 // largest |v_com - v_com_exact| / v0 over the frames, and period (2 pi / omega).
@@ -45,7 +47,8 @@ int run(const CommandLine& cl, const Config& scene) {
   const double dx = L / cells;
   const double thickness = dx * bar.integer("thickness_cells", 2, 1, 64);
   const double tolerance = bar.number("check_tolerance", 0.1, Range::positive());
-  const double layer = wall_layer(parse_kernel(scene), dx);  // the fixed wall at x = 0
+  // The fixed wall at x = 0; on an adaptive grid it acts on coarse nodes (dx 2^(levels-1)).
+  const double layer = wall_layer(parse_kernel(scene), dx * (1 << (adaptive::levels_of(scene) - 1)));
   DerivedDomain<dim> domain{Vec<dim>::Constant(-layer), Vec<dim>::Constant(thickness + layer), dx};
   domain.hi[0] = 1.25 * L + 2 * layer;
 
@@ -56,6 +59,7 @@ int run(const CommandLine& cl, const Config& scene) {
     scene.child("material").fail("poisson_ratio", "the 1D bar solution needs poisson_ratio: 0");
   auto colliders = geometry::parse_colliders<dim>(scene, domain.lo, domain.hi, layer);
   solid::SolidScene<dim> solid = solid::make_solid_scene(settings, materials, colliders);
+  solid::read_adaptive_key(solid, scene);  // optional: an adaptive grid (bar.cells: the finest)
   const int ppc = geometry::particles_per_cell<dim>(bar);
   Vec<dim> hi = Vec<dim>::Constant(thickness);
   hi[0] = L;

@@ -8,6 +8,11 @@
 
 namespace mpm::adaptive {
 
+int levels_of(const Config& scene) {
+  const std::optional<Config> cfg = scene.optional_child("adaptive");
+  return cfg ? cfg->integer("levels", 2, 1, max_levels) : 1;
+}
+
 template <int dim>
 std::optional<RefinementSettings<dim>> parse_refinement(const Config& scene, const SceneSettings<dim>& settings) {
   const std::optional<Config> cfg = scene.optional_child("adaptive");
@@ -18,7 +23,7 @@ std::optional<RefinementSettings<dim>> parse_refinement(const Config& scene, con
   if (!std::holds_alternative<QuadraticBSpline>(settings.kernel))
     scene.fail("grid", "an adaptive grid (key adaptive) transfers with GIMP weights: use kernel: quadratic");
   RefinementSettings<dim> r;
-  r.levels = cfg->integer("levels", 2, 1, max_levels);
+  r.levels = levels_of(scene);
   for (const Config& entry : cfg->list("refine")) {
     RefinementRegion<dim> region;
     region.level = entry.integer("level", r.levels - 1, 0, r.levels - 1);

@@ -136,6 +136,14 @@ SolidScene<dim> make_solid_scene(SceneSettings<dim> settings, std::vector<Materi
 }
 
 template <int dim>
+void read_adaptive_key(SolidScene<dim>& solid, const Config& scene) {
+  if (const auto refinement = adaptive::parse_refinement<dim>(scene, solid.settings)) {
+    adaptive::check_refinement_memory(scene, *refinement, solid.settings, solid.colliders);
+    make_adaptive(solid, *refinement);
+  }
+}
+
+template <int dim>
 void seed_bodies(SolidScene<dim>& solid, const Config& scene) {
   for (const Config& body : scene.list("bodies")) seed_body(solid, body);
 }
@@ -143,21 +151,19 @@ void seed_bodies(SolidScene<dim>& solid, const Config& scene) {
 template <int dim>
 SolidScene<dim> load_solid_scene(const Config& scene) {
   SceneSettings<dim> settings = parse_scene_settings<dim>(scene);
-  const auto refinement = adaptive::parse_refinement<dim>(scene, settings);
   // Walls act on the nodes within two cells of the faces: of coarse cells on an adaptive grid.
-  const double wall_dx = refinement ? refinement->coarsest_dx(settings.dx) : settings.dx;
+  const double wall_dx = settings.dx * (1 << (adaptive::levels_of(scene) - 1));
   auto colliders = geometry::parse_colliders<dim>(scene, settings.domain_lo, settings.domain_hi,
                                                   wall_layer(settings.kernel, wall_dx));
-  if (refinement) adaptive::check_refinement_memory(scene, *refinement, settings, colliders);
   const std::string solver = scene.choice("solver", "explicit", solid_solver_names());
   const stages::ImplicitSettings implicit = parse_implicit_settings(scene, solver);
-  if (solver == "implicit" && refinement)
+  if (solver == "implicit" && scene.has("adaptive"))
     scene.fail("solver", "solver 'implicit' runs on a uniform grid only; remove the key 'adaptive' or use 'explicit'");
   for (int a = 0; solver == "implicit" && a < dim; ++a)
     if (settings.periodic[a]) scene.fail("solver", "solver 'implicit' does not support periodic axes yet");
   SolidScene<dim> s =
       make_solid_scene(std::move(settings), parse_materials<dim>(scene), std::move(colliders), solver, implicit);
-  if (refinement) make_adaptive(s, *refinement);
+  read_adaptive_key(s, scene);
   seed_bodies(s, scene);
   return s;
 }
@@ -209,6 +215,7 @@ double elastic_energy(const MpmState<dim>& state, const std::vector<Material<dim
                                             geometry::ColliderSet<dim>, const std::string&,                           \
                                             const stages::ImplicitSettings&);                                         \
   template void make_adaptive(SolidScene<dim>&, const adaptive::RefinementSettings<dim>&);                            \
+  template void read_adaptive_key(SolidScene<dim>&, const Config&);                                                   \
   template void seed_bodies(SolidScene<dim>&, const Config&);                                                         \
   template SolidScene<dim> load_solid_scene<dim>(const Config&);                                                      \
   template Pipeline<MpmState<dim>> make_solid_pipeline(const SolidScene<dim>&);                                       \

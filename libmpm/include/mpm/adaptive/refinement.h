@@ -55,6 +55,10 @@ struct RefinementSettings {
 template <int dim>
 std::optional<RefinementSettings<dim>> parse_refinement(const Config& scene, const SceneSettings<dim>& settings);
 
+//! The number of levels the scene's `adaptive` key asks for (1 without the key), validated as
+//! parse_refinement does: apps size their wall layers with it before the domain is known.
+int levels_of(const Config& scene);
+
 //! Bytes the tree holds per refined cell: a key and a value in a hash table at most half full,
 //! after growth by doubling.
 inline constexpr double kBytesPerRefinedCell = 48.0;

@@ -66,6 +66,13 @@ SolidScene<dim> make_solid_scene(SceneSettings<dim> settings, std::vector<Materi
 template <int dim>
 void make_adaptive(SolidScene<dim>& scene, const adaptive::RefinementSettings<dim>& refinement);
 
+//! Apps with their own body keys: reads the scene's optional `adaptive` key
+//! (adaptive::parse_refinement), refuses a static refinement beyond the memory
+//! (adaptive::check_refinement_memory) and makes the unseeded scene adaptive. Size the wall
+//! layer first with adaptive::levels_of: the walls act on the coarsest cells.
+template <int dim>
+void read_adaptive_key(SolidScene<dim>& solid, const Config& scene);
+
 //! Seeds the optional "bodies" list of `scene` (box, sphere or mesh shapes).
 template <int dim>
 void seed_bodies(SolidScene<dim>& solid, const Config& scene);
