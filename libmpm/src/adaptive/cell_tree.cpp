@@ -67,23 +67,45 @@ void CellTree<dim>::refine(int level, const IVec<dim>& cell) {
 }
 
 template <int dim>
-void CellTree<dim>::refine_where(const std::function<int(const Vec<dim>&, const Vec<dim>&)>& target_level,
-                                 const Vec<dim>& region_lo, const Vec<dim>& region_hi) {
+template <class OnRefine>
+void CellTree<dim>::walk_refinements(const std::function<int(const Vec<dim>&, const Vec<dim>&)>& target_level,
+                                     const Vec<dim>& region_lo, const Vec<dim>& region_hi, OnRefine&& on_refine) const {
+  bool go_on = true;
   std::function<void(int, const IVec<dim>&)> visit = [&](int level, const IVec<dim>& cell) {
     if (!is_refined(level, cell)) {
       if (level == finest()) return;
       const Vec<dim> lo = origin_ + dx(level) * cell.template cast<double>();
       const Vec<dim> hi = lo + Vec<dim>::Constant(dx(level));
       if (target_level(lo, hi) <= level) return;
-      refine(level, cell);
+      go_on = on_refine(level, cell);
     }
-    for (int c = 0; c < (1 << dim); ++c) {
+    for (int c = 0; c < (1 << dim) && go_on; ++c) {
       IVec<dim> child;
       for (int a = 0; a < dim; ++a) child[a] = 2 * cell[a] + ((c >> a) & 1);
       visit(level + 1, child);
     }
   };
-  for_each_base_cell(region_lo, region_hi, [&](const IVec<dim>& cell) { visit(0, cell); });
+  for_each_base_cell(region_lo, region_hi, [&](const IVec<dim>& cell) {
+    if (go_on) visit(0, cell);
+  });
+}
+
+template <int dim>
+void CellTree<dim>::refine_where(const std::function<int(const Vec<dim>&, const Vec<dim>&)>& target_level,
+                                 const Vec<dim>& region_lo, const Vec<dim>& region_hi) {
+  walk_refinements(target_level, region_lo, region_hi, [&](int level, const IVec<dim>& cell) {
+    refine(level, cell);
+    return true;
+  });
+}
+
+template <int dim>
+double CellTree<dim>::count_refinements(const std::function<int(const Vec<dim>&, const Vec<dim>&)>& target_level,
+                                        double cap) const {
+  double count = 0.0;
+  walk_refinements(target_level, origin_, origin_ + dx0_ * base_cells_.template cast<double>(),
+                   [&](int, const IVec<dim>&) { return ++count <= cap; });
+  return count;
 }
 
 template <int dim>

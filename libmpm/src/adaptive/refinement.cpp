@@ -4,7 +4,6 @@
 #include <mpm/core/memory_budget.h>
 
 #include <cmath>
-#include <functional>
 
 namespace mpm::adaptive {
 
@@ -103,8 +102,7 @@ IVec<dim> base_cells(const RefinementSettings<dim>& r, const SceneSettings<dim>&
 template <int dim>
 void check_refinement_memory(const Config& scene, const RefinementSettings<dim>& r, const SceneSettings<dim>& settings,
                              const geometry::ColliderSet<dim>& colliders) {
-  const IVec<dim> base = base_cells(r, settings);
-  const double dx0 = r.coarsest_dx(settings.dx);
+  const CellTree<dim> unrefined(settings.domain_lo, base_cells(r, settings), r.coarsest_dx(settings.dx), r.levels);
   // The tree may take half of what still fits: the rest is for the particles and grids that
   // the refinement is for (seeding checks those when it has them).
   const double budget = 0.5 * std::max(0.0, memory_headroom());
@@ -113,21 +111,9 @@ void check_refinement_memory(const Config& scene, const RefinementSettings<dim>&
   double count = 0.0;
   for (std::size_t i = 0; i < r.regions.size(); ++i) {
     const RefinementRegion<dim>& region = r.regions[i];
-    // The cells refine_where would refine for this region alone, top down, until over the cap.
-    std::function<void(int, const IVec<dim>&)> visit = [&](int level, const IVec<dim>& cell) {
-      if (level >= region.level || count > cap) return;
-      const double dx = dx0 / static_cast<double>(1 << level);
-      const Vec<dim> lo = settings.domain_lo + dx * cell.template cast<double>();
-      if (!meets(region, lo, Vec<dim>(lo + Vec<dim>::Constant(dx)), colliders)) return;
-      count += 1.0;
-      for (int c = 0; c < (1 << dim); ++c) {
-        IVec<dim> child;
-        for (int a = 0; a < dim; ++a) child[a] = 2 * cell[a] + ((c >> a) & 1);
-        visit(level + 1, child);
-      }
-    };
-    for_each_in_box<dim>(IVec<dim>::Zero(), (base.array() - 1).matrix(),
-                         [&](const IVec<dim>& cell) { visit(0, cell); });
+    count += unrefined.count_refinements(
+        [&](const Vec<dim>& lo, const Vec<dim>& hi) { return meets(region, lo, hi, colliders) ? region.level : 0; },
+        cap - count);
     if (count > cap)
       entries[i].fail(region.kind == RefinementRegion<dim>::Kind::box ? "box" : "near_colliders",
                       "refining to level " + std::to_string(region.level) + " (dx " +

@@ -64,6 +64,10 @@ public:
   void refine_where(const std::function<int(const Vec<dim>& lo, const Vec<dim>& hi)>& target_level,
                     const Vec<dim>& region_lo, const Vec<dim>& region_hi);
 
+  //! The number of cells refine_where(target_level) would refine, counted without refining;
+  //! the count stops as soon as it exceeds `cap` (then returns cap + 1).
+  double count_refinements(const std::function<int(const Vec<dim>& lo, const Vec<dim>& hi)>& target_level,
+                           double cap) const;
   //! The leaf that contains finest-level cell `f` (level -1 outside the domain).
   CellId<dim> leaf_of(const IVec<dim>& f) const;
   //! The coarsest leaf whose closure contains lattice point `point` (level -1 outside).
@@ -97,6 +101,12 @@ private:
     for_each_in_box<dim>(first, last, fn);
   }
   void visit_leaves(int level, const IVec<dim>& cell, const std::function<void(int, const IVec<dim>&)>& fn) const;
+  //! refine_where's walk, top down over the level-0 cells overlapping [region_lo, region_hi]:
+  //! on_refine(level, cell) for each unrefined cell whose target level exceeds its own (false:
+  //! stop the walk), then into its children, as into those of every refined cell.
+  template <class OnRefine>
+  void walk_refinements(const std::function<int(const Vec<dim>&, const Vec<dim>&)>& target_level,
+                        const Vec<dim>& region_lo, const Vec<dim>& region_hi, OnRefine&& on_refine) const;
   int finest_level_in(int level, const IVec<dim>& cell, const Vec<dim>& lo, const Vec<dim>& hi) const;
 
   Vec<dim> origin_ = Vec<dim>::Zero();

@@ -238,6 +238,25 @@ TEST_CASE("a one-level adaptive grid reproduces the uniform quadratic transfers"
   check_uniform_limit<3>();
 }
 
+TEST_CASE("count_refinements counts the cells refine_where refines, without refining, and stops past its cap") {
+  // A disk refined to level 3 inside a box refined to level 2, over 6 x 4 level-0 cells.
+  const auto target = [](const Vec<2>& lo, const Vec<2>& hi) {
+    const Vec<2> nearest = Vec<2>(0.7, 0.5).cwiseMax(lo).cwiseMin(hi);
+    if ((nearest - Vec<2>(0.7, 0.5)).norm() < 0.2) return 3;
+    return (lo.array() < 1.2).all() && (hi.array() > 0.3).all() ? 2 : 0;
+  };
+  const CellTree<2> unrefined(Vec<2>::Zero(), IVec<2>(6, 4), 0.25, 4);
+  const double counted = unrefined.count_refinements(target, 1e18);
+  CellTree<2> tree = unrefined;
+  tree.refine_where(target);
+  std::size_t leaves = 0;
+  tree.for_each_leaf([&](int, const IVec<2>&) { ++leaves; });
+  CHECK(counted > 50.0);
+  CHECK(counted == static_cast<double>(leaves - 24) / 3.0);  // each refinement adds 3 leaves
+  CHECK(unrefined.count_refinements(target, 5.0) == 6.0);
+  CHECK(unrefined == CellTree<2>(Vec<2>::Zero(), IVec<2>(6, 4), 0.25, 4));
+}
+
 TEST_CASE("a 3D grid spanning 2^13 finest cells per axis holds memory for the particles' blocks only") {
   // 4 levels over 1024^3 coarse cells: the finest level has 8192 = 2^13 cells per axis. A
   // dense block table alone would hold (8192 / 4)^3 * 4 bytes = 34 GB on that level.
