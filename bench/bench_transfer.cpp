@@ -34,6 +34,7 @@
 #include <cstdio>
 #include <random>
 #include <string>
+#include <thread>
 #include <vector>
 
 using namespace mpm;
@@ -536,6 +537,7 @@ bool run_precision(const Options& o, const char* name, const Particles<3>& sorte
 
 int main(int argc, char** argv) {
   Options o;
+  const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   CLI::App app{"Particle <-> grid transfer benchmark (Gao et al. 2017, Table 1)"};
   app.add_option("--particles-spacing", o.spacing, "particle lattice spacing [m] (default 1/256)")
       ->check(CLI::Range(1e-3, 0.25));
@@ -548,7 +550,7 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"float", "double", "both"}));
   app.add_option("--threads", o.threads,
                  "thread counts to time, e.g. --threads 1 2 4 16 (default 1 2); 1 is added first when missing")
-      ->check(CLI::Range(1, 4096));
+      ->check(CLI::Range(1, cores, "thread count in [1, cores of this machine = " + std::to_string(cores) + "]"));
   CLI11_PARSE(app, argc, argv);
   o.threads.erase(std::remove(o.threads.begin(), o.threads.end(), 1), o.threads.end());
   o.threads.insert(o.threads.begin(), 1);  // the baseline of every ratio
