@@ -27,9 +27,9 @@
 #include <mpm/solid/solid_channels.h>
 #include <mpm/solid/solid_scene.h>
 
-#include <Eigen/SVD>
 #include <tbb/global_control.h>
 #include <CLI/CLI.hpp>
+#include <Eigen/SVD>
 
 #include <algorithm>
 #include <chrono>
@@ -330,10 +330,11 @@ bool run_case(const Options& o, const std::string& name) {
   run_reference(c, o.cells, check.dt, &ref_totals);
   const double d = deviation(check.totals, ref_totals);
   const double tolerance = 1e-9;
-  std::printf("\n%s: %zu particles, dx = 1/%d, %d steps (dt %.3g .. %.3g s); library vs reference totals: max "
-              "relative difference %.1e (tolerance %.0e) %s\n",
-              name.c_str(), check.particles, o.cells, o.steps, *std::min_element(check.dt.begin(), check.dt.end()),
-              *std::max_element(check.dt.begin(), check.dt.end()), d, tolerance, d < tolerance ? "ok" : "FAILED");
+  std::printf(
+      "\n%s: %zu particles, dx = 1/%d, %d steps (dt %.3g .. %.3g s); library vs reference totals: max "
+      "relative difference %.1e (tolerance %.0e) %s\n",
+      name.c_str(), check.particles, o.cells, o.steps, *std::min_element(check.dt.begin(), check.dt.end()),
+      *std::max_element(check.dt.begin(), check.dt.end()), d, tolerance, d < tolerance ? "ok" : "FAILED");
   if (!(d < tolerance)) return false;
 
   std::vector<double> reference;
@@ -350,10 +351,8 @@ bool run_case(const Options& o, const std::string& name) {
   }
   const double n = static_cast<double>(check.particles) * o.steps;
   const double ref_s = median(reference), one = median(library[0]);
-  std::printf("median of %d runs; ns per particle-step per core = s x threads x 1e9 / (particles x steps)\n",
-              o.repeat);
-  std::printf("%-10s %7s | %9s %14s %12s %9s\n", "run", "threads", "s", "ns/p-step/core", "vs reference",
-              "speed-up");
+  std::printf("median of %d runs; ns per particle-step per core = s x threads x 1e9 / (particles x steps)\n", o.repeat);
+  std::printf("%-10s %7s | %9s %14s %12s %9s\n", "run", "threads", "s", "ns/p-step/core", "vs reference", "speed-up");
   std::printf("%-10s %7d | %9.3f %14.1f %12s %9s\n", "reference", 1, ref_s, ref_s * 1e9 / n, "1.00", "");
   for (std::size_t i = 0; i < o.threads.size(); ++i) {
     const double s = median(library[i]);
@@ -374,8 +373,7 @@ int main(int argc, char** argv) {
   Options o;
   const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   CLI::App app{"The explicit solid step: library against a textbook step, ns per particle-step per core"};
-  app.add_option("--case", o.cases, "sand, jello or both (default both)")
-      ->check(CLI::IsMember({"sand", "jello"}));
+  app.add_option("--case", o.cases, "sand, jello or both (default both)")->check(CLI::IsMember({"sand", "jello"}));
   app.add_option("--cells", o.cells, "grid cells per axis of the unit cube (default 64)")->check(CLI::Range(16, 512));
   app.add_option("--steps", o.steps, "steps per run (default 10)")->check(CLI::Range(1, 10000));
   app.add_option("--repeat", o.repeat, "runs per configuration; the median is reported")->check(CLI::Range(1, 100));
