@@ -46,6 +46,7 @@ struct RestartCase {
   double frame_dt;
   std::vector<std::string> phases, solid_phases, series, final_results;
   bool adaptive = false;  //!< solid particles carry their level (channel "level")
+  bool plastic = false;   //!< solid particles carry the stress cache (a plastic material)
 };
 
 const RestartCase kColumnCollapse{COLUMN_COLLAPSE_APP,
@@ -55,7 +56,9 @@ const RestartCase kColumnCollapse{COLUMN_COLLAPSE_APP,
                                   {""},
                                   {""},
                                   {"particles"},
-                                  {"runout", "final_height", "normalized_runout"}};
+                                  {"runout", "final_height", "normalized_runout"},
+                                  false,
+                                  true};
 // Resampling splits and merges particles every step (random split rotations hashed from the
 // step): the restarted run must split and merge the same particles.
 const RestartCase kColumnAdaptive{COLUMN_COLLAPSE_APP,
@@ -66,6 +69,7 @@ const RestartCase kColumnAdaptive{COLUMN_COLLAPSE_APP,
                                   {""},
                                   {"particles"},
                                   {"runout", "final_height", "normalized_runout"},
+                                  true,
                                   true};
 #ifdef JELLO_COLLIDE_APP
 // Every result of jello_collide compares the end with the start of the run: none is final-only.
@@ -108,14 +112,18 @@ std::vector<std::string> split(const std::string& line) {
   return fields;
 }
 
-void check_checkpoints_equal(const fs::path& a, const fs::path& b, const std::string& phase, bool solid,
-                             bool adaptive) {
+void check_checkpoints_equal(const fs::path& a, const fs::path& b, const std::string& phase, bool solid, bool adaptive,
+                             bool plastic) {
   INFO(a.filename().string() << " phase '" << phase << "'");
   mpm::io::CheckpointHeader ha, hb;
   mpm::Particles<2> pa, pb;
   if (solid) {
     mpm::solid::add_solid_channels(pa);
     mpm::solid::add_solid_channels(pb);
+    if (plastic) {
+      mpm::solid::add_stress_cache(pa);
+      mpm::solid::add_stress_cache(pb);
+    }
   }
   if (adaptive)
     for (mpm::Particles<2>* p : {&pa, &pb}) p->add_channel<std::uint16_t>("level", 0, mpm::ChannelUse{true, true, ""});
@@ -212,7 +220,7 @@ void check_particle_state(const RestartCase& c, const fs::path& full, const fs::
     for (const std::string& phase : c.phases) {
       const bool solid = std::find(c.solid_phases.begin(), c.solid_phases.end(), phase) != c.solid_phases.end();
       check_checkpoints_equal(full / numbered("checkpoint", frame, ".h5"),
-                              restarted / numbered("checkpoint", frame, ".h5"), phase, solid, c.adaptive);
+                              restarted / numbered("checkpoint", frame, ".h5"), phase, solid, c.adaptive, c.plastic);
     }
   for (const std::string& series : c.series) {
     for (int frame = kCheckpointEvery + 1; frame <= kFrames; ++frame) {

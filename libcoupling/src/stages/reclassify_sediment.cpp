@@ -90,6 +90,7 @@ void ReclassifySediment<dim>::run(CoupledState<dim>& s) {
   to_discrete_ = to_continuum_ = 0;
   std::vector<mpm::Mat<dim>>& F = mpm::solid::elastic_F(P);
   std::vector<double>& plastic = mpm::solid::plastic_state(P);
+  std::vector<mpm::Mat<dim>>* cache = mpm::solid::stress_cache(P);
   for (std::size_t p = 0; p < P.size(); ++p) {
     const bool was_discrete = P.material[p] == discrete_grain;
     if (was_discrete && phi_p_[p] > thresholds_.dense_above) {
@@ -102,6 +103,7 @@ void ReclassifySediment<dim>::run(CoupledState<dim>& s) {
     if (was_discrete || P.material[p] == discrete_grain) {
       F[p] = mpm::Mat<dim>::Identity();
       plastic[p] = 0.0;
+      if (cache) (*cache)[p].setZero();  // tau(I) = 0
     }
   }
 }

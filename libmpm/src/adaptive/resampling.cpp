@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <type_traits>
 #include <unordered_map>
@@ -164,6 +165,14 @@ void merge_particles(Particles<dim>& P, const std::vector<std::size_t>& group,
     if constexpr (std::is_same_v<T, std::uint16_t>) {
       return;  // material and level: equal within a group (the level is lowered below)
     } else {
+      if (info.use.derived) {
+        constexpr double unknown = std::numeric_limits<double>::quiet_NaN();  // its owner recomputes it
+        if constexpr (std::is_same_v<T, double>)
+          values[into] = unknown;
+        else
+          values[into].setConstant(unknown);
+        return;
+      }
       if constexpr (std::is_same_v<T, double>) {
         if (info.name == "mass" || info.name == "volume0") {  // extensive
           double sum = 0.0;

@@ -62,6 +62,12 @@ ExplicitSolver<dim>::ExplicitSolver(std::vector<Material<dim>> materials, bool s
     : materials_(std::move(materials)), stress_free_particles_(stress_free_particles) {}
 
 template <int dim>
+void ExplicitSolver<dim>::add_channels(Particles<dim>& particles) const {
+  add_solid_channels(particles);
+  if (stages::any_plastic(materials_)) add_stress_cache(particles);
+}
+
+template <int dim>
 double ExplicitSolver<dim>::wave_speed() const {
   double c = 0.0;
   for (const Material<dim>& m : materials_) c = std::max(c, m.wave_speed());

@@ -34,6 +34,10 @@ struct ChannelUse {
   //! The dataset name in particle frames when it is not the channel's name. Frames hold a matrix
   //! channel as its determinant (ParaView shows scalars and 3-vectors), so "F" is written as "J".
   std::string output_name = {};
+  //! A cache of other channels (the solid's stress_cache): a merge of particles
+  //! (adaptive/resampling.h) marks it unknown (NaN) instead of averaging it, so that its owner
+  //! recomputes it.
+  bool derived = false;
 };
 
 //! What for_each_channel tells about a channel besides its values.

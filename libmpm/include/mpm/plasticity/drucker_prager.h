@@ -65,8 +65,9 @@ public:
 
   //! Projects Fe onto the admissible set and updates the volume correction `plastic` (log
   //! volume, >= 0). Returns whether Fe changed. A changed Fe has positive singular values.
-  bool project(Mat<dim>& Fe, double& plastic) const {
-    const math::Svd<dim> f = math::svd(Fe);
+  //! `result`, when given, receives the SVD of the Fe left (the trial's when unchanged).
+  bool project(Mat<dim>& Fe, double& plastic, math::Svd<dim>* result = nullptr) const {
+    math::Svd<dim> f = math::svd(Fe);
     const Vec<dim> eps = Hencky::principal_strain(f.sigma) + Vec<dim>::Constant(plastic / dim);
     const double trace = eps.sum();
     const double bulk = dim * elastic_.lambda + 2.0 * elastic_.mu;  // tr tau / tr eps
@@ -77,14 +78,19 @@ public:
       plastic = std::max(trace - apex_trace, 0.0);
     } else {
       const double y = yield(elastic_.principal_kirchhoff(eps));
-      if (y <= 0.0 && plastic == 0.0) return false;  // I, nothing stored to absorb
-      if (y > 0.0) {                                 // III
+      if (y <= 0.0 && plastic == 0.0) {  // I, nothing stored to absorb
+        if (result) *result = f;
+        return false;
+      }
+      if (y > 0.0) {  // III
         const Vec<dim> dev = eps - Vec<dim>::Constant(trace / dim);
         H -= y / (2.0 * elastic_.mu * dev.norm()) * dev;
       }
       plastic = 0.0;
     }
-    Fe = f.U * H.array().exp().matrix().asDiagonal() * f.V.transpose();
+    f.sigma = H.array().exp();
+    Fe = f.U * f.sigma.asDiagonal() * f.V.transpose();
+    if (result) *result = f;
     return true;
   }
 

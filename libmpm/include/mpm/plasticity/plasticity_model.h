@@ -1,12 +1,15 @@
 #pragma once
 //! The plastic return maps a scene can choose, as one closed std::variant (visited outside the
 //! particle loop, like constitutive::ElasticModel). Each alternative offers
-//!   bool project(Mat<dim>& Fe, double& plastic) const;   // true when Fe changed
+//!   bool project(Mat<dim>& Fe, double& plastic, math::Svd<dim>* result = nullptr) const;
+//!                        // true when Fe changed; *result: the SVD of the Fe it leaves
+//!                        // (the models work in that space; NoPlasticity fills none)
 //!   double yield_function(const Mat<dim>& Fe) const;     // <= 0 admissible
 //!   double modulus_scale(double plastic) const;          // factor of the elastic moduli
 //! where `plastic` is the per-particle scalar state (Particles::plastic); modulus_scale is 1
 //! except for a hardening model (snow).
 #include <mpm/core/types.h>
+#include <mpm/math/svd.h>
 #include <mpm/plasticity/drucker_prager.h>
 #include <mpm/plasticity/snow.h>
 #include <mpm/plasticity/von_mises.h>
@@ -24,7 +27,7 @@ struct NoPlasticity {
   static constexpr std::string_view name = "none";
 
   template <int dim>
-  bool project(Mat<dim>& /*Fe*/, double& /*plastic*/) const {
+  bool project(Mat<dim>& /*Fe*/, double& /*plastic*/, math::Svd<dim>* /*result*/ = nullptr) const {
     return false;
   }
   template <int dim>

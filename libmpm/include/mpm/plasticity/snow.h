@@ -42,9 +42,10 @@ public:
   }
 
   //! Clamps the singular values of Fe and moves the removed volume into log J^P (`plastic`).
-  bool project(Mat<dim>& Fe, double& plastic) const {
-    const math::Svd<dim> f = math::svd(Fe);
+  bool project(Mat<dim>& Fe, double& plastic, math::Svd<dim>* result = nullptr) const {
+    math::Svd<dim> f = math::svd(Fe);
     const Vec<dim> clamped = f.sigma.cwiseMax(lo_).cwiseMin(hi_);
+    if (result) *result = math::Svd<dim>{f.U, clamped, f.V};
     if (clamped == f.sigma) return false;
     // An inverted F^E (sigma < 0) is clamped to lo_: its volume change has no logarithm, so
     // J^P takes the magnitude of the ratio.

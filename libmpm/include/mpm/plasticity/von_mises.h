@@ -44,14 +44,19 @@ public:
 
   //! Projects Fe onto the yield surface; returns whether Fe changed (then its singular values
   //! are positive). The model is perfectly plastic and keeps no state: `plastic` is unchanged.
-  bool project(Mat<dim>& Fe, double& /*plastic*/) const {
-    const math::Svd<dim> f = math::svd(Fe);
+  bool project(Mat<dim>& Fe, double& /*plastic*/, math::Svd<dim>* result = nullptr) const {
+    math::Svd<dim> f = math::svd(Fe);
     const Vec<dim> eps = Hencky::principal_strain(f.sigma);
     const Vec<dim> dev = deviator(eps);
     const double y = yield(dev);
-    if (y <= 0.0) return false;
+    if (y <= 0.0) {
+      if (result) *result = f;
+      return false;
+    }
     const Vec<dim> H = eps - y / (std::sqrt(1.5) * 2.0 * elastic_.mu * dev.norm()) * dev;
-    Fe = f.U * H.array().exp().matrix().asDiagonal() * f.V.transpose();
+    f.sigma = H.array().exp();
+    Fe = f.U * f.sigma.asDiagonal() * f.V.transpose();
+    if (result) *result = f;
     return true;
   }
 

@@ -14,7 +14,8 @@ public:
   using typename SolidSolver<dim>::Stages;
   ExplicitSolver(std::vector<Material<dim>> materials, bool stress_free_particles);
   std::string name() const override { return "explicit"; }
-  void add_channels(Particles<dim>& particles) const override { add_solid_channels(particles); }
+  //! F and plastic; the stress cache too when a material is plastic.
+  void add_channels(Particles<dim>& particles) const override;
   double wave_speed() const override;
   Stages grid_update() const override;
   Stages particle_update() const override;

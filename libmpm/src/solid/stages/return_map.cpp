@@ -2,6 +2,8 @@
 // project log(Sigma) onto the Drucker-Prager cone (Klar et al. 2016, with the volume
 // correction of Tampubolon et al. 2017) or the von Mises cylinder (paper sec. 4.2.2),
 // F^E = U exp(H) V^T. Elastic materials are skipped; the model is chosen outside the loop.
+// Where the particles carry a stress cache (solid_channels.h), the Kirchhoff stress of the
+// F^E left is computed from the same SVD, U diag(p_i sigma_i) U^T, for the next step's forces.
 #include <mpm/core/finite_guard.h>
 #include <mpm/solid/solid_channels.h>
 #include <mpm/solid/stages/return_map.h>
@@ -22,18 +24,27 @@ void ReturnMap<dim>::run(MpmState<dim>& s) {
   Particles<dim>& P = s.particles;
   std::vector<Mat<dim>>& F = solid::elastic_F(P);
   std::vector<double>& plastic = solid::plastic_state(P);
+  std::vector<Mat<dim>>* cache = solid::stress_cache(P);
   for (std::size_t m = 0; m < materials_.size(); ++m) {
     std::visit(
-        [&](const auto& model) {
+        [&](const auto& elastic, const auto& model) {
           using Model = std::decay_t<decltype(model)>;
           if constexpr (!std::is_same_v<Model, plasticity::NoPlasticity>) {
             tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.size(), 4096), [&](const auto& r) {
-              for (std::size_t p = r.begin(); p != r.end(); ++p)
-                if (P.material[p] == m) model.project(F[p], plastic[p]);
+              math::Svd<dim> f;
+              for (std::size_t p = r.begin(); p != r.end(); ++p) {
+                if (P.material[p] != m) continue;
+                if (!cache) {
+                  model.project(F[p], plastic[p]);
+                  continue;
+                }
+                model.project(F[p], plastic[p], &f);
+                (*cache)[p] = constitutive::isotropic_kirchhoff(elastic, f);
+              }
             });
           }
         },
-        materials_[m].plasticity);
+        materials_[m].elastic, materials_[m].plasticity);
   }
   check_finite(F, name(), "particle", "elastic deformation gradient F^E");
 }

@@ -3,6 +3,10 @@
 // with tau = P F^T the Kirchhoff stress of the elastic part (multiplicative plasticity keeps
 // all stress in F^E). The constitutive model is chosen per material by std::visit outside
 // the particle loop. Precondition: particles sorted into buckets (stage 'sort').
+// A plastic material's tau is the one the last return map left in the stress cache
+// (solid_channels.h), computed from its SVD of F^E: one SVD per particle and step instead of
+// two. Particles whose cached stress is unknown (the first step, after a merge or a switch of
+// a grain) take it from F^E here.
 #include <mpm/adaptive/adaptive_transfer.h>
 #include <mpm/core/finite_guard.h>
 #include <mpm/core/transfer.h>
@@ -25,14 +29,21 @@ void StressForces<dim>::run(MpmState<dim>& s) {
   else
     weighted_stress_.resize(P.size());
   const std::vector<double>& plastic = solid::plastic_state(std::as_const(P));
+  const std::vector<Mat<dim>>* cache = solid::stress_cache(P);
   for (std::size_t m = 0; m < materials_.size(); ++m) {
     std::visit(
         [&](const auto& model, const auto& plasticity) {
+          using Plasticity = std::decay_t<decltype(plasticity)>;
+          const bool cached = cache && !std::is_same_v<Plasticity, plasticity::NoPlasticity>;
           tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.size(), 4096), [&](const auto& r) {
-            for (std::size_t p = r.begin(); p != r.end(); ++p)
-              if (P.material[p] == m)
-                weighted_stress_[p] =
-                    (P.volume0[p] * plasticity.modulus_scale(plastic[p])) * model.first_piola(F[p]) * F[p].transpose();
+            for (std::size_t p = r.begin(); p != r.end(); ++p) {
+              if (P.material[p] != m) continue;
+              const double scale = P.volume0[p] * plasticity.modulus_scale(plastic[p]);
+              if (cached && solid::known_stress((*cache)[p]))
+                weighted_stress_[p] = scale * (*cache)[p];
+              else
+                weighted_stress_[p] = scale * model.first_piola(F[p]) * F[p].transpose();
+            }
           });
         },
         materials_[m].elastic, materials_[m].plasticity);

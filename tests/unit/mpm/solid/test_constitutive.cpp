@@ -13,9 +13,13 @@
 #include <mpm/math/svd.h>
 #include <mpm/plasticity/plasticity_model.h>
 #include <mpm/solid/material.h>
+#include <mpm/solid/solid_channels.h>
+#include <mpm/solid/solid_scene.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <random>
 #include <string>
@@ -269,6 +273,18 @@ TEST_CASE_TEMPLATE("return map: lands on the yield surface, idempotent, admissib
   constexpr int dim = DimOf<Model>::value;
   const constitutive::HenckyStVK<dim> elastic{kLame.mu, kLame.lambda};
   std::mt19937 rng(2016);
+  // The SVD a projection hands out (for the stress cache, stages::ReturnMap) is that of the F^E
+  // it leaves, and the Kirchhoff stress from it is tau(F^E).
+  const auto check_result_svd = [&](const Model& model, const Mat<dim>& trial, const Mat<dim>& Fe) {
+    Mat<dim> again = trial;
+    double plastic = 0.0;
+    math::Svd<dim> f;
+    model.project(again, plastic, &f);
+    CHECK(again == Fe);
+    CHECK((f.U * f.sigma.asDiagonal() * f.V.transpose() - Fe).norm() <= 1e-13 * Fe.norm());
+    const Mat<dim> tau = elastic.first_piola(Fe) * Fe.transpose();
+    CHECK((constitutive::isotropic_kirchhoff(elastic, f) - tau).norm() <= 1e-12 * kLame.mu);
+  };
   for (const Model& model : return_maps<Model>()) {
     int outside = 0, inside = 0;
     for (int n = 0; n < 200; ++n) {
@@ -279,6 +295,7 @@ TEST_CASE_TEMPLATE("return map: lands on the yield surface, idempotent, admissib
       Mat<dim> Fe = trial;
       double plastic = 0.0;
       if (model.yield_function(trial) <= 0.0) {
+        check_result_svd(model, trial, trial);
         ++inside;
         CHECK_FALSE(model.project(Fe, plastic));
         CHECK(Fe == trial);
@@ -290,6 +307,7 @@ TEST_CASE_TEMPLATE("return map: lands on the yield surface, idempotent, admissib
       REQUIRE(model.project(Fe, plastic));
       CHECK(std::abs(model.yield_function(Fe)) <= 1e-10 * stress_scale);
       CHECK(Fe.determinant() > 0.0);
+      check_result_svd(model, trial, Fe);
 
       Mat<dim> again = Fe;
       double plastic_again = plastic;
@@ -446,4 +464,80 @@ plasticity:
   CHECK_THROWS_AS(parse_material<3>(Config::parse(base + "poisson_ratio: 0.5\n")), InputError);
   const std::string no_yield_stress = "elasticity: hencky_stvk\nplasticity: {model: von_mises}\n";
   CHECK_THROWS_AS(parse_material<3>(Config::parse(base + "poisson_ratio: 0.3\n" + no_yield_stress)), InputError);
+}
+
+namespace {
+
+// The explicit step of a scene with plastic material takes the stress of the return map's SVD
+// (solid_channels.h, stress cache) instead of a second SVD of F^E. A run that forgets the cache
+// before every step (each stress then comes from F^E, as without the cache) must follow the
+// same trajectory to round-off; the cache must hold tau(F^E) of every plastic particle and
+// nothing for the elastic ones.
+template <int dim>
+solid::SolidScene<dim> sand_and_jelly() {
+  const std::string z = dim == 3 ? ", 0.35]" : "]", z0 = dim == 3 ? ", 0.15]" : "]", zd = dim == 3 ? ", 0]" : "]";
+  return solid::load_solid_scene<dim>(Config::parse(
+      "dim: " + std::to_string(dim) + "\ndomain: {lo: [0, 0" + zd + ", hi: [1, 0.5" + (dim == 3 ? ", 0.5]" : "]") +
+      "}\ngrid: {dx: " + (dim == 3 ? "0.05" : "0.025") +
+      "}\nwalls: {contact: sticky}\ntime: {end: 1, frame_dt: 1, cfl: 0.4}\ngravity: [0, -9.81" + zd +
+      "\nmaterials:\n"
+      "  - {name: sand, density: 2650, youngs_modulus: 1.0e6, poisson_ratio: 0.3, elasticity: hencky_stvk,"
+      " plasticity: {model: drucker_prager, friction_angle: 30}}\n"
+      "  - {name: jelly, density: 1000, youngs_modulus: 1.0e5, poisson_ratio: 0.3, elasticity: fixed_corotated}\n"
+      "bodies:\n"
+      "  - {shape: box, material: sand, lo: [0.1, 0.1" +
+      z0 + ", hi: [0.3, 0.4" + z + "}\n  - {shape: box, material: jelly, lo: [0.6, 0.1" + z0 + ", hi: [0.8, 0.25" + z +
+      ", velocity: [0, -1" + zd + "}\n"));
+}
+
+template <int dim>
+void check_stress_cache() {
+  INFO("dim = ", dim);
+  solid::SolidScene<dim> cached = sand_and_jelly<dim>(), recomputed = sand_and_jelly<dim>();
+  REQUIRE(solid::stress_cache(cached.state.particles) != nullptr);
+  Pipeline<MpmState<dim>> a = solid::make_solid_pipeline(cached), b = solid::make_solid_pipeline(recomputed);
+  for (int step = 0; step < 80; ++step) {
+    a.step(cached.state);
+    for (Mat<dim>& tau : *solid::stress_cache(recomputed.state.particles))
+      tau.setConstant(std::numeric_limits<double>::quiet_NaN());
+    b.step(recomputed.state);
+  }
+  const Particles<dim>&P = cached.state.particles, &Q = recomputed.state.particles;
+  REQUIRE(P.size() == Q.size());
+  double dx = 0.0, dv = 0.0, vmax = 0.0;
+  for (std::size_t p = 0; p < P.size(); ++p) {
+    dx = std::max(dx, (P.x[p] - Q.x[p]).norm());
+    dv = std::max(dv, (P.v[p] - Q.v[p]).norm());
+    vmax = std::max(vmax, Q.v[p].norm());
+  }
+  CHECK(dx <= 1e-12);
+  CHECK(dv <= 1e-10 * vmax);
+  CHECK(vmax > 0.1);
+
+  const std::vector<Mat<dim>>& F = solid::elastic_F(P);
+  const std::vector<Mat<dim>>& cache = *solid::stress_cache(P);
+  const auto& sand = cached.materials[0];
+  const double sand_mu = constitutive::Lame::from_youngs_poisson(1e6, 0.3).mu;
+  int on_cone = 0, sand_particles = 0;
+  for (std::size_t p = 0; p < P.size(); ++p) {
+    if (P.material[p] == 1) {  // jelly: elastic, no cache
+      CHECK_FALSE(solid::known_stress(cache[p]));
+      continue;
+    }
+    ++sand_particles;
+    REQUIRE(solid::known_stress(cache[p]));
+    const Mat<dim> tau = std::get<constitutive::HenckyStVK<dim>>(sand.elastic).first_piola(F[p]) * F[p].transpose();
+    CHECK((cache[p] - tau).norm() <= 1e-12 * sand_mu);  // round-off of the moduli's scale
+    if (std::get<plasticity::DruckerPrager<dim>>(sand.plasticity).yield_function(F[p]) >
+        -1e-6 * std::max(tau.norm(), 1.0))
+      ++on_cone;
+  }
+  CHECK(on_cone > sand_particles / 10);  // the return map did work
+}
+
+}  // namespace
+
+TEST_CASE("stress cache: one SVD per step, the same trajectory to round-off (2D and 3D)") {
+  check_stress_cache<2>();
+  check_stress_cache<3>();
 }

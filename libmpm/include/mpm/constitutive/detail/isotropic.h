@@ -159,6 +159,13 @@ Mat<dim> isotropic_first_piola(const Model& model, const Mat<dim>& F) {
   return f.U * model.principal_stress(f.sigma).asDiagonal() * f.V.transpose();
 }
 
+//! Kirchhoff stress tau = P F^T = U diag(p_i sigma_i) U^T from the SVD f of F (the return maps
+//! have it at hand: stages::ReturnMap fills the stress cache with it).
+template <class Model, int dim>
+Mat<dim> isotropic_kirchhoff(const Model& model, const math::Svd<dim>& f) {
+  return f.U * model.principal_stress(f.sigma).cwiseProduct(f.sigma).asDiagonal() * f.U.transpose();
+}
+
 //! The differential at F; with `definite` made positive semi-definite (Teran et al. 2005).
 template <class Model, int dim>
 StressDerivative<dim> stress_derivative(const Model& model, const Mat<dim>& F, bool definite) {
