@@ -337,8 +337,8 @@ bool run_case(const Options& o, const std::string& name) {
       name.c_str(), check.particles, o.cells, o.steps, *std::min_element(check.dt.begin(), check.dt.end()),
       *std::max_element(check.dt.begin(), check.dt.end()), d, tolerance, d < tolerance ? "ok" : "FAILED");
   if (!(d < tolerance)) {
-    const char* names[] = {"p_x", "p_y", "p_z", "mx_x", "mx_y", "mx_z", "KE", "tr F", "F_xy+F_yx", "F_yz+F_zy",
-                           "|F - I|^2", "plastic"};
+    const char* names[] = {"p_x", "p_y",  "p_z",       "mx_x",      "mx_y",      "mx_z",
+                           "KE",  "tr F", "F_xy+F_yx", "F_yz+F_zy", "|F - I|^2", "plastic"};
     for (std::size_t i = 0; i < ref_totals.size(); ++i)
       std::printf("  %-10s library %.15g reference %.15g\n", names[i], check.totals[i], ref_totals[i]);
     return false;
