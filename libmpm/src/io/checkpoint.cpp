@@ -11,6 +11,7 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <sstream>
 #include <string>
 #include <type_traits>
@@ -246,7 +247,12 @@ void load_checkpoint(const std::filesystem::path& path, CheckpointHeader& header
   const std::vector<std::string> stored = lines(file.read_string_attribute(attribute(phase, "channels")));
 
   // The file must store exactly the channels the scene's particles keep in checkpoints, each in
-  // its shape: checked in full before anything is allocated or read.
+  // its shape: checked in full before anything is allocated or read. A derived channel (a cache
+  // of others, such as the solid's stress_cache) may be missing, from a checkpoint written
+  // before the scene carried it: it is then unknown (NaN) and recomputed by its owner.
+  const auto stored_here = [&](const std::string& channel) {
+    return std::find(stored.begin(), stored.end(), channel) != stored.end() && file.has(dataset(phase, channel));
+  };
   std::vector<std::string> declared;
   into.for_each_channel([&](const ChannelInfo& info, const auto&) {
     if (info.use.checkpoint) declared.push_back(info.name);
@@ -260,7 +266,8 @@ void load_checkpoint(const std::filesystem::path& path, CheckpointHeader& header
     if (!info.use.checkpoint) return;
     using T = typename std::decay_t<decltype(values)>::value_type;
     const std::string set = dataset(phase, info.name);
-    if (std::find(stored.begin(), stored.end(), info.name) == stored.end() || !file.has(set))
+    if (!stored_here(info.name) && info.use.derived) return;
+    if (!stored_here(info.name))
       throw InputError(where + " has no particle channel '" + info.name + "' (it stores " + joined(stored) +
                        "): it was written by another scene");
     const detail::Shape expected = shape_of<dim, T>(n), shape = file.shape(set);
@@ -280,8 +287,14 @@ void load_checkpoint(const std::filesystem::path& path, CheckpointHeader& header
     if (!info.use.checkpoint) return;
     using T = typename std::decay_t<decltype(values)>::value_type;
     std::vector<T> buffer(n);
-    file.read(dataset(phase, info.name), scalars(buffer), shape_of<dim, T>(n));
-    checksum ^= channel_checksum(info.name, buffer);
+    if (stored_here(info.name)) {
+      file.read(dataset(phase, info.name), scalars(buffer), shape_of<dim, T>(n));
+      checksum ^= channel_checksum(info.name, buffer);
+    } else if constexpr (std::is_floating_point_v<T>) {  // derived, not stored: unknown
+      std::fill(buffer.begin(), buffer.end(), std::numeric_limits<double>::quiet_NaN());
+    } else if constexpr (!std::is_integral_v<T>) {
+      for (T& value : buffer) value.setConstant(std::numeric_limits<double>::quiet_NaN());
+    }
     buffers.emplace_back(std::move(buffer));
   });
   if (const std::string recorded = file.read_string_attribute(attribute(phase, "checksum"));

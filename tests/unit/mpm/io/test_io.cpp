@@ -368,6 +368,23 @@ TEST_CASE("loading a wrong, missing or corrupt checkpoint throws naming the file
   CHECK_THROWS_AS(io::load_checkpoint(dir / "particles_0000.h5", header, in_3d), InputError);
 }
 
+TEST_CASE("a checkpoint may lack a derived channel, which loads as unknown, and no other") {
+  const ScratchDir dir("derived_checkpoint");
+  const Particles<3> saved = random_particles<3>(10, true, 3);  // written before the stress cache
+  io::save_checkpoint(dir / "old.h5", saved, {3, 1, 2, 0.5, 1e-3, "d", "1", 0, {}, {}});
+  io::CheckpointHeader header;
+  Particles<3> with_cache = declared<3>(true);
+  solid::add_stress_cache(with_cache);
+  io::load_checkpoint(dir / "old.h5", header, with_cache);
+  REQUIRE(with_cache.size() == saved.size());
+  CHECK(same_bits(solid::elastic_F(with_cache), solid::elastic_F(saved)));
+  for (const Mat<3>& tau : *solid::stress_cache(with_cache)) CHECK_FALSE(solid::known_stress(tau));
+
+  Particles<3> with_damage = declared<3>(true);
+  with_damage.add_channel<double>("damage", 0.0, {.checkpoint = true});
+  CHECK_THROWS_AS(io::load_checkpoint(dir / "old.h5", header, with_damage), InputError);
+}
+
 TEST_CASE("a checkpoint changed after it was written is refused by its checksums") {
   const ScratchDir dir("changed_checkpoint");
   const Particles<3> p = random_particles<3>(10, true, 1);
