@@ -183,8 +183,7 @@ private:
     Eigen::Vector3i base;
     Vec<3> fx;
     Vec<3> w[3], dw[3];
-    double dx;
-    Weights(const Vec<3>& x, double h) : dx(h) {
+    Weights(const Vec<3>& x, double h) {
       const Vec<3> xi = x / h;
       base = (xi.array() - 0.5).floor().cast<int>();
       fx = xi - base.cast<double>();

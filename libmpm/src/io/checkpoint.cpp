@@ -266,10 +266,11 @@ void load_checkpoint(const std::filesystem::path& path, CheckpointHeader& header
     if (!info.use.checkpoint) return;
     using T = typename std::decay_t<decltype(values)>::value_type;
     const std::string set = dataset(phase, info.name);
-    if (!stored_here(info.name) && info.use.derived) return;
-    if (!stored_here(info.name))
+    if (!stored_here(info.name)) {
+      if (info.use.derived) return;  // loaded as unknown below
       throw InputError(where + " has no particle channel '" + info.name + "' (it stores " + joined(stored) +
                        "): it was written by another scene");
+    }
     const detail::Shape expected = shape_of<dim, T>(n), shape = file.shape(set);
     if (shape != expected)
       throw InputError(where + ": particle channel '" + info.name + "' has shape " + describe(shape) + ", expected " +

@@ -34,12 +34,8 @@ void ReturnMap<dim>::run(MpmState<dim>& s) {
               math::Svd<dim> f;
               for (std::size_t p = r.begin(); p != r.end(); ++p) {
                 if (P.material[p] != m) continue;
-                if (!cache) {
-                  model.project(F[p], plastic[p]);
-                  continue;
-                }
-                model.project(F[p], plastic[p], &f);
-                (*cache)[p] = constitutive::isotropic_kirchhoff(elastic, f);
+                model.project(F[p], plastic[p], cache ? &f : nullptr);
+                if (cache) (*cache)[p] = constitutive::isotropic_kirchhoff(elastic, f);
               }
             });
           }
