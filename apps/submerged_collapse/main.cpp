@@ -1,15 +1,20 @@
-// submerged_collapse: a granular column of width a and height 2a collapses under water, the
-// experiment of Rondon, Pouliquen & Aussillous (2011, Phys. Fluids 23:073301), whose outcome
-// depends on the initial packing: loose columns (phi ~ 0.55) flow far and fast, dense ones
-// (phi ~ 0.62) creep. The scene is a coupled scene file (coupling/scene_loader.h): a sediment
-// body and a fluid body that fills its pores; sediment.packing_fraction sets phi.
+// submerged_collapse: a granular column collapses under a liquid, the experiment of Rondon,
+// Pouliquen & Aussillous (2011, Phys. Fluids 23:073301; data/reference/rondon2011.md), whose
+// outcome depends on the initial packing: loose columns (phi ~ 0.55) flow far and fast over a
+// positive excess pore pressure, dense ones (phi ~ 0.60) creep over a negative one. The scene
+// is a coupled scene file (coupling/scene_loader.h): a sediment body and a fluid body that
+// fills its pores; sediment.packing_fraction sets phi.
 //
 //   submerged_collapse data/scenes/submerged_collapse.yaml
-//   submerged_collapse data/scenes/submerged_collapse.yaml --set sediment.packing_fraction=0.62
+//   submerged_collapse data/scenes/submerged_collapse.yaml --set sediment.packing_fraction=0.60
+//       --set bodies.0.hi=[0.07,0.052] --set time.end=10          (the dense run, one line)
 //
 // Output as every app (mpm/core/runner.h: fluid_ and sediment_NNNN.h5, previews, checkpoints);
 // diagnostics.csv adds front and height of the grains [m], their kinetic energy
-// sediment_kinetic_energy [J/m in 2D] and the continuum / discrete counts.
+// sediment_kinetic_energy [J/m in 2D], the continuum / discrete counts and, with a fluid,
+// base_pore_pressure [Pa]: the excess pore pressure under the column, the pressure of the cell
+// 40 % of the column's length from its back, in the first cell above its base, less that of
+// the cell at the same height at the far end of the liquid (the hydrostatic part cancels).
 // summary.json:
 //   runout        final front minus initial front [m]; front = the 99.5th percentile of the
 //                 x of the continuum grains (the deposit; discrete grains suspended ahead of it
@@ -18,15 +23,18 @@
 //                 y over the left half of the initial column
 //   duration      first time after the peak at which the grains' kinetic energy falls below
 //                 1e-3 of its peak [s] (frame resolution; time.end when it never does)
+//   peak_base_pore_pressure   the base_pore_pressure of largest magnitude, with its sign [Pa]
 // --check: the grains came to rest before time.end, spread (runout > 0) and the column lost
 // height, and the grain mass is unchanged.
 #include <coupling/coupled_runner.h>
 #include <coupling/scene_loader.h>
+#include <coupling/stages/mixture_projection.h>
 #include <mpm/core/app.h>
 #include <mpm/core/command_line.h>
 #include <mpm/core/error.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <vector>
 
@@ -62,6 +70,17 @@ double height(const coupling::CoupledState<dim>& s, double left_of) {
   return quantile(std::move(y), 0.995);
 }
 
+//! The lower-left corner and upper-right corner of the particles' positions.
+template <int dim>
+std::pair<Vec<dim>, Vec<dim>> bounds(const Particles<dim>& P) {
+  Vec<dim> lo = Vec<dim>::Constant(1e300), hi = Vec<dim>::Constant(-1e300);
+  for (const Vec<dim>& x : P.x) {
+    lo = lo.cwiseMin(x);
+    hi = hi.cwiseMax(x);
+  }
+  return {lo, hi};
+}
+
 template <int dim>
 double grain_kinetic_energy(const coupling::CoupledState<dim>& s) {
   const Particles<dim>& P = s.sediment.particles;
@@ -94,6 +113,21 @@ int run(const CommandLine& cl, const Config& scene) {
   });
   runner.add_column(
       "discrete", [](const coupling::CoupledState<dim>& st) { return double(coupling::count_sediment(st).discrete); });
+  // The pore-pressure sensor under the column and its hydrostatic reference at the far end.
+  using Projection = coupling::stages::MixtureProjection<dim>;
+  if (const Projection* projection = s.has_fluid ? pipeline.template find<Projection>() : nullptr) {
+    const auto [grains_lo, grains_hi] = bounds(s.sediment.particles);
+    const auto [fluid_lo, fluid_hi] = bounds(s.fluid.particles);
+    Vec<dim> sensor = 0.5 * (grains_lo + grains_hi), reference = sensor;
+    sensor[0] = grains_lo[0] + 0.4 * (grains_hi[0] - grains_lo[0]);
+    sensor[1] = grains_lo[1] + 0.5 * col.settings.dx;
+    reference[0] = fluid_hi[0] - col.settings.dx;
+    reference[1] = sensor[1];
+    runner.add_column("base_pore_pressure", [=](const coupling::CoupledState<dim>& st) {
+      const SparseGrid<dim>& g = st.fluid.grid;
+      return projection->projection().pressure_at(g, sensor) - projection->projection().pressure_at(g, reference);
+    });
+  }
   runner.run(s, pipeline);
 
   const std::vector<double> time = runner.history("time"), energy = runner.history("sediment_kinetic_energy");
@@ -104,6 +138,10 @@ int run(const CommandLine& cl, const Config& scene) {
       duration = time[static_cast<std::size_t>(e - energy.begin())];
       break;
     }
+  double peak_pore_pressure = 0.0;
+  if (s.has_fluid)
+    for (const double p : runner.history("base_pore_pressure"))
+      if (std::abs(p) > std::abs(peak_pore_pressure)) peak_pore_pressure = p;
   const double grains = s.sediment.particles.total_mass();
   const double runout = front(s, true) - front0, final_height = height(s, left_half);
   runner.write_summary({{"runout", runout},
@@ -111,7 +149,8 @@ int run(const CommandLine& cl, const Config& scene) {
                         {"duration", duration},
                         {"initial_front", front0},
                         {"initial_height", height0},
-                        {"peak_sediment_kinetic_energy", energy.empty() ? 0.0 : *peak}});
+                        {"peak_sediment_kinetic_energy", energy.empty() ? 0.0 : *peak},
+                        {"peak_base_pore_pressure", peak_pore_pressure}});
   if (!cl.check) return 0;
   auto check = [](const char* what, bool pass, double value) {
     std::printf("check %s: %.6g %s\n", what, value, pass ? "ok" : "FAILED");

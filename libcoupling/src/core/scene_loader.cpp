@@ -4,10 +4,14 @@
 #include <mpm/geometry/body_config.h>
 #include <mpm/geometry/collider_config.h>
 #include <mpm/geometry/seeding.h>
+#include <mpm/solid/solid_channels.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <map>
 #include <optional>
 #include <unordered_set>
 #include <vector>
@@ -71,6 +75,47 @@ SedimentPhase<dim> parse_sediment_phase(const mpm::Config& sediment) {
   return s;
 }
 
+namespace {
+//! A sediment body that starts in equilibrium under its own buoyant weight, as a bed that has
+//! settled (body key `geostatic: true`): the skeleton carries the overburden of its grains,
+//! tau_vv = -(rho_s - rho_f) g h (h the depth below the body's top in the same lattice column,
+//! the mixture stress being phi tau), in uniaxial strain (no lateral strain, Hencky: tau_vv =
+//! (lambda + 2 mu) eps_vv). Without it a soft skeleton first consolidates under its weight and
+//! expels pore fluid for seconds, which hides the pore pressure of the flow itself.
+template <int dim>
+void start_geostatic(CoupledScene<dim>& scene, std::size_t first, const std::vector<mpm::Vec<dim>>& x,
+                     const mpm::Config& body) {
+  if (!scene.sediment || scene.sediment->materials.empty() || scene.sediment->solver == "grains")
+    body.fail("geostatic", "a geostatic start needs a continuum sediment (sediment.solver: explicit or implicit)");
+  const mpm::Vec<dim>& g = scene.settings.gravity;
+  int up = -1;
+  for (int a = 0; a < dim; ++a)
+    if (g[a] != 0.0) up = up == -1 ? a : dim;
+  if (up < 0 || up == dim || g[up] > 0.0)
+    body.fail("geostatic", "a geostatic start needs gravity along one axis, pointing down (-y in 2D, -z in 3D)");
+  const double spacing = scene.settings.dx / mpm::geometry::lattice_points_per_axis<dim>(
+                                                 mpm::geometry::particles_per_cell<dim>(body));
+  // The body's top per lattice column (positions rounded to the lattice across the vertical).
+  const auto column = [&](const mpm::Vec<dim>& p) {
+    std::array<long long, dim> key{};
+    for (int a = 0; a < dim; ++a) key[a] = a == up ? 0 : std::llround(p[a] / spacing);
+    return key;
+  };
+  std::map<std::array<long long, dim>, double> top;
+  for (const mpm::Vec<dim>& p : x) {
+    auto [it, inserted] = top.try_emplace(column(p), p[up]);
+    if (!inserted) it->second = std::max(it->second, p[up]);
+  }
+  const double buoyant = scene.sediment->density - (scene.fluid ? scene.fluid->density : 0.0);
+  const double modulus = scene.sediment->materials.front().lame.p_wave_modulus();  // lambda + 2 mu
+  std::vector<mpm::Mat<dim>>& F = mpm::solid::elastic_F(scene.state.sediment.particles);
+  for (std::size_t p = first, i = 0; p < F.size(); ++p, ++i) {
+    const double depth = top.at(column(x[i])) + 0.5 * spacing - x[i][up];
+    F[p](up, up) = std::exp(-buoyant * std::abs(g[up]) * depth / modulus);
+  }
+}
+}  // namespace
+
 template <int dim>
 CoupledScene<dim> load_coupled_scene(const mpm::Config& scene) {
   using mpm::Range;
@@ -126,7 +171,12 @@ CoupledScene<dim> load_coupled_scene(const mpm::Config& scene) {
     const double phi = default_packing ? body.number("packing_fraction", *default_packing, *packing)
                                        : body.number("packing_fraction", *packing);
     const mpm::geometry::BodyParticles<dim> b = mpm::geometry::seed_body_shape<dim>(body, out.settings);
+    const std::size_t first = out.state.sediment.particles.size();
     add_sediment_particles(out, b.x, phi * b.volume, body.vector<dim>("velocity", Vec::Zero()), body.path());
+    if (body.flag("geostatic", false)) start_geostatic(out, first, b.x, body);
+    if (std::vector<double>* rest = mpm::solid::rest_packing(out.state.sediment.particles))
+      for (std::size_t p = first; p < rest->size(); ++p)
+        (*rest)[p] = phi * mpm::solid::elastic_F(out.state.sediment.particles)[p].determinant();
     const int k = mpm::geometry::lattice_points_per_axis<dim>(mpm::geometry::particles_per_cell<dim>(body));
     pores.emplace_back(b.x, out.settings.dx / k, phi);
   }

@@ -4,7 +4,8 @@
 //            explicit estimate of the step),
 //   continuum -> discrete if phi_p < phi_low, discrete -> continuum if phi_p > phi_high,
 //   F^E = I and plastic = 0 for every particle that is discrete now or was during the step
-//   (DeformationUpdate moved its F; a new continuum particle starts stress-free).
+//   (DeformationUpdate moved its F; a new continuum particle starts stress-free), and a
+//   dilatant sand's rest packing unknown (the return map starts it at the critical packing).
 // The stencil reads the nodes through node_index: after advection a particle may leave the
 // patch of the bucket it was sorted into, and nodes that are not allocated hold no sediment.
 #include <coupling/stages/reclassify_sediment.h>
@@ -16,6 +17,7 @@
 #include <tbb/parallel_for.h>
 
 #include <cmath>
+#include <limits>
 #include <variant>
 
 namespace coupling {
@@ -91,6 +93,7 @@ void ReclassifySediment<dim>::run(CoupledState<dim>& s) {
   std::vector<mpm::Mat<dim>>& F = mpm::solid::elastic_F(P);
   std::vector<double>& plastic = mpm::solid::plastic_state(P);
   std::vector<mpm::Mat<dim>>* cache = mpm::solid::stress_cache(P);
+  std::vector<double>* packing = mpm::solid::rest_packing(P);
   for (std::size_t p = 0; p < P.size(); ++p) {
     const bool was_discrete = P.material[p] == discrete_grain;
     if (was_discrete && phi_p_[p] > thresholds_.dense_above) {
@@ -104,6 +107,8 @@ void ReclassifySediment<dim>::run(CoupledState<dim>& s) {
       F[p] = mpm::Mat<dim>::Identity();
       plastic[p] = 0.0;
       if (cache) (*cache)[p].setZero();  // tau(I) = 0
+      // The kernel estimate is biased at free surfaces: a joining grain starts critical.
+      if (packing) (*packing)[p] = std::numeric_limits<double>::quiet_NaN();
     }
   }
 }

@@ -63,7 +63,13 @@ Material<dim> parse_material(const Config& cfg) {
   if (model == plasticity::DruckerPrager<dim>::name) {
     const double friction_angle = plastic->number("friction_angle", 30.0, Range::half_open(0.0, 90.0));
     const double cohesion = plastic->number("cohesion", 0.0, Range::non_negative());
-    material.plasticity = plasticity::DruckerPrager<dim>(friction_angle, cohesion, material.lame);
+    // Dilatancy (drucker_prager.h): K = 0 is none; a dilatant sand needs its critical packing.
+    const double dilatancy = plastic->number("dilatancy", 0.0, Range::non_negative());
+    const double critical_packing = dilatancy > 0.0 ? plastic->number("critical_packing", Range::open(0.0, 1.0)) : 0.6;
+    if (dilatancy == 0.0 && plastic->has("critical_packing"))
+      plastic->fail("critical_packing", "a critical packing needs a dilatancy coefficient > 0 (key 'dilatancy')");
+    material.plasticity =
+        plasticity::DruckerPrager<dim>(friction_angle, cohesion, material.lame, dilatancy, critical_packing);
   } else if (model == plasticity::VonMises<dim>::name) {
     const double yield_stress = plastic->number("yield_stress", Range::positive());
     material.plasticity = plasticity::VonMises<dim>(yield_stress, material.lame);

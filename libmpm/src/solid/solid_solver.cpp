@@ -23,6 +23,9 @@ std::shared_ptr<const SolidSolver<dim>> make_solid_solver(const std::string& nam
   MPM_VERIFY((name != "explicit" && name != "implicit") || !materials.empty(), InputError,
              "solid solver '" + name + "' needs at least one material");
   if (name == "explicit") return std::make_shared<ExplicitSolver<dim>>(std::move(materials), stress_free_particles);
+  MPM_VERIFY(name != "implicit" || !stages::any_dilatant(materials), InputError,
+             "solid solver 'implicit' does not support dilatant sand yet (plasticity.dilatancy > 0): use "
+             "solver: explicit");
   if (name == "implicit")
     return std::make_shared<ImplicitSolver<dim>>(std::move(materials), std::move(colliders), implicit);
   std::string names;
@@ -65,6 +68,7 @@ template <int dim>
 void ExplicitSolver<dim>::add_channels(Particles<dim>& particles) const {
   add_solid_channels(particles);
   if (stages::any_plastic(materials_)) add_stress_cache(particles);
+  if (stages::any_dilatant(materials_)) add_rest_packing(particles);
 }
 
 template <int dim>

@@ -23,6 +23,21 @@
 //! removed in case II, and v/d is added back to every trial strain: the material must first
 //! be compressed by v before it develops pressure. With this, log det Fe + v equals the log of
 //! the total volume change at all times (all three cases keep tr eps + v).
+//!
+//! Dilatancy (optional; Roux & Radjai 1998, Pailha & Pouliquen 2009 eq. 2.4-2.5). With a
+//! dilatancy coefficient K > 0 and a critical packing phi_c, the grains' volume fraction phi
+//! sets a dilatancy angle and adds it to the friction:
+//!   tan psi = K (phi - phi_c),   mu = mu_cone + tan psi,   tr d eps^p = tan psi gamma_dot dt,
+//! where mu_cone = alpha d / sqrt(2) is the cone's own ratio of shear stress to pressure in
+//! simple shear (||dev tau|| = sqrt(2) tau_xy, tr tau = d p) and gamma_dot dt = sqrt(2) dgamma
+//! the engineering shear strain of the plastic step. A dense packing (phi > phi_c) is
+//! stronger and dilates as it yields, a loose one weaker and contracting, both toward phi_c
+//! (the critical state). The plastic volume change is elastic compression of the returned
+//! state (tr eps drops by sqrt(2) tan psi dgamma), so a confined dense sample builds pressure
+//! and a loose one loses it. phi comes from the per-particle rest packing phi_r, the packing
+//! at F^E = I (solid_channels.h): phi = phi_r / det F^E_trial; the map updates phi_r by
+//! det F^E_new / det F^E_trial (the total volume does not change within the map), which keeps
+//! phi_r / det F^E the true packing in all three cases.
 #include <mpm/constitutive/hencky_stvk.h>
 #include <mpm/constitutive/lame.h>
 #include <mpm/core/error.h>
@@ -43,8 +58,15 @@ public:
   static constexpr std::string_view name = "drucker_prager";
 
   //! friction_angle [deg] in [0, 90), cohesion [Pa] >= 0; lame of the Hencky StVK elasticity.
-  DruckerPrager(double friction_angle, double cohesion, const constitutive::Lame& lame)
-      : elastic_{lame.mu, lame.lambda} {
+  //! Dilatancy: coefficient K >= 0 (0: none) and critical packing phi_c in (0, 1).
+  DruckerPrager(double friction_angle, double cohesion, const constitutive::Lame& lame, double dilatancy = 0.0,
+                double critical_packing = 0.6)
+      : elastic_{lame.mu, lame.lambda}, dilatancy_(dilatancy), critical_packing_(critical_packing) {
+    verify<InputError>(dilatancy >= 0.0, "Drucker-Prager dilatancy coefficient " + std::to_string(dilatancy) +
+                                             ": expected a value >= 0");
+    verify<InputError>(critical_packing > 0.0 && critical_packing < 1.0,
+                       "Drucker-Prager critical packing " + std::to_string(critical_packing) +
+                           ": expected a value in (0, 1)");
     verify<InputError>(
         friction_angle >= 0.0 && friction_angle < 90.0,
         "Drucker-Prager friction angle " + std::to_string(friction_angle) + " deg: expected a value in [0, 90)");
@@ -58,36 +80,63 @@ public:
 
   //! y of the Kirchhoff stress of Fe [Pa]; <= 0 is admissible.
   double yield_function(const Mat<dim>& Fe) const {
-    return yield(elastic_.principal_kirchhoff(Hencky::principal_strain(math::svd(Fe).sigma)));
+    return yield(elastic_.principal_kirchhoff(Hencky::principal_strain(math::svd(Fe).sigma)), alpha_);
   }
 
   double modulus_scale(double /*plastic*/) const { return 1.0; }
 
+  //! Whether the friction and flow depend on the packing (K > 0); the return map then calls
+  //! the overload with the rest packing.
+  bool dilatant() const { return dilatancy_ > 0.0; }
+  double dilatancy() const { return dilatancy_; }
+  double critical_packing() const { return critical_packing_; }
+
   //! Projects Fe onto the admissible set and updates the volume correction `plastic` (log
   //! volume, >= 0). Returns whether Fe changed. A changed Fe has positive singular values.
   //! `result`, when given, receives the SVD of the Fe left (the trial's when unchanged).
+  //! Without a packing the map is that of K = 0.
   bool project(Mat<dim>& Fe, double& plastic, math::Svd<dim>* result = nullptr) const {
+    return project(Fe, plastic, nullptr, result);
+  }
+
+  //! The same with dilatancy: `rest_packing` phi_r (see above) is read and updated.
+  bool project(Mat<dim>& Fe, double& plastic, double* rest_packing, math::Svd<dim>* result = nullptr) const {
     math::Svd<dim> f = math::svd(Fe);
-    const Vec<dim> eps = Hencky::principal_strain(f.sigma) + Vec<dim>::Constant(plastic / dim);
+    const Vec<dim> strain = Hencky::principal_strain(f.sigma);
+    const Vec<dim> eps = strain + Vec<dim>::Constant(plastic / dim);
     const double trace = eps.sum();
     const double bulk = dim * elastic_.lambda + 2.0 * elastic_.mu;  // tr tau / tr eps
+    double alpha = alpha_, tan_psi = 0.0;
+    if (rest_packing && dilatant()) {
+      tan_psi = dilatancy_ * (*rest_packing * std::exp(-strain.sum()) - critical_packing_);
+      alpha = std::max(alpha_ + tan_psi * std::numbers::sqrt2 / dim, 0.0);  // mu_cone + tan psi
+    }
     Vec<dim> H = eps;
-    if (alpha_ > 0.0 && alpha_ * bulk * trace >= k_) {  // II: to the apex, store the excess
-      const double apex_trace = k_ / (alpha_ * bulk);
-      H.setConstant(apex_trace / dim);
-      plastic = std::max(trace - apex_trace, 0.0);
+    if (alpha > 0.0 && alpha * bulk * trace >= k_) {  // II: to the apex, store the excess
+      plastic = to_apex(H, trace, alpha, bulk);
     } else {
-      const double y = yield(elastic_.principal_kirchhoff(eps));
+      const double y = yield(elastic_.principal_kirchhoff(eps), alpha);
       if (y <= 0.0 && plastic == 0.0) {  // I, nothing stored to absorb
         if (result) *result = f;
         return false;
       }
+      plastic = 0.0;
       if (y > 0.0) {  // III
         const Vec<dim> dev = eps - Vec<dim>::Constant(trace / dim);
-        H -= y / (2.0 * elastic_.mu * dev.norm()) * dev;
+        const double dev_norm = dev.norm();
+        // y falls by 2 mu for each unit of dgamma and by alpha bulk sqrt(2) tan psi through
+        // the plastic volume change; where that does not reach the cone before the deviator
+        // is spent (strong contraction), all shear goes and the volume change with it.
+        const double rate = 2.0 * elastic_.mu + alpha * bulk * std::numbers::sqrt2 * tan_psi;
+        const double share = rate > 0.0 && y < rate * dev_norm ? y / (rate * dev_norm) : 1.0;  // dgamma / ||dev||
+        H -= share * dev;
+        if (tan_psi != 0.0) {
+          H -= Vec<dim>::Constant(std::numbers::sqrt2 * tan_psi * share * dev_norm / dim);
+          if (const double t = H.sum(); alpha > 0.0 && alpha * bulk * t > k_) plastic = to_apex(H, t, alpha, bulk);
+        }
       }
-      plastic = 0.0;
     }
+    if (rest_packing && dilatant()) *rest_packing *= std::exp(H.sum() - strain.sum());
     f.sigma = H.array().exp();
     Fe = f.U * f.sigma.asDiagonal() * f.V.transpose();
     if (result) *result = f;
@@ -97,14 +146,23 @@ public:
 private:
   using Hencky = constitutive::HenckyStVK<dim>;
 
-  double yield(const Vec<dim>& tau) const {
+  double yield(const Vec<dim>& tau, double alpha) const {
     const double trace = tau.sum();
-    return (tau - Vec<dim>::Constant(trace / dim)).norm() + alpha_ * trace - k_;
+    return (tau - Vec<dim>::Constant(trace / dim)).norm() + alpha * trace - k_;
+  }
+
+  //! Case II: H becomes the apex; returns the log volume it discards (the new correction v).
+  double to_apex(Vec<dim>& H, double trace, double alpha, double bulk) const {
+    const double apex_trace = k_ / (alpha * bulk);
+    H.setConstant(apex_trace / dim);
+    return std::max(trace - apex_trace, 0.0);
   }
 
   Hencky elastic_;
-  double alpha_ = 0.0;  //!< friction coefficient [-]
-  double k_ = 0.0;      //!< cohesive strength [Pa]
+  double alpha_ = 0.0;             //!< friction coefficient [-]
+  double k_ = 0.0;                 //!< cohesive strength [Pa]
+  double dilatancy_ = 0.0;         //!< K [-]
+  double critical_packing_ = 0.6;  //!< phi_c [-]
 };
 
 }  // namespace mpm::plasticity

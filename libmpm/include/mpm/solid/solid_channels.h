@@ -11,6 +11,11 @@
 //!                           bit-identically), not written to frames. Whoever changes F^E other
 //!                           than the return map sets the entry anew or to NaN (a merge of
 //!                           particles does, the channel being `derived`).
+//! A scene with a dilatant material (Drucker-Prager with a dilatancy coefficient) adds
+//!   rest_packing  double  phi_r, the grains' volume fraction at F^E = I: the packing is
+//!                         phi_r / det F^E. Set by the scene's seeding (a body's packing
+//!                         fraction), kept by the return map (drucker_prager.h); written to
+//!                         frames and stored in checkpoints.
 //!
 //! The accessors look a channel up by name (a short scan): a stage calls them once per run(),
 //! outside its particle loops, never per particle.
@@ -26,6 +31,7 @@ namespace mpm::solid {
 inline constexpr const char* kElasticF = "F";
 inline constexpr const char* kPlastic = "plastic";
 inline constexpr const char* kStressCache = "stress_cache";
+inline constexpr const char* kRestPacking = "rest_packing";
 
 //! Declares F (= I) and plastic (= 0) for the particles present and every later one
 //! (idempotent).
@@ -42,6 +48,21 @@ template <int dim>
 void add_stress_cache(Particles<dim>& P) {
   P.template add_channel<Mat<dim>>(kStressCache, Mat<dim>::Constant(std::numeric_limits<double>::quiet_NaN()),
                                    {.checkpoint = true, .derived = true});
+}
+
+//! Declares rest_packing (unknown, NaN) for the particles present and every later one
+//! (idempotent). The return map starts a particle of unknown packing at its material's critical
+//! packing (no dilatancy).
+template <int dim>
+void add_rest_packing(Particles<dim>& P) {
+  P.template add_channel<double>(kRestPacking, std::numeric_limits<double>::quiet_NaN(),
+                                 {.output = true, .checkpoint = true});
+}
+
+//! The rest packing, or nullptr when the particles carry none.
+template <int dim>
+std::vector<double>* rest_packing(Particles<dim>& P) {
+  return P.template find_channel<double>(kRestPacking);
 }
 
 //! The stress cache, or nullptr when the particles carry none.

@@ -1,6 +1,6 @@
 // Return mapping in principal (SVD) space (paper sec. 4.2): F^E_trial = U Sigma V^T,
 // project log(Sigma) onto the Drucker-Prager cone (Klar et al. 2016, with the volume
-// correction of Tampubolon et al. 2017) or the von Mises cylinder (paper sec. 4.2.2),
+// correction of Tampubolon et al. 2017, and dilatancy where the material has it) or the von Mises cylinder (paper sec. 4.2.2),
 // F^E = U exp(H) V^T. Elastic materials are skipped; the model is chosen outside the loop.
 // Where the particles carry a stress cache (solid_channels.h), the Kirchhoff stress of the
 // F^E left is computed from the same SVD, U diag(p_i sigma_i) U^T, for the next step's forces.
@@ -20,11 +20,37 @@ bool any_plastic(const std::vector<Material<dim>>& materials) {
 }
 
 template <int dim>
+bool any_dilatant(const std::vector<Material<dim>>& materials) {
+  for (const auto& m : materials)
+    if (const auto* sand = std::get_if<plasticity::DruckerPrager<dim>>(&m.plasticity); sand && sand->dilatant())
+      return true;
+  return false;
+}
+
+namespace {
+//! One particle's return map: a dilatant Drucker-Prager material reads and updates the rest
+//! packing (a particle of unknown packing starts at the critical one), every other model its
+//! plain map.
+template <int dim, class Model>
+void project(const Model& model, Mat<dim>& F, double& plastic, double* packing, math::Svd<dim>* result) {
+  if constexpr (std::is_same_v<Model, plasticity::DruckerPrager<dim>>) {
+    if (packing && model.dilatant()) {
+      if (std::isnan(*packing)) *packing = model.critical_packing() * F.determinant();
+      model.project(F, plastic, packing, result);
+      return;
+    }
+  }
+  model.project(F, plastic, result);
+}
+}  // namespace
+
+template <int dim>
 void ReturnMap<dim>::run(MpmState<dim>& s) {
   Particles<dim>& P = s.particles;
   std::vector<Mat<dim>>& F = solid::elastic_F(P);
   std::vector<double>& plastic = solid::plastic_state(P);
   std::vector<Mat<dim>>* cache = solid::stress_cache(P);
+  std::vector<double>* packing = solid::rest_packing(P);
   for (std::size_t m = 0; m < materials_.size(); ++m) {
     std::visit(
         [&](const auto& elastic, const auto& model) {
@@ -34,7 +60,7 @@ void ReturnMap<dim>::run(MpmState<dim>& s) {
               math::Svd<dim> f;
               for (std::size_t p = r.begin(); p != r.end(); ++p) {
                 if (P.material[p] != m) continue;
-                model.project(F[p], plastic[p], cache ? &f : nullptr);
+                project(model, F[p], plastic[p], packing ? &(*packing)[p] : nullptr, cache ? &f : nullptr);
                 if (cache) (*cache)[p] = constitutive::isotropic_kirchhoff(elastic, f);
               }
             });
@@ -47,6 +73,8 @@ void ReturnMap<dim>::run(MpmState<dim>& s) {
 
 template bool any_plastic(const std::vector<Material<2>>&);
 template bool any_plastic(const std::vector<Material<3>>&);
+template bool any_dilatant(const std::vector<Material<2>>&);
+template bool any_dilatant(const std::vector<Material<3>>&);
 template class ReturnMap<2>;
 template class ReturnMap<3>;
 

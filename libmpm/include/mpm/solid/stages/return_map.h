@@ -15,6 +15,7 @@ public:
   std::string name() const override { return "plasticity"; }
   std::vector<std::string> reads() const override { return {"particle.F", "particle.plastic", "particle.material"}; }
   std::vector<std::string> writes() const override { return {"particle.F", "particle.plastic"}; }
+  // (and particle.rest_packing of dilatant materials: a channel only they carry)
   void run(MpmState<dim>& s) override;
 
 private:
@@ -24,5 +25,9 @@ private:
 //! True when some material has a plasticity model other than none.
 template <int dim>
 bool any_plastic(const std::vector<Material<dim>>& materials);
+
+//! True when some material is a dilatant Drucker-Prager sand (its particles need a packing).
+template <int dim>
+bool any_dilatant(const std::vector<Material<dim>>& materials);
 
 }  // namespace mpm::stages

@@ -1,0 +1,230 @@
+// Dilatant Drucker-Prager sand (plasticity/drucker_prager.h): the return map against its own
+// definition (the cone of mu_cone + tan psi, plastic volume sqrt(2) tan psi dgamma, the packing
+// kept through the map), and the behaviour it exists for: under undrained (isochoric) shear a
+// dense sand builds pressure and a loose one loses it; under drained shear at constant pressure
+// both reach the critical packing. The principal strains are taken with Eigen's JacobiSVD, not
+// with the SVD the map uses.
+#include <doctest/doctest.h>
+
+#include <mpm/constitutive/hencky_stvk.h>
+#include <mpm/core/config.h>
+#include <mpm/core/error.h>
+#include <mpm/plasticity/drucker_prager.h>
+#include <mpm/solid/material.h>
+
+#include <Eigen/Geometry>
+#include <Eigen/SVD>
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <random>
+#include <string>
+
+using namespace mpm;
+
+namespace {
+
+const constitutive::Lame kLame = constitutive::Lame::from_youngs_poisson(1e6, 0.3);
+constexpr double kFriction = 30.0, kK = 4.0, kCritical = 0.58;
+
+template <int dim>
+plasticity::DruckerPrager<dim> sand(double dilatancy = kK) {
+  return {kFriction, 0.0, kLame, dilatancy, kCritical};
+}
+
+//! The cone's own friction coefficient alpha (drucker_prager.h).
+double cone_alpha() {
+  const double s = std::sin(kFriction * std::numbers::pi / 180.0);
+  return std::sqrt(2.0 / 3.0) * 2.0 * s / (3.0 - s);
+}
+
+template <int dim>
+Vec<dim> log_singular_values(const Mat<dim>& F) {
+  return Eigen::JacobiSVD<Mat<dim>>(F).singularValues().array().log();
+}
+
+template <int dim>
+Mat<dim> kirchhoff(const Mat<dim>& F) {
+  const constitutive::HenckyStVK<dim> hencky{kLame.mu, kLame.lambda};
+  return hencky.first_piola(F) * F.transpose();
+}
+
+//! ||dev tau|| / -tr tau: on the cone it is alpha (of the current packing).
+template <int dim>
+double stress_ratio(const Mat<dim>& tau) {
+  const double trace = tau.trace();
+  return (tau - trace / dim * Mat<dim>::Identity()).norm() / -trace;
+}
+
+template <int dim>
+Mat<dim> random_rotation(std::mt19937& rng) {
+  std::uniform_real_distribution<double> u(-std::numbers::pi, std::numbers::pi);
+  if constexpr (dim == 2) {
+    return Eigen::Rotation2D<double>(u(rng)).toRotationMatrix();
+  } else {
+    const Vec<3> axis = Vec<3>(u(rng), u(rng), u(rng)).normalized();
+    return Eigen::AngleAxis<double>(u(rng), axis).toRotationMatrix();
+  }
+}
+
+//! Simple shear by `gamma` in the x-y plane.
+template <int dim>
+Mat<dim> shear(double gamma) {
+  Mat<dim> S = Mat<dim>::Identity();
+  S(0, 1) = gamma;
+  return S;
+}
+
+}  // namespace
+
+TEST_CASE_TEMPLATE("dilatant return map: on the cone of mu + tan psi, plastic volume sqrt(2) tan psi dgamma",
+                   Matrix, Mat<2>, Mat<3>) {
+  constexpr int dim = Matrix::RowsAtCompileTime;
+  const plasticity::DruckerPrager<dim> model = sand<dim>();
+  std::mt19937 rng(1998);
+  std::uniform_real_distribution<double> stretch(0.95, 1.02);
+  int on_cone = 0, at_apex = 0;
+  for (const double phi : {0.52, 0.56, 0.58, 0.60, 0.64}) {
+    const double tan_psi = kK * (phi - kCritical);
+    const double alpha = cone_alpha() + std::numbers::sqrt2 * tan_psi / dim;
+    for (int n = 0; n < 100; ++n) {
+      Vec<dim> s;
+      for (int a = 0; a < dim; ++a) s(a) = stretch(rng);
+      const Mat<dim> trial = random_rotation<dim>(rng) * s.asDiagonal() * random_rotation<dim>(rng);
+      CAPTURE(phi);
+      CAPTURE(trial);
+      Mat<dim> Fe = trial;
+      double plastic = 0.0, rest = phi * trial.determinant();  // the packing is phi now
+      model.project(Fe, plastic, &rest);
+      CHECK(rest / Fe.determinant() == doctest::Approx(phi).epsilon(1e-12));  // total volume kept
+      const Mat<dim> tau = kirchhoff(Fe);
+      const double scale = kirchhoff(trial).norm();
+      if (plastic > 0.0 || tau.trace() > -1e-9 * scale) {  // II: stress free at the apex
+        CHECK(tau.norm() <= 1e-9 * scale);
+        ++at_apex;
+        continue;
+      }
+      // Admissible on the cone of this packing; on it where the map moved F^E.
+      CHECK(stress_ratio(tau) <= alpha * (1.0 + 1e-10));
+      if ((Fe - trial).norm() == 0.0) continue;
+      CHECK(stress_ratio(tau) == doctest::Approx(alpha).epsilon(1e-9));
+      ++on_cone;
+      // The flow: the deviator shrinks by dgamma, the volume by sqrt(2) tan psi dgamma.
+      const Vec<dim> before = log_singular_values(trial), after = log_singular_values(Fe);
+      const auto dev_norm = [](const Vec<dim>& e) { return (e.array() - e.mean()).matrix().norm(); };
+      const double dgamma = dev_norm(before) - dev_norm(after);
+      CHECK(dgamma > 0.0);
+      CHECK(after.sum() - before.sum() ==
+            doctest::Approx(-std::numbers::sqrt2 * tan_psi * dgamma).scale(1e-3).epsilon(1e-9));
+    }
+  }
+  CHECK(on_cone > 100);
+  CHECK(at_apex > 20);
+
+  // K = 0 is the plain map, bit for bit, and leaves the packing alone.
+  const plasticity::DruckerPrager<dim> plain(kFriction, 0.0, kLame), none = sand<dim>(0.0);
+  for (int n = 0; n < 50; ++n) {
+    Vec<dim> s;
+    for (int a = 0; a < dim; ++a) s(a) = stretch(rng);
+    const Mat<dim> trial = random_rotation<dim>(rng) * s.asDiagonal() * random_rotation<dim>(rng);
+    Mat<dim> a = trial, b = trial;
+    double va = 0.0, vb = 0.0, rest = 0.6;
+    plain.project(a, va);
+    none.project(b, vb, &rest);
+    CHECK(a == b);
+    CHECK(va == vb);
+    CHECK(rest == 0.6);
+  }
+}
+
+TEST_CASE_TEMPLATE("undrained shear: a dense sand builds pressure, a loose one liquefies, a critical one holds",
+                   Matrix, Mat<2>, Mat<3>) {
+  constexpr int dim = Matrix::RowsAtCompileTime;
+  const plasticity::DruckerPrager<dim> model = sand<dim>();
+  // Isotropic compression by 1 %, then 0.5 of simple shear at constant volume in 500 steps.
+  const auto pressure_after_shear = [&](double phi, double gamma) {
+    Mat<dim> Fe = 0.99 * Mat<dim>::Identity();
+    double plastic = 0.0, rest = phi * Fe.determinant();
+    for (int n = 0; n < 500; ++n) {
+      Fe = shear<dim>(gamma / 500) * Fe;
+      model.project(Fe, plastic, &rest);
+    }
+    CHECK(rest / Fe.determinant() == doctest::Approx(phi).epsilon(1e-12));  // isochoric: phi fixed
+    return -kirchhoff(Fe).trace() / dim;
+  };
+  const double p0 = -kirchhoff(Mat<dim>(0.99 * Mat<dim>::Identity())).trace() / dim;
+  CHECK(pressure_after_shear(0.58, 0.5) == doctest::Approx(p0).epsilon(1e-10));  // psi = 0: no volume change
+  CHECK(pressure_after_shear(0.62, 0.5) > 2.0 * p0);                             // dilatancy held back
+  CHECK(pressure_after_shear(0.54, 0.5) < 1e-9 * p0);                            // contraction: no contacts left
+  CHECK(pressure_after_shear(0.62, 0.5) > pressure_after_shear(0.60, 0.5));      // denser, stronger
+}
+
+TEST_CASE_TEMPLATE("drained shear at constant pressure: dense and loose sand reach the critical packing", Matrix,
+                   Mat<2>, Mat<3>) {
+  constexpr int dim = Matrix::RowsAtCompileTime;
+  const plasticity::DruckerPrager<dim> model = sand<dim>();
+  const double p_target = 2e3;  // [Pa]
+  struct Path {
+    double packing, peak_ratio, final_ratio;
+  };
+  // Simple shear by 3 in 3000 steps; each step scales the volume so that the pressure after
+  // the return map is p_target (bisection: the pressure grows monotonically with compression).
+  const auto shear_drained = [&](double phi) {
+    Mat<dim> Fe = Mat<dim>::Identity();
+    double plastic = 0.0, rest = phi, peak = 0.0, ratio = 0.0;
+    for (int n = 0; n < 3000; ++n) {
+      const Mat<dim> base = shear<dim>(1e-3) * Fe;
+      double lo = 0.9, hi = 1.1;
+      Mat<dim> next;
+      double next_plastic = 0.0, next_rest = 0.0;
+      for (int it = 0; it < 60; ++it) {
+        const double scale = 0.5 * (lo + hi);
+        next = scale * base;
+        next_plastic = plastic;
+        next_rest = rest;
+        model.project(next, next_plastic, &next_rest);
+        (-kirchhoff(next).trace() / dim > p_target ? lo : hi) = scale;
+      }
+      Fe = next;
+      plastic = next_plastic;
+      rest = next_rest;
+      ratio = stress_ratio(kirchhoff(Fe));
+      peak = std::max(peak, ratio);
+    }
+    CHECK(-kirchhoff(Fe).trace() / dim == doctest::Approx(p_target).epsilon(1e-6));
+    return Path{rest / Fe.determinant(), peak, ratio};
+  };
+  const Path dense = shear_drained(0.62), loose = shear_drained(0.54);
+  CAPTURE(dense.packing);
+  CAPTURE(loose.packing);
+  CHECK(std::abs(dense.packing - kCritical) < 2e-3);  // dilated
+  CHECK(std::abs(loose.packing - kCritical) < 2e-3);  // compacted
+  CHECK(dense.packing > kCritical);                   // from above and below, without overshoot
+  CHECK(loose.packing < kCritical);
+  // At the critical state both are on the cone of the plain friction angle; the dense sand
+  // passed a peak above it.
+  CHECK(dense.final_ratio == doctest::Approx(cone_alpha()).epsilon(2e-2));
+  CHECK(loose.final_ratio == doctest::Approx(cone_alpha()).epsilon(2e-2));
+  CHECK(dense.peak_ratio > cone_alpha() + std::numbers::sqrt2 * kK * 0.02 / dim);
+}
+
+TEST_CASE("dilatant sand: scene keys and their errors") {
+  const std::string base =
+      "density: 2650\nyoungs_modulus: 1e6\npoisson_ratio: 0.3\nelasticity: hencky_stvk\nplasticity: {model: "
+      "drucker_prager, friction_angle: 30";
+  const Material<2> m = parse_material<2>(Config::parse(base + ", dilatancy: 4.09, critical_packing: 0.58}\n"));
+  const auto& dp = std::get<plasticity::DruckerPrager<2>>(m.plasticity);
+  CHECK(dp.dilatant());
+  CHECK(dp.dilatancy() == 4.09);
+  CHECK(dp.critical_packing() == 0.58);
+  CHECK_FALSE(std::get<plasticity::DruckerPrager<2>>(parse_material<2>(Config::parse(base + "}\n")).plasticity)
+                  .dilatant());
+  CHECK_THROWS_WITH_AS(parse_material<2>(Config::parse(base + ", dilatancy: -1, critical_packing: 0.58}\n")),
+                       doctest::Contains("plasticity.dilatancy"), InputError);
+  CHECK_THROWS_WITH_AS(parse_material<2>(Config::parse(base + ", dilatancy: 4, critical_packing: 1.2}\n")),
+                       doctest::Contains("plasticity.critical_packing"), InputError);
+  CHECK_THROWS_WITH_AS(parse_material<2>(Config::parse(base + ", dilatancy: 4}\n")),
+                       doctest::Contains("critical_packing"), InputError);
+  CHECK_THROWS_WITH_AS(parse_material<2>(Config::parse(base + ", critical_packing: 0.58}\n")),
+                       doctest::Contains("needs a dilatancy coefficient"), InputError);
+}
