@@ -93,8 +93,8 @@ void start_geostatic(CoupledScene<dim>& scene, std::size_t first, const std::vec
     if (g[a] != 0.0) up = up == -1 ? a : dim;
   if (up < 0 || up == dim || g[up] > 0.0)
     body.fail("geostatic", "a geostatic start needs gravity along one axis, pointing down (-y in 2D, -z in 3D)");
-  const double spacing = scene.settings.dx / mpm::geometry::lattice_points_per_axis<dim>(
-                                                 mpm::geometry::particles_per_cell<dim>(body));
+  const double spacing =
+      scene.settings.dx / mpm::geometry::lattice_points_per_axis<dim>(mpm::geometry::particles_per_cell<dim>(body));
   // The body's top per lattice column (positions rounded to the lattice across the vertical).
   const auto column = [&](const mpm::Vec<dim>& p) {
     std::array<long long, dim> key{};
