@@ -62,11 +62,11 @@ public:
   DruckerPrager(double friction_angle, double cohesion, const constitutive::Lame& lame, double dilatancy = 0.0,
                 double critical_packing = 0.6)
       : elastic_{lame.mu, lame.lambda}, dilatancy_(dilatancy), critical_packing_(critical_packing) {
-    verify<InputError>(dilatancy >= 0.0, "Drucker-Prager dilatancy coefficient " + std::to_string(dilatancy) +
-                                             ": expected a value >= 0");
-    verify<InputError>(critical_packing > 0.0 && critical_packing < 1.0,
-                       "Drucker-Prager critical packing " + std::to_string(critical_packing) +
-                           ": expected a value in (0, 1)");
+    verify<InputError>(dilatancy >= 0.0,
+                       "Drucker-Prager dilatancy coefficient " + std::to_string(dilatancy) + ": expected a value >= 0");
+    verify<InputError>(
+        critical_packing > 0.0 && critical_packing < 1.0,
+        "Drucker-Prager critical packing " + std::to_string(critical_packing) + ": expected a value in (0, 1)");
     verify<InputError>(
         friction_angle >= 0.0 && friction_angle < 90.0,
         "Drucker-Prager friction angle " + std::to_string(friction_angle) + " deg: expected a value in [0, 90)");

@@ -77,8 +77,8 @@ Mat<dim> shear(double gamma) {
 
 }  // namespace
 
-TEST_CASE_TEMPLATE("dilatant return map: on the cone of mu + tan psi, plastic volume sqrt(2) tan psi dgamma",
-                   Matrix, Mat<2>, Mat<3>) {
+TEST_CASE_TEMPLATE("dilatant return map: on the cone of mu + tan psi, plastic volume sqrt(2) tan psi dgamma", Matrix,
+                   Mat<2>, Mat<3>) {
   constexpr int dim = Matrix::RowsAtCompileTime;
   const plasticity::DruckerPrager<dim> model = sand<dim>();
   std::mt19937 rng(1998);
@@ -137,8 +137,8 @@ TEST_CASE_TEMPLATE("dilatant return map: on the cone of mu + tan psi, plastic vo
   }
 }
 
-TEST_CASE_TEMPLATE("undrained shear: a dense sand builds pressure, a loose one liquefies, a critical one holds",
-                   Matrix, Mat<2>, Mat<3>) {
+TEST_CASE_TEMPLATE("undrained shear: a dense sand builds pressure, a loose one liquefies, a critical one holds", Matrix,
+                   Mat<2>, Mat<3>) {
   constexpr int dim = Matrix::RowsAtCompileTime;
   const plasticity::DruckerPrager<dim> model = sand<dim>();
   // Isotropic compression by 1 %, then 0.5 of simple shear at constant volume in 500 steps.
@@ -217,8 +217,8 @@ TEST_CASE("dilatant sand: scene keys and their errors") {
   CHECK(dp.dilatant());
   CHECK(dp.dilatancy() == 4.09);
   CHECK(dp.critical_packing() == 0.58);
-  CHECK_FALSE(std::get<plasticity::DruckerPrager<2>>(parse_material<2>(Config::parse(base + "}\n")).plasticity)
-                  .dilatant());
+  CHECK_FALSE(
+      std::get<plasticity::DruckerPrager<2>>(parse_material<2>(Config::parse(base + "}\n")).plasticity).dilatant());
   CHECK_THROWS_WITH_AS(parse_material<2>(Config::parse(base + ", dilatancy: -1, critical_packing: 0.58}\n")),
                        doctest::Contains("plasticity.dilatancy"), InputError);
   CHECK_THROWS_WITH_AS(parse_material<2>(Config::parse(base + ", dilatancy: 4, critical_packing: 1.2}\n")),
