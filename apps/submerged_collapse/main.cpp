@@ -12,10 +12,15 @@
 // Output as every app (mpm/core/runner.h: fluid_ and sediment_NNNN.h5, previews, checkpoints);
 // diagnostics.csv adds front and height of the grains [m], their kinetic energy
 // sediment_kinetic_energy [J/m in 2D], the continuum / discrete counts and, with a fluid,
-// base_pore_pressure [Pa]: the excess pore pressure under the column, the pressure of the cell
-// 40 % of the column's length from its back, in the first cell above its base, less that of
-// the cell at the same height at the far end of the liquid (the hydrostatic part cancels).
+// base_pore_pressure [Pa]: the excess pore pressure under the column, the mean pressure of the
+// second cell row above its base from 20 % to 60 % of its length (a sensor dx apart, at least
+// one), less that of the cell at the same height at the far end of the liquid (the hydrostatic
+// part cancels), and deposit_front [m]: the far edge of the last dx-wide column holding at least
+// 2 mm of grains at the initial packing.
 // summary.json:
+//   deposit_runout  final minus initial deposit_front [m] (what the experiment's front means)
+//   deposit_runout_error  |deposit_runout / experiment.deposit_runout - 1|, when the scene has
+//                 the key `experiment.deposit_runout` [m] (> 0): the measured runout
 //   runout        final front minus initial front [m]; front = the 99.5th percentile of the
 //                 x of the continuum grains (the deposit; discrete grains suspended ahead of it
 //                 do not count; diagnostics column front_grains counts every grain)
@@ -23,9 +28,12 @@
 //                 y over the left half of the initial column
 //   duration      first time after the peak at which the grains' kinetic energy falls below
 //                 1e-3 of its peak [s] (frame resolution; time.end when it never does)
-//   peak_base_pore_pressure   the base_pore_pressure of largest magnitude, with its sign [Pa]
+//   mean_base_pore_pressure_1s  the mean of base_pore_pressure over the frames of the first
+//                 second [Pa]: positive under a contracting (loose) column, negative under a
+//                 dilating (dense) one
 // --check: the grains came to rest before time.end, spread (runout > 0) and the column lost
 // height, and the grain mass is unchanged.
+#include <coupling/bed_profile.h>
 #include <coupling/coupled_runner.h>
 #include <coupling/scene_loader.h>
 #include <coupling/stages/mixture_projection.h>
@@ -36,11 +44,15 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <optional>
+#include <utility>
 #include <vector>
 
 using namespace mpm;
 
 namespace {
+
+constexpr double kDepositThickness = 2e-3;  //!< [m], deposit_front
 
 //! The q-quantile of `values` (nearest rank); 0 when empty.
 double quantile(std::vector<double> values, double q) {
@@ -60,6 +72,19 @@ double front(const coupling::CoupledState<dim>& s, bool deposit) {
   for (std::size_t p = 0; p < P.size(); ++p)
     if (all || P.material[p] != coupling::discrete_grain) x.push_back(P.x[p][0]);
   return quantile(std::move(x), 0.995);
+}
+
+//! The deposit's front [m]: the far edge of the last column (in x, from the back wall) whose
+//! bed holds at least `thickness` of grains at the packing phi (coupling/bed_profile.h), so that
+//! a few grains spread thin ahead of the deposit do not count.
+template <int dim>
+double deposit_front(const coupling::CoupledState<dim>& s, const coupling::BedProfile<dim>& bed, double thickness,
+                     double dx) {
+  const std::vector<double> h = bed.heights(s.sediment.particles);
+  double front = 0.0;
+  for (std::int64_t c = 0; c < bed.column_count(); ++c)
+    if (h[static_cast<std::size_t>(c)] >= thickness) front = std::max(front, bed.centre(c)[0] + 0.5 * dx);
+  return front;
 }
 
 template <int dim>
@@ -96,6 +121,10 @@ int run(const CommandLine& cl, const Config& scene) {
   // stages only (issue 5, lean scenes).
   verify<InputError>(col.sediment.has_value() && col.state.sediment.particles.size() > 0,
                      scene.file() + ": submerged_collapse needs a `sediment` and a sediment body");
+  // The experiment's runout, when the scene names it: the summary then gives the error.
+  std::optional<double> measured_runout;
+  if (const std::optional<Config> experiment = scene.optional_child("experiment"))
+    measured_runout = experiment->number("deposit_runout", Range::positive());
   scene.reject_unknown_keys();
   coupling::CoupledState<dim>& s = col.state;
   const double front0 = front(s, true), left_half = 0.5 * front0, height0 = height(s, left_half);
@@ -104,6 +133,13 @@ int run(const CommandLine& cl, const Config& scene) {
   auto pipeline = coupling::make_coupled_pipeline(col);
   coupling::CoupledRunner<dim> runner("submerged_collapse", cl, scene, col.settings);
   runner.add_column("front", [](const coupling::CoupledState<dim>& st) { return front(st, true); });
+  // 2 mm: about ten grain diameters of the experiment, the thinnest deposit it draws.
+  const coupling::BedProfile<dim> bed(
+      col.settings, scene.optional_child("sediment")->number("packing_fraction", 0.6, Range::open(0.0, 1.0)));
+  const double deposit_front0 = deposit_front(s, bed, kDepositThickness, col.settings.dx);
+  runner.add_column("deposit_front", [&, dx = col.settings.dx](const coupling::CoupledState<dim>& st) {
+    return deposit_front(st, bed, kDepositThickness, dx);
+  });
   runner.add_column("front_grains", [](const coupling::CoupledState<dim>& st) { return front(st, false); });
   runner.add_column("height", [=](const coupling::CoupledState<dim>& st) { return height(st, left_half); });
   runner.add_column("sediment_kinetic_energy",
@@ -117,15 +153,24 @@ int run(const CommandLine& cl, const Config& scene) {
   using Projection = coupling::stages::MixtureProjection<dim>;
   if (const Projection* projection = s.has_fluid ? pipeline.template find<Projection>() : nullptr) {
     const auto [grains_lo, grains_hi] = bounds(s.sediment.particles);
-    const auto [fluid_lo, fluid_hi] = bounds(s.fluid.particles);
-    Vec<dim> sensor = 0.5 * (grains_lo + grains_hi), reference = sensor;
-    sensor[0] = grains_lo[0] + 0.4 * (grains_hi[0] - grains_lo[0]);
-    sensor[1] = grains_lo[1] + 0.5 * col.settings.dx;
-    reference[0] = fluid_hi[0] - col.settings.dx;
-    reference[1] = sensor[1];
+    const Vec<dim> fluid_hi = bounds(s.fluid.particles).second;
+    // The second cell row above the column's base (the first touches the floor's prescribed
+    // nodes), from 20 % to 60 % of its length; the reference: the same row at the far end.
+    const double dx = col.settings.dx;
+    std::vector<Vec<dim>> sensor;
+    Vec<dim> x = 0.5 * (grains_lo + grains_hi);
+    x[1] = grains_lo[1] + 1.5 * dx;
+    for (x[0] = grains_lo[0] + 0.2 * (grains_hi[0] - grains_lo[0]);
+         x[0] <= grains_lo[0] + 0.6 * (grains_hi[0] - grains_lo[0]); x[0] += dx)
+      sensor.push_back(x);
+    Vec<dim> reference = x;
+    reference[0] = fluid_hi[0] - dx;
     runner.add_column("base_pore_pressure", [=](const coupling::CoupledState<dim>& st) {
       const SparseGrid<dim>& g = st.fluid.grid;
-      return projection->projection().pressure_at(g, sensor) - projection->projection().pressure_at(g, reference);
+      const auto& p = projection->projection();
+      double sum = 0.0;
+      for (const Vec<dim>& at : sensor) sum += p.pressure_at(g, at);
+      return sum / static_cast<double>(sensor.size()) - p.pressure_at(g, reference);
     });
   }
   runner.run(s, pipeline);
@@ -138,19 +183,32 @@ int run(const CommandLine& cl, const Config& scene) {
       duration = time[static_cast<std::size_t>(e - energy.begin())];
       break;
     }
-  double peak_pore_pressure = 0.0;
-  if (s.has_fluid)
-    for (const double p : runner.history("base_pore_pressure"))
-      if (std::abs(p) > std::abs(peak_pore_pressure)) peak_pore_pressure = p;
+  // The frames' pore pressure is noisy (a few cells of a flowing mixture, step to step): the
+  // summary gives its mean over the first second of the collapse, where the sign is decided.
+  double early_pore_pressure = 0.0;
+  if (s.has_fluid) {
+    const std::vector<double> p = runner.history("base_pore_pressure");
+    int frames = 0;
+    for (std::size_t k = 0; k < p.size(); ++k)
+      if (time[k] > 0.0 && time[k] <= 1.0 + 1e-9) {
+        early_pore_pressure += p[k];
+        ++frames;
+      }
+    if (frames > 0) early_pore_pressure /= frames;
+  }
   const double grains = s.sediment.particles.total_mass();
   const double runout = front(s, true) - front0, final_height = height(s, left_half);
-  runner.write_summary({{"runout", runout},
-                        {"final_height", final_height},
-                        {"duration", duration},
-                        {"initial_front", front0},
-                        {"initial_height", height0},
-                        {"peak_sediment_kinetic_energy", energy.empty() ? 0.0 : *peak},
-                        {"peak_base_pore_pressure", peak_pore_pressure}});
+  const double deposit_runout = deposit_front(s, bed, kDepositThickness, col.settings.dx) - deposit_front0;
+  std::vector<std::pair<std::string, double>> results{{"runout", runout},
+                                                      {"deposit_runout", deposit_runout},
+                                                      {"final_height", final_height},
+                                                      {"duration", duration},
+                                                      {"initial_front", front0},
+                                                      {"initial_height", height0},
+                                                      {"peak_sediment_kinetic_energy", energy.empty() ? 0.0 : *peak},
+                                                      {"mean_base_pore_pressure_1s", early_pore_pressure}};
+  if (measured_runout) results.emplace_back("deposit_runout_error", std::abs(deposit_runout / *measured_runout - 1.0));
+  runner.write_summary(results);
   if (!cl.check) return 0;
   auto check = [](const char* what, bool pass, double value) {
     std::printf("check %s: %.6g %s\n", what, value, pass ? "ok" : "FAILED");
