@@ -63,13 +63,22 @@ Material<dim> parse_material(const Config& cfg) {
   if (model == plasticity::DruckerPrager<dim>::name) {
     const double friction_angle = plastic->number("friction_angle", 30.0, Range::half_open(0.0, 90.0));
     const double cohesion = plastic->number("cohesion", 0.0, Range::non_negative());
-    // Dilatancy (drucker_prager.h): K = 0 is none; a dilatant sand needs its critical packing.
-    const double dilatancy = plastic->number("dilatancy", 0.0, Range::non_negative());
-    const double critical_packing = dilatancy > 0.0 ? plastic->number("critical_packing", Range::open(0.0, 1.0)) : 0.6;
-    if (dilatancy == 0.0 && plastic->has("critical_packing"))
+    // Dilatancy and mu(J) (drucker_prager.h): K = 0 is none, and a dilatant sand needs its
+    // critical packing; without `rate` the friction is rate independent.
+    typename plasticity::DruckerPrager<dim>::Flow flow;
+    flow.dilatancy = plastic->number("dilatancy", 0.0, Range::non_negative());
+    if (flow.dilatancy > 0.0)
+      flow.critical_packing = plastic->number("critical_packing", Range::open(0.0, 1.0));
+    else if (plastic->has("critical_packing"))
       plastic->fail("critical_packing", "a critical packing needs a dilatancy coefficient > 0 (key 'dilatancy')");
-    material.plasticity =
-        plasticity::DruckerPrager<dim>(friction_angle, cohesion, material.lame, dilatancy, critical_packing);
+    const plasticity::DruckerPrager<dim> rate_independent(friction_angle, cohesion, material.lame);
+    if (const std::optional<Config> rate = plastic->optional_child("rate")) {
+      const double mu_1 = rate_independent.friction();
+      flow.mu_2 = rate->number("mu_2", Range::closed(mu_1, 1e6));  // the message names mu_1's bound
+      flow.j_0 = rate->number("j_0", 0.005, Range::positive());
+      flow.viscosity = rate->number("viscosity", Range::positive());
+    }
+    material.plasticity = plasticity::DruckerPrager<dim>(friction_angle, cohesion, material.lame, flow);
   } else if (model == plasticity::VonMises<dim>::name) {
     const double yield_stress = plastic->number("yield_stress", Range::positive());
     material.plasticity = plasticity::VonMises<dim>(yield_stress, material.lame);

@@ -38,6 +38,15 @@
 //! at F^E = I (solid_channels.h): phi = phi_r / det F^E_trial; the map updates phi_r by
 //! det F^E_new / det F^E_trial (the total volume does not change within the map), which keeps
 //! phi_r / det F^E the true packing in all three cases.
+//!
+//! Rate-dependent friction (optional; the mu(J) of dense suspensions, Boyer, Guazzelli &
+//! Pouliquen 2011, eq. 6): with mu_2 > mu_cone the friction grows with the viscous number
+//! J = eta_f gamma_dot / P of the plastic flow,
+//!   mu(J) = mu_cone + (mu_2 - mu_cone) J / (J + J_0),
+//! gamma_dot = sqrt(2) dgamma / dt, P = -tr tau / d of the returned state (P <= 0: J = inf).
+//! Case III then solves y(dgamma) = 0 with the friction of its own dgamma (y decreases
+//! monotonically in dgamma: bisection); a slow flow (J -> 0) is the rate-independent map, a
+//! flow at vanishing pressure meets mu_2.
 #include <mpm/constitutive/hencky_stvk.h>
 #include <mpm/constitutive/lame.h>
 #include <mpm/core/error.h>
@@ -57,16 +66,24 @@ class DruckerPrager {
 public:
   static constexpr std::string_view name = "drucker_prager";
 
+  //! What the sand does beyond the cone: dilatancy and rate-dependent friction (both off by
+  //! default).
+  struct Flow {
+    double dilatancy = 0.0;         //!< K of tan psi = K (phi - phi_c) [-]; 0: none
+    double critical_packing = 0.6;  //!< phi_c [-], in (0, 1)
+    double mu_2 = 0.0;              //!< mu(J) at large J [-]; 0: rate independent, else >= mu_cone
+    double j_0 = 0.005;             //!< J_0 [-] > 0
+    double viscosity = 0.0;         //!< eta_f of J [Pa s] > 0 where mu_2 is set
+  };
+
   //! friction_angle [deg] in [0, 90), cohesion [Pa] >= 0; lame of the Hencky StVK elasticity.
-  //! Dilatancy: coefficient K >= 0 (0: none) and critical packing phi_c in (0, 1).
-  DruckerPrager(double friction_angle, double cohesion, const constitutive::Lame& lame, double dilatancy = 0.0,
-                double critical_packing = 0.6)
-      : elastic_{lame.mu, lame.lambda}, dilatancy_(dilatancy), critical_packing_(critical_packing) {
-    verify<InputError>(dilatancy >= 0.0,
-                       "Drucker-Prager dilatancy coefficient " + std::to_string(dilatancy) + ": expected a value >= 0");
+  DruckerPrager(double friction_angle, double cohesion, const constitutive::Lame& lame, Flow flow = {})
+      : elastic_{lame.mu, lame.lambda}, flow_(flow) {
+    verify<InputError>(flow.dilatancy >= 0.0, "Drucker-Prager dilatancy coefficient " + std::to_string(flow.dilatancy) +
+                                                  ": expected a value >= 0");
     verify<InputError>(
-        critical_packing > 0.0 && critical_packing < 1.0,
-        "Drucker-Prager critical packing " + std::to_string(critical_packing) + ": expected a value in (0, 1)");
+        flow.critical_packing > 0.0 && flow.critical_packing < 1.0,
+        "Drucker-Prager critical packing " + std::to_string(flow.critical_packing) + ": expected a value in (0, 1)");
     verify<InputError>(
         friction_angle >= 0.0 && friction_angle < 90.0,
         "Drucker-Prager friction angle " + std::to_string(friction_angle) + " deg: expected a value in [0, 90)");
@@ -76,7 +93,18 @@ public:
     const double cos_phi = std::cos(friction_angle * std::numbers::pi / 180.0);
     alpha_ = std::sqrt(2.0 / 3.0) * 2.0 * sin_phi / (3.0 - sin_phi);
     k_ = std::sqrt(2.0 / 3.0) * 6.0 * cohesion * cos_phi / (3.0 - sin_phi);
+    if (flow.mu_2 != 0.0) {
+      verify<InputError>(flow.mu_2 >= friction(), "Drucker-Prager mu_2 " + std::to_string(flow.mu_2) +
+                                                      ": expected a value >= the static friction mu_1 = " +
+                                                      std::to_string(friction()) + " of the friction angle");
+      verify<InputError>(flow.j_0 > 0.0, "Drucker-Prager J_0 " + std::to_string(flow.j_0) + ": expected > 0");
+      verify<InputError>(flow.viscosity > 0.0,
+                         "Drucker-Prager viscosity " + std::to_string(flow.viscosity) + " Pa s: expected > 0");
+    }
   }
+
+  //! mu_cone = alpha d / sqrt(2): the static friction, shear stress over pressure in simple shear.
+  double friction() const { return alpha_ * dim / std::numbers::sqrt2; }
 
   //! y of the Kirchhoff stress of Fe [Pa]; <= 0 is admissible.
   double yield_function(const Mat<dim>& Fe) const {
@@ -87,20 +115,22 @@ public:
 
   //! Whether the friction and flow depend on the packing (K > 0); the return map then calls
   //! the overload with the rest packing.
-  bool dilatant() const { return dilatancy_ > 0.0; }
-  double dilatancy() const { return dilatancy_; }
-  double critical_packing() const { return critical_packing_; }
+  bool dilatant() const { return flow_.dilatancy > 0.0; }
+  //! Whether the friction depends on the shear rate (mu_2 set); the map then needs dt.
+  bool rate_dependent() const { return flow_.mu_2 > 0.0; }
+  const Flow& flow() const { return flow_; }
 
   //! Projects Fe onto the admissible set and updates the volume correction `plastic` (log
   //! volume, >= 0). Returns whether Fe changed. A changed Fe has positive singular values.
   //! `result`, when given, receives the SVD of the Fe left (the trial's when unchanged).
   //! Without a packing the map is that of K = 0.
   bool project(Mat<dim>& Fe, double& plastic, math::Svd<dim>* result = nullptr) const {
-    return project(Fe, plastic, nullptr, result);
+    return project(Fe, plastic, nullptr, 0.0, result);
   }
 
-  //! The same with dilatancy: `rest_packing` phi_r (see above) is read and updated.
-  bool project(Mat<dim>& Fe, double& plastic, double* rest_packing, math::Svd<dim>* result = nullptr) const {
+  //! The same with dilatancy (`rest_packing` phi_r, see above, is read and updated; nullptr:
+  //! K = 0) and the rate dependence over a step dt [s] (0: rate independent).
+  bool project(Mat<dim>& Fe, double& plastic, double* rest_packing, double dt, math::Svd<dim>* result = nullptr) const {
     math::Svd<dim> f = math::svd(Fe);
     const Vec<dim> strain = Hencky::principal_strain(f.sigma);
     const Vec<dim> eps = strain + Vec<dim>::Constant(plastic / dim);
@@ -108,7 +138,7 @@ public:
     const double bulk = dim * elastic_.lambda + 2.0 * elastic_.mu;  // tr tau / tr eps
     double alpha = alpha_, tan_psi = 0.0;
     if (rest_packing && dilatant()) {
-      tan_psi = dilatancy_ * (*rest_packing * std::exp(-strain.sum()) - critical_packing_);
+      tan_psi = flow_.dilatancy * (*rest_packing * std::exp(-strain.sum()) - flow_.critical_packing);
       alpha = std::max(alpha_ + tan_psi * std::numbers::sqrt2 / dim, 0.0);  // mu_cone + tan psi
     }
     Vec<dim> H = eps;
@@ -128,7 +158,12 @@ public:
         // the plastic volume change; where that does not reach the cone before the deviator
         // is spent (strong contraction), all shear goes and the volume change with it.
         const double rate = 2.0 * elastic_.mu + alpha * bulk * std::numbers::sqrt2 * tan_psi;
-        const double share = rate > 0.0 && y < rate * dev_norm ? y / (rate * dev_norm) : 1.0;  // dgamma / ||dev||
+        double share = rate > 0.0 && y < rate * dev_norm ? y / (rate * dev_norm) : 1.0;  // dgamma / ||dev||
+        if (rate_dependent() && dt > 0.0) {
+          const auto friction_at = [&](double dgamma) { return alpha + rate_friction(dgamma, trace, tan_psi, dt); };
+          share = rate_dependent_share(dev_norm, trace, tan_psi, friction_at);
+          alpha = friction_at(share * dev_norm);
+        }
         H -= share * dev;
         if (tan_psi != 0.0) {
           H -= Vec<dim>::Constant(std::numbers::sqrt2 * tan_psi * share * dev_norm / dim);
@@ -151,6 +186,33 @@ private:
     return (tau - Vec<dim>::Constant(trace / dim)).norm() + alpha * trace - k_;
   }
 
+  //! The cone's alpha that mu(J) adds at the plastic strain dgamma of a step dt [-].
+  double rate_friction(double dgamma, double trace, double tan_psi, double dt) const {
+    const double bulk = dim * elastic_.lambda + 2.0 * elastic_.mu;
+    const double pressure = -bulk * (trace - std::numbers::sqrt2 * tan_psi * dgamma) / dim;
+    const double strain_rate = flow_.viscosity * std::numbers::sqrt2 * dgamma / dt;  // eta gamma_dot
+    // J / (J + J_0) = eta gamma_dot / (eta gamma_dot + J_0 P), 1 where P <= 0
+    const double share = pressure > 0.0 ? strain_rate / (strain_rate + flow_.j_0 * pressure) : 1.0;
+    return (flow_.mu_2 - friction()) * share * std::numbers::sqrt2 / dim;
+  }
+
+  //! Case III with mu(J): dgamma / ||dev|| in [0, 1] where y(dgamma) = 0 (y falls
+  //! monotonically in dgamma: 2 mu per unit, and alpha(dgamma) grows while tr tau < 0), or 1
+  //! where the deviator is spent first. Bisection to round-off.
+  template <class FrictionAt>
+  double rate_dependent_share(double dev_norm, double trace, double tan_psi, const FrictionAt& friction_at) const {
+    const double bulk = dim * elastic_.lambda + 2.0 * elastic_.mu;
+    const auto y = [&](double share) {
+      const double dgamma = share * dev_norm;
+      return 2.0 * elastic_.mu * (dev_norm - dgamma) +
+             friction_at(dgamma) * bulk * (trace - std::numbers::sqrt2 * tan_psi * dgamma) - k_;
+    };
+    if (y(1.0) >= 0.0) return 1.0;
+    double lo = 0.0, hi = 1.0;
+    for (int n = 0; n < 60 && hi - lo > 1e-15; ++n) (y(0.5 * (lo + hi)) > 0.0 ? lo : hi) = 0.5 * (lo + hi);
+    return 0.5 * (lo + hi);
+  }
+
   //! Case II: H becomes the apex; returns the log volume it discards (the new correction v).
   double to_apex(Vec<dim>& H, double trace, double alpha, double bulk) const {
     const double apex_trace = k_ / (alpha * bulk);
@@ -159,10 +221,9 @@ private:
   }
 
   Hencky elastic_;
-  double alpha_ = 0.0;             //!< friction coefficient [-]
-  double k_ = 0.0;                 //!< cohesive strength [Pa]
-  double dilatancy_ = 0.0;         //!< K [-]
-  double critical_packing_ = 0.6;  //!< phi_c [-]
+  double alpha_ = 0.0;  //!< friction coefficient [-]
+  double k_ = 0.0;      //!< cohesive strength [Pa]
+  Flow flow_;
 };
 
 }  // namespace mpm::plasticity

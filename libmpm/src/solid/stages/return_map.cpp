@@ -29,14 +29,15 @@ bool any_dilatant(const std::vector<Material<dim>>& materials) {
 
 namespace {
 //! One particle's return map: a dilatant Drucker-Prager material reads and updates the rest
-//! packing (a particle of unknown packing starts at the critical one), every other model its
-//! plain map.
+//! packing (a particle of unknown packing starts at the critical one), a rate-dependent one
+//! uses the step dt, every other model its plain map.
 template <int dim, class Model>
-void project(const Model& model, Mat<dim>& F, double& plastic, double* packing, math::Svd<dim>* result) {
+void project(const Model& model, Mat<dim>& F, double& plastic, double* packing, double dt, math::Svd<dim>* result) {
   if constexpr (std::is_same_v<Model, plasticity::DruckerPrager<dim>>) {
-    if (packing && model.dilatant()) {
-      if (std::isnan(*packing)) *packing = model.critical_packing() * F.determinant();
-      model.project(F, plastic, packing, result);
+    if (model.dilatant() || model.rate_dependent()) {
+      if (!model.dilatant()) packing = nullptr;
+      if (packing && std::isnan(*packing)) *packing = model.flow().critical_packing * F.determinant();
+      model.project(F, plastic, packing, dt, result);
       return;
     }
   }
@@ -60,7 +61,7 @@ void ReturnMap<dim>::run(MpmState<dim>& s) {
               math::Svd<dim> f;
               for (std::size_t p = r.begin(); p != r.end(); ++p) {
                 if (P.material[p] != m) continue;
-                project(model, F[p], plastic[p], packing ? &(*packing)[p] : nullptr, cache ? &f : nullptr);
+                project(model, F[p], plastic[p], packing ? &(*packing)[p] : nullptr, s.dt, cache ? &f : nullptr);
                 if (cache) (*cache)[p] = constitutive::isotropic_kirchhoff(elastic, f);
               }
             });

@@ -29,7 +29,7 @@ constexpr double kFriction = 30.0, kK = 4.0, kCritical = 0.58;
 
 template <int dim>
 plasticity::DruckerPrager<dim> sand(double dilatancy = kK) {
-  return {kFriction, 0.0, kLame, dilatancy, kCritical};
+  return {kFriction, 0.0, kLame, {.dilatancy = dilatancy, .critical_packing = kCritical}};
 }
 
 //! The cone's own friction coefficient alpha (drucker_prager.h).
@@ -95,7 +95,7 @@ TEST_CASE_TEMPLATE("dilatant return map: on the cone of mu + tan psi, plastic vo
       CAPTURE(trial);
       Mat<dim> Fe = trial;
       double plastic = 0.0, rest = phi * trial.determinant();  // the packing is phi now
-      model.project(Fe, plastic, &rest);
+      model.project(Fe, plastic, &rest, 0.0);
       CHECK(rest / Fe.determinant() == doctest::Approx(phi).epsilon(1e-12));  // total volume kept
       const Mat<dim> tau = kirchhoff(Fe);
       const double scale = kirchhoff(trial).norm();
@@ -130,7 +130,7 @@ TEST_CASE_TEMPLATE("dilatant return map: on the cone of mu + tan psi, plastic vo
     Mat<dim> a = trial, b = trial;
     double va = 0.0, vb = 0.0, rest = 0.6;
     plain.project(a, va);
-    none.project(b, vb, &rest);
+    none.project(b, vb, &rest, 0.0);
     CHECK(a == b);
     CHECK(va == vb);
     CHECK(rest == 0.6);
@@ -147,7 +147,7 @@ TEST_CASE_TEMPLATE("undrained shear: a dense sand builds pressure, a loose one l
     double plastic = 0.0, rest = phi * Fe.determinant();
     for (int n = 0; n < 500; ++n) {
       Fe = shear<dim>(gamma / 500) * Fe;
-      model.project(Fe, plastic, &rest);
+      model.project(Fe, plastic, &rest, 0.0);
     }
     CHECK(rest / Fe.determinant() == doctest::Approx(phi).epsilon(1e-12));  // isochoric: phi fixed
     return -kirchhoff(Fe).trace() / dim;
@@ -182,7 +182,7 @@ TEST_CASE_TEMPLATE("drained shear at constant pressure: dense and loose sand rea
         next = scale * base;
         next_plastic = plastic;
         next_rest = rest;
-        model.project(next, next_plastic, &next_rest);
+        model.project(next, next_plastic, &next_rest, 0.0);
         (-kirchhoff(next).trace() / dim > p_target ? lo : hi) = scale;
       }
       Fe = next;
@@ -215,8 +215,9 @@ TEST_CASE("dilatant sand: scene keys and their errors") {
   const Material<2> m = parse_material<2>(Config::parse(base + ", dilatancy: 4.09, critical_packing: 0.58}\n"));
   const auto& dp = std::get<plasticity::DruckerPrager<2>>(m.plasticity);
   CHECK(dp.dilatant());
-  CHECK(dp.dilatancy() == 4.09);
-  CHECK(dp.critical_packing() == 0.58);
+  CHECK(dp.flow().dilatancy == 4.09);
+  CHECK(dp.flow().critical_packing == 0.58);
+  CHECK_FALSE(dp.rate_dependent());
   CHECK_FALSE(
       std::get<plasticity::DruckerPrager<2>>(parse_material<2>(Config::parse(base + "}\n")).plasticity).dilatant());
   CHECK_THROWS_WITH_AS(parse_material<2>(Config::parse(base + ", dilatancy: -1, critical_packing: 0.58}\n")),
@@ -227,4 +228,95 @@ TEST_CASE("dilatant sand: scene keys and their errors") {
                        doctest::Contains("critical_packing"), InputError);
   CHECK_THROWS_WITH_AS(parse_material<2>(Config::parse(base + ", critical_packing: 0.58}\n")),
                        doctest::Contains("needs a dilatancy coefficient"), InputError);
+
+  // mu(J): mu_2 below the static friction (mu_1 = 0.462 at 30 degrees in 2D) is refused.
+  const Material<2> fast =
+      parse_material<2>(Config::parse(base + ", rate: {mu_2: 0.7, j_0: 0.005, viscosity: 0.012}}\n"));
+  const auto& rated = std::get<plasticity::DruckerPrager<2>>(fast.plasticity);
+  CHECK(rated.rate_dependent());
+  CHECK(rated.flow().mu_2 == 0.7);
+  CHECK(rated.flow().viscosity == 0.012);
+  CHECK_THROWS_WITH_AS(parse_material<2>(Config::parse(base + ", rate: {mu_2: 0.3, viscosity: 0.012}}\n")),
+                       doctest::Contains("plasticity.rate.mu_2"), InputError);
+  CHECK_THROWS_WITH_AS(parse_material<2>(Config::parse(base + ", rate: {mu_2: 0.7, viscosity: 0}}\n")),
+                       doctest::Contains("plasticity.rate.viscosity"), InputError);
+  CHECK_THROWS_WITH_AS(parse_material<2>(Config::parse(base + ", rate: {mu_2: 0.7}}\n")),
+                       doctest::Contains("viscosity"), InputError);
+}
+
+namespace {
+constexpr double kMu2 = 0.7, kJ0 = 0.005, kEta = 0.012;
+
+template <int dim>
+plasticity::DruckerPrager<dim> rated_sand() {
+  return {kFriction, 0.0, kLame, {.mu_2 = kMu2, .j_0 = kJ0, .viscosity = kEta}};
+}
+
+}  // namespace
+
+TEST_CASE_TEMPLATE("mu(J): on the cone of the friction of its own shear rate; slow flow is rate independent", Matrix,
+                   Mat<2>, Mat<3>) {
+  constexpr int dim = Matrix::RowsAtCompileTime;
+  const plasticity::DruckerPrager<dim> model = rated_sand<dim>(), plain(kFriction, 0.0, kLame);
+  const double mu_1 = cone_alpha() * dim / std::numbers::sqrt2;
+  std::mt19937 rng(2011);
+  std::uniform_real_distribution<double> stretch(0.95, 1.02);
+  int flowing = 0;
+  for (const double dt : {1e-5, 1e-3, 1e-1}) {
+    for (int n = 0; n < 100; ++n) {
+      Vec<dim> s;
+      for (int a = 0; a < dim; ++a) s(a) = stretch(rng);
+      const Mat<dim> trial = random_rotation<dim>(rng) * s.asDiagonal() * random_rotation<dim>(rng);
+      CAPTURE(dt);
+      CAPTURE(trial);
+      Mat<dim> Fe = trial, Fp = trial;
+      double plastic = 0.0, plain_plastic = 0.0;
+      model.project(Fe, plastic, nullptr, dt);
+      plain.project(Fp, plain_plastic);
+      const Mat<dim> tau = kirchhoff(Fe);
+      if (plastic > 0.0 || (Fe - trial).norm() == 0.0) continue;  // apex or elastic: as the plain map
+      ++flowing;
+      // J from the returned state alone: dgamma from the principal strains, P from tau.
+      const Vec<dim> before = log_singular_values(trial), after = log_singular_values(Fe);
+      const auto dev_norm = [](const Vec<dim>& e) { return (e.array() - e.mean()).matrix().norm(); };
+      const double dgamma = dev_norm(before) - dev_norm(after);
+      const double J = kEta * std::numbers::sqrt2 * dgamma / dt / (-tau.trace() / dim);
+      const double mu = mu_1 + (kMu2 - mu_1) * J / (J + kJ0);
+      CHECK(stress_ratio(tau) == doctest::Approx(mu * std::numbers::sqrt2 / dim).epsilon(1e-9));
+      CHECK(stress_ratio(tau) >= stress_ratio(kirchhoff(Fp)) * (1.0 - 1e-12));  // never weaker
+      if (dt == 1e-1) CHECK((Fe - Fp).norm() <= 0.05 * (trial - Fp).norm());    // slow: nearly the plain map
+    }
+  }
+  CHECK(flowing > 50);
+}
+
+TEST_CASE_TEMPLATE("mu(J): steady simple shear at an imposed rate and pressure reaches mu(eta gamma_dot / P)", Matrix,
+                   Mat<2>, Mat<3>) {
+  constexpr int dim = Matrix::RowsAtCompileTime;
+  const plasticity::DruckerPrager<dim> model = rated_sand<dim>();
+  const double mu_1 = cone_alpha() * dim / std::numbers::sqrt2, p_target = 200.0, dt = 1e-3;
+  for (const double gamma_dot : {0.1, 10.0, 100.0}) {
+    // Shear by gamma_dot dt per step at the pressure p_target (bisection on the volume).
+    Mat<dim> Fe = Mat<dim>::Identity();
+    double plastic = 0.0;
+    for (int n = 0; n < 4000; ++n) {
+      const Mat<dim> base = shear<dim>(gamma_dot * dt) * Fe;
+      double lo = 0.9, hi = 1.1;
+      Mat<dim> next;
+      double next_plastic = 0.0;
+      for (int it = 0; it < 60; ++it) {
+        const double scale = 0.5 * (lo + hi);
+        next = scale * base;
+        next_plastic = plastic;
+        model.project(next, next_plastic, nullptr, dt);
+        (-kirchhoff(next).trace() / dim > p_target ? lo : hi) = scale;
+      }
+      Fe = next;
+      plastic = next_plastic;
+    }
+    const double J = kEta * gamma_dot / p_target;
+    const double mu = mu_1 + (kMu2 - mu_1) * J / (J + kJ0);
+    CAPTURE(gamma_dot);
+    CHECK(stress_ratio(kirchhoff(Fe)) == doctest::Approx(mu * std::numbers::sqrt2 / dim).epsilon(2e-3));
+  }
 }
