@@ -47,6 +47,7 @@ struct RestartCase {
   std::vector<std::string> phases, solid_phases, series, final_results;
   bool adaptive = false;  //!< solid particles carry their level (channel "level")
   bool plastic = false;   //!< solid particles carry the stress cache (a plastic material)
+  bool dilatant = false;  //!< solid particles carry the rest packing (a dilatant sand)
 };
 
 const RestartCase kColumnCollapse{COLUMN_COLLAPSE_APP,
@@ -88,6 +89,21 @@ const RestartCase kSettling{SETTLING_APP,
                             {"terminal_velocity_stokes", "hindered_velocity"}};
 #endif
 
+#ifdef SUBMERGED_COLLAPSE_APP
+// Dilatant continuum sediment that switches to discrete grains, under a liquid.
+const RestartCase kSubmergedCollapse{SUBMERGED_COLLAPSE_APP,
+                                     "submerged_collapse.yaml",
+                                     "--set grid.dx=0.01 --set walls.thickness=0.01",
+                                     0.02,
+                                     {"fluid", "sediment"},
+                                     {"sediment"},
+                                     {"fluid", "sediment"},
+                                     {"runout", "deposit_runout", "final_height"},
+                                     false,
+                                     true,
+                                     true};
+#endif
+
 //! Runs the case's app; its stderr goes to <out>.log. Returns the exit status.
 int run_app(const RestartCase& c, const fs::path& out, const std::string& extra) {
   const std::string command =
@@ -112,8 +128,9 @@ std::vector<std::string> split(const std::string& line) {
   return fields;
 }
 
-void check_checkpoints_equal(const fs::path& a, const fs::path& b, const std::string& phase, bool solid, bool adaptive,
-                             bool plastic) {
+void check_checkpoints_equal(const fs::path& a, const fs::path& b, const std::string& phase, bool solid,
+                             const RestartCase& app) {
+  const bool adaptive = app.adaptive, plastic = app.plastic;
   INFO(a.filename().string() << " phase '" << phase << "'");
   mpm::io::CheckpointHeader ha, hb;
   mpm::Particles<2> pa, pb;
@@ -123,6 +140,10 @@ void check_checkpoints_equal(const fs::path& a, const fs::path& b, const std::st
     if (plastic) {
       mpm::solid::add_stress_cache(pa);
       mpm::solid::add_stress_cache(pb);
+    }
+    if (app.dilatant) {
+      mpm::solid::add_rest_packing(pa);
+      mpm::solid::add_rest_packing(pb);
     }
   }
   if (adaptive)
@@ -220,7 +241,7 @@ void check_particle_state(const RestartCase& c, const fs::path& full, const fs::
     for (const std::string& phase : c.phases) {
       const bool solid = std::find(c.solid_phases.begin(), c.solid_phases.end(), phase) != c.solid_phases.end();
       check_checkpoints_equal(full / numbered("checkpoint", frame, ".h5"),
-                              restarted / numbered("checkpoint", frame, ".h5"), phase, solid, c.adaptive, c.plastic);
+                              restarted / numbered("checkpoint", frame, ".h5"), phase, solid, c);
     }
   for (const std::string& series : c.series) {
     for (int frame = kCheckpointEvery + 1; frame <= kFrames; ++frame) {
@@ -298,5 +319,10 @@ TEST_CASE("a run continued from a checkpoint is bit-identical to the uninterrupt
 #endif
 #ifdef SETTLING_APP
   SUBCASE("coupled: settling column (fluid and sediment)") { check_restart(kSettling, "settling"); }
+#endif
+#ifdef SUBMERGED_COLLAPSE_APP
+  SUBCASE("coupled: dilatant sediment, continuum and discrete, under a liquid") {
+    check_restart(kSubmergedCollapse, "submerged_collapse");
+  }
 #endif
 }

@@ -113,11 +113,14 @@ void seed_body(SolidScene<dim>& scene, const Config& body) {
   if (!F && stretch != Vec<dim>::Ones())
     body.fail("stretch", "a stretched body needs a solver that tracks deformation (solver: explicit)");
   // A dilatant sand's grains start at the body's packing fraction (without the key: critical).
-  if (std::vector<double>* packing = rest_packing(P); packing && body.has("packing_fraction")) {
+  if (body.has("packing_fraction")) {
+    const auto* sand = std::get_if<plasticity::DruckerPrager<dim>>(&scene.materials.at(m).plasticity);
+    if (!sand || !sand->dilatant())
+      body.fail("packing_fraction", "a packing fraction needs a dilatant material (plasticity.dilatancy > 0)");
     const double phi = body.number("packing_fraction", Range::open(0.0, 1.0));
+    std::vector<double>* packing = rest_packing(P);  // declared by the explicit solver
+    if (!packing) body.fail("packing_fraction", "a packing fraction needs solver: explicit");
     for (std::size_t p = first; p < P.size(); ++p) (*packing)[p] = phi * std::fabs(stretch.prod());
-  } else if (body.has("packing_fraction")) {
-    body.fail("packing_fraction", "a packing fraction needs a dilatant material (plasticity.dilatancy > 0)");
   }
   for (std::size_t p = first; p < P.size(); ++p) {
     if (F) (*F)[p] = stretch.asDiagonal();

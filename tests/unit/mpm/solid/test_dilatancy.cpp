@@ -11,6 +11,8 @@
 #include <mpm/core/error.h>
 #include <mpm/plasticity/drucker_prager.h>
 #include <mpm/solid/material.h>
+#include <mpm/solid/solid_channels.h>
+#include <mpm/solid/solid_scene.h>
 
 #include <Eigen/Geometry>
 #include <Eigen/SVD>
@@ -319,4 +321,41 @@ TEST_CASE_TEMPLATE("mu(J): steady simple shear at an imposed rate and pressure r
     CAPTURE(gamma_dot);
     CHECK(stress_ratio(kirchhoff(Fe)) == doctest::Approx(mu * std::numbers::sqrt2 / dim).epsilon(2e-3));
   }
+}
+
+TEST_CASE("dilatant sand in a solid scene: the body's packing, refused for another material") {
+  const std::string head = R"(
+dim: 2
+domain: {lo: [0, 0], hi: [1, 0.6]}
+grid: {dx: 0.05}
+materials:
+  - {name: sand, density: 2650, youngs_modulus: 1.0e6, poisson_ratio: 0.3, elasticity: hencky_stvk,
+     plasticity: {model: drucker_prager, friction_angle: 30, dilatancy: 4, critical_packing: 0.58}}
+  - {name: jelly, density: 1000, youngs_modulus: 1.0e5, poisson_ratio: 0.3}
+time: {end: 0.1}
+gravity: [0, -9.81]
+bodies:
+)";
+  const solid::SolidScene<2> scene = solid::load_solid_scene<2>(
+      Config::parse(head + "  - {shape: box, lo: [0.2, 0.2], hi: [0.4, 0.4], material: sand, packing_fraction: 0.62, "
+                           "stretch: [1, 0.9]}\n  - {shape: box, lo: [0.6, 0.2], hi: [0.8, 0.4], material: sand}\n"));
+  const Particles<2>& P = scene.state.particles;
+  const std::vector<double>* rest = P.find_channel<double>(solid::kRestPacking);
+  REQUIRE(rest != nullptr);
+  int set = 0, unknown = 0;
+  for (std::size_t p = 0; p < P.size(); ++p) {
+    if (P.x[p][0] < 0.5) {
+      CHECK((*rest)[p] == doctest::Approx(0.62 * 0.9).epsilon(1e-15));  // phi det F^E at the start
+      ++set;
+    } else {
+      CHECK(std::isnan((*rest)[p]));  // no key: the return map starts it at phi_c
+      ++unknown;
+    }
+  }
+  CHECK(set > 0);
+  CHECK(unknown > 0);
+  CHECK_THROWS_WITH_AS(
+      solid::load_solid_scene<2>(Config::parse(
+          head + "  - {shape: box, lo: [0.2, 0.2], hi: [0.4, 0.4], material: jelly, packing_fraction: 0.6}\n")),
+      doctest::Contains("bodies[0].packing_fraction"), InputError);
 }
