@@ -77,6 +77,37 @@ Mat<dim> shear(double gamma) {
   return S;
 }
 
+//! A trial F^E with singular values in [0.95, 1.02] between random rotations.
+template <int dim>
+Mat<dim> random_trial(std::mt19937& rng) {
+  std::uniform_real_distribution<double> stretch(0.95, 1.02);
+  Vec<dim> s;
+  for (int a = 0; a < dim; ++a) s(a) = stretch(rng);
+  return random_rotation<dim>(rng) * s.asDiagonal() * random_rotation<dim>(rng);
+}
+
+//! A material point sheared by `gamma` in one step of dt, drained: the volume scaled so that
+//! the pressure after the return map is p_target (bisection: the pressure grows monotonically
+//! with compression). Fe, plastic and (a dilatant model's) rest packing move to the new state.
+template <int dim>
+void shear_drained(const plasticity::DruckerPrager<dim>& model, double gamma, double dt, double p_target, Mat<dim>& Fe,
+                   double& plastic, double* rest) {
+  const Mat<dim> base = shear<dim>(gamma) * Fe;
+  double lo = 0.9, hi = 1.1, next_plastic = 0.0, next_rest = 0.0;
+  Mat<dim> next;
+  for (int it = 0; it < 60; ++it) {
+    const double scale = 0.5 * (lo + hi);
+    next = scale * base;
+    next_plastic = plastic;
+    next_rest = rest ? *rest : 0.0;
+    model.project(next, next_plastic, rest ? &next_rest : nullptr, dt);
+    (-kirchhoff(next).trace() / dim > p_target ? lo : hi) = scale;
+  }
+  Fe = next;
+  plastic = next_plastic;
+  if (rest) *rest = next_rest;
+}
+
 }  // namespace
 
 TEST_CASE_TEMPLATE("dilatant return map: on the cone of mu + tan psi, plastic volume sqrt(2) tan psi dgamma", Matrix,
@@ -84,15 +115,12 @@ TEST_CASE_TEMPLATE("dilatant return map: on the cone of mu + tan psi, plastic vo
   constexpr int dim = Matrix::RowsAtCompileTime;
   const plasticity::DruckerPrager<dim> model = sand<dim>();
   std::mt19937 rng(1998);
-  std::uniform_real_distribution<double> stretch(0.95, 1.02);
   int on_cone = 0, at_apex = 0;
   for (const double phi : {0.52, 0.56, 0.58, 0.60, 0.64}) {
     const double tan_psi = kK * (phi - kCritical);
     const double alpha = cone_alpha() + std::numbers::sqrt2 * tan_psi / dim;
     for (int n = 0; n < 100; ++n) {
-      Vec<dim> s;
-      for (int a = 0; a < dim; ++a) s(a) = stretch(rng);
-      const Mat<dim> trial = random_rotation<dim>(rng) * s.asDiagonal() * random_rotation<dim>(rng);
+      const Mat<dim> trial = random_trial<dim>(rng);
       CAPTURE(phi);
       CAPTURE(trial);
       Mat<dim> Fe = trial;
@@ -126,9 +154,7 @@ TEST_CASE_TEMPLATE("dilatant return map: on the cone of mu + tan psi, plastic vo
   // K = 0 is the plain map, bit for bit, and leaves the packing alone.
   const plasticity::DruckerPrager<dim> plain(kFriction, 0.0, kLame), none = sand<dim>(0.0);
   for (int n = 0; n < 50; ++n) {
-    Vec<dim> s;
-    for (int a = 0; a < dim; ++a) s(a) = stretch(rng);
-    const Mat<dim> trial = random_rotation<dim>(rng) * s.asDiagonal() * random_rotation<dim>(rng);
+    const Mat<dim> trial = random_trial<dim>(rng);
     Mat<dim> a = trial, b = trial;
     double va = 0.0, vb = 0.0, rest = 0.6;
     plain.project(a, va);
@@ -169,34 +195,19 @@ TEST_CASE_TEMPLATE("drained shear at constant pressure: dense and loose sand rea
   struct Path {
     double packing, peak_ratio, final_ratio;
   };
-  // Simple shear by 3 in 3000 steps; each step scales the volume so that the pressure after
-  // the return map is p_target (bisection: the pressure grows monotonically with compression).
-  const auto shear_drained = [&](double phi) {
+  // Simple shear by 3 in 3000 steps at the pressure p_target.
+  const auto shear_to_critical = [&](double phi) {
     Mat<dim> Fe = Mat<dim>::Identity();
     double plastic = 0.0, rest = phi, peak = 0.0, ratio = 0.0;
     for (int n = 0; n < 3000; ++n) {
-      const Mat<dim> base = shear<dim>(1e-3) * Fe;
-      double lo = 0.9, hi = 1.1;
-      Mat<dim> next;
-      double next_plastic = 0.0, next_rest = 0.0;
-      for (int it = 0; it < 60; ++it) {
-        const double scale = 0.5 * (lo + hi);
-        next = scale * base;
-        next_plastic = plastic;
-        next_rest = rest;
-        model.project(next, next_plastic, &next_rest, 0.0);
-        (-kirchhoff(next).trace() / dim > p_target ? lo : hi) = scale;
-      }
-      Fe = next;
-      plastic = next_plastic;
-      rest = next_rest;
+      shear_drained(model, 1e-3, 0.0, p_target, Fe, plastic, &rest);
       ratio = stress_ratio(kirchhoff(Fe));
       peak = std::max(peak, ratio);
     }
     CHECK(-kirchhoff(Fe).trace() / dim == doctest::Approx(p_target).epsilon(1e-6));
     return Path{rest / Fe.determinant(), peak, ratio};
   };
-  const Path dense = shear_drained(0.62), loose = shear_drained(0.54);
+  const Path dense = shear_to_critical(0.62), loose = shear_to_critical(0.54);
   CAPTURE(dense.packing);
   CAPTURE(loose.packing);
   CHECK(std::abs(dense.packing - kCritical) < 2e-3);  // dilated
@@ -262,13 +273,10 @@ TEST_CASE_TEMPLATE("mu(J): on the cone of the friction of its own shear rate; sl
   const plasticity::DruckerPrager<dim> model = rated_sand<dim>(), plain(kFriction, 0.0, kLame);
   const double mu_1 = cone_alpha() * dim / std::numbers::sqrt2;
   std::mt19937 rng(2011);
-  std::uniform_real_distribution<double> stretch(0.95, 1.02);
   int flowing = 0;
   for (const double dt : {1e-5, 1e-3, 1e-1}) {
     for (int n = 0; n < 100; ++n) {
-      Vec<dim> s;
-      for (int a = 0; a < dim; ++a) s(a) = stretch(rng);
-      const Mat<dim> trial = random_rotation<dim>(rng) * s.asDiagonal() * random_rotation<dim>(rng);
+      const Mat<dim> trial = random_trial<dim>(rng);
       CAPTURE(dt);
       CAPTURE(trial);
       Mat<dim> Fe = trial, Fp = trial;
@@ -298,24 +306,10 @@ TEST_CASE_TEMPLATE("mu(J): steady simple shear at an imposed rate and pressure r
   const plasticity::DruckerPrager<dim> model = rated_sand<dim>();
   const double mu_1 = cone_alpha() * dim / std::numbers::sqrt2, p_target = 200.0, dt = 1e-3;
   for (const double gamma_dot : {0.1, 10.0, 100.0}) {
-    // Shear by gamma_dot dt per step at the pressure p_target (bisection on the volume).
+    // Shear by gamma_dot dt per step at the pressure p_target.
     Mat<dim> Fe = Mat<dim>::Identity();
     double plastic = 0.0;
-    for (int n = 0; n < 4000; ++n) {
-      const Mat<dim> base = shear<dim>(gamma_dot * dt) * Fe;
-      double lo = 0.9, hi = 1.1;
-      Mat<dim> next;
-      double next_plastic = 0.0;
-      for (int it = 0; it < 60; ++it) {
-        const double scale = 0.5 * (lo + hi);
-        next = scale * base;
-        next_plastic = plastic;
-        model.project(next, next_plastic, nullptr, dt);
-        (-kirchhoff(next).trace() / dim > p_target ? lo : hi) = scale;
-      }
-      Fe = next;
-      plastic = next_plastic;
-    }
+    for (int n = 0; n < 4000; ++n) shear_drained(model, gamma_dot * dt, dt, p_target, Fe, plastic, nullptr);
     const double J = kEta * gamma_dot / p_target;
     const double mu = mu_1 + (kMu2 - mu_1) * J / (J + kJ0);
     CAPTURE(gamma_dot);
