@@ -157,8 +157,8 @@ public:
         // y falls by 2 mu for each unit of dgamma and by alpha bulk sqrt(2) tan psi through
         // the plastic volume change; where that does not reach the cone before the deviator
         // is spent (strong contraction), all shear goes and the volume change with it.
-        const double rate = 2.0 * elastic_.mu + alpha * bulk * std::numbers::sqrt2 * tan_psi;
-        double share = rate > 0.0 && y < rate * dev_norm ? y / (rate * dev_norm) : 1.0;  // dgamma / ||dev||
+        const double slope = 2.0 * elastic_.mu + alpha * bulk * std::numbers::sqrt2 * tan_psi;  // -dy/ddgamma
+        double share = slope > 0.0 && y < slope * dev_norm ? y / (slope * dev_norm) : 1.0;      // dgamma / ||dev||
         if (rate_dependent() && dt > 0.0) {
           const auto friction_at = [&](double dgamma) { return alpha + rate_friction(dgamma, trace, tan_psi, dt); };
           share = rate_dependent_share(dev_norm, trace, tan_psi, friction_at);
