@@ -174,9 +174,10 @@ CoupledScene<dim> load_coupled_scene(const mpm::Config& scene) {
     const std::size_t first = out.state.sediment.particles.size();
     add_sediment_particles(out, b.x, phi * b.volume, body.vector<dim>("velocity", Vec::Zero()), body.path());
     if (body.flag("geostatic", false)) start_geostatic(out, first, b.x, body);
-    if (std::vector<double>* rest = mpm::solid::rest_packing(out.state.sediment.particles))
-      for (std::size_t p = first; p < rest->size(); ++p)
-        (*rest)[p] = phi * mpm::solid::elastic_F(out.state.sediment.particles)[p].determinant();
+    if (std::vector<double>* rest = mpm::solid::rest_packing(out.state.sediment.particles)) {
+      const std::vector<mpm::Mat<dim>>& F = mpm::solid::elastic_F(out.state.sediment.particles);
+      for (std::size_t p = first; p < rest->size(); ++p) (*rest)[p] = phi * F[p].determinant();
+    }
     const int k = mpm::geometry::lattice_points_per_axis<dim>(mpm::geometry::particles_per_cell<dim>(body));
     pores.emplace_back(b.x, out.settings.dx / k, phi);
   }

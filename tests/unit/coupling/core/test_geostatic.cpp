@@ -50,9 +50,9 @@ double mean_speed(const CoupledState<2>& s) {
 
 TEST_CASE("geostatic start: the overburden in F^E, the packing kept, a confined bed at rest") {
   CoupledScene<2> scene = load_coupled_scene<2>(bed(true));
-  const mpm::Particles<2>& P = scene.state.sediment.particles;
+  mpm::Particles<2>& P = scene.state.sediment.particles;
   const std::vector<mpm::Mat<2>>& F = mpm::solid::elastic_F(P);
-  const std::vector<double>* rest = mpm::solid::rest_packing(const_cast<mpm::Particles<2>&>(P));
+  const std::vector<double>* rest = mpm::solid::rest_packing(P);
   REQUIRE(rest != nullptr);
   // Particles on a lattice of spacing dx / 2 from y = 0.01125 to 0.05875: the top row's depth is
   // half a spacing, each row below one more.
