@@ -15,6 +15,8 @@
 // the mass balance below 1e-12.
 #include <fluid/scene/fluid_scene.h>
 
+#include <mpm/geometry/particle_spacing.h>
+
 #include <mpm/core/app.h>
 #include <mpm/core/runner.h>
 
@@ -39,6 +41,14 @@ int run(const CommandLine& cl, const Config& scene) {
   // 2. Run.
   auto pipeline = fluid::make_fluid_pipeline(water);
   Runner<dim> runner("channel", cl, scene, water.settings);
+  // How evenly the water's particles fill it, per frame (geometry/particle_spacing.h).
+  const double dx = water.settings.dx;
+  const Vec<dim> origin = water.state.grid.origin();
+  auto spacing = [dx, origin](const MpmState<dim>& s) {
+    return geometry::particle_spacing<dim>(s.particles.x, origin, dx);
+  };
+  runner.add_column("spacing_count_cv", [spacing](const MpmState<dim>& s) { return spacing(s).count_cv; });
+  runner.add_column("spacing_empty_share", [spacing](const MpmState<dim>& s) { return spacing(s).empty_share; });
   runner.run(water.state, pipeline);
 
   // 3. Discharges: rho |U_n| A in, the mean removal rate over the steady window out.
@@ -57,10 +67,16 @@ int run(const CommandLine& cl, const Config& scene) {
   for (std::size_t k = 0; k <= last; ++k)
     balance = std::max(balance, std::abs(stored[0] + emitted[k] - out[k] - stored[k]) / (stored[0] + emitted[k]));
   const double ratio = q_out / q_in;
+  // The worst spacing over the steady window.
+  const std::vector<double> cv = runner.history("spacing_count_cv"), empty = runner.history("spacing_empty_share");
+  const double worst_cv = *std::max_element(cv.begin() + static_cast<std::ptrdiff_t>(first), cv.end());
+  const double worst_empty = *std::max_element(empty.begin() + static_cast<std::ptrdiff_t>(first), empty.end());
   runner.write_summary({{"inflow_discharge", q_in},
                         {"outflow_discharge", q_out},
                         {"discharge_ratio", ratio},
-                        {"mass_balance_error", balance}});
+                        {"mass_balance_error", balance},
+                        {"spacing_count_cv", worst_cv},
+                        {"spacing_empty_share", worst_empty}});
   if (cl.check) {
     const bool steady = check_value("discharge_ratio", ratio, 1.0, tolerance);
     const bool conserved = check_value("mass_balance_error", balance, 0.0, 1e-12);

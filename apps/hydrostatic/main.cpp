@@ -10,8 +10,10 @@
 // over the fluid cells at the end (over the particles, p(J_p), with fluid.solver:
 // weakly_compressible), relative to rho g h (first order in dx: the free surface of
 // the cell pressures sits half a cell above the top cell centres). --check: speed ratio below
-// 0.016 / cells_per_depth (measured in 2D: 1.5e-3, 4.8e-4, 2.1e-4 at 8, 16, 32 cells; 3D 16
-// cells: 5.4e-4) and pressure error below 1 / cells_per_depth.
+// 1e-8 with the projection (measured in 2D: 3.2e-12, 1.8e-12, 8.7e-13, 6.5e-14 at 8, 16, 32, 64
+// cells; 3D 16 cells: 6.5e-12; with pressure.surface_extension: false 1.5e-3, 4.8e-4, 2.1e-4 at
+// 8, 16, 32 cells), 0.016 / cells_per_depth with the weakly compressible liquid, and pressure
+// error below 1 / cells_per_depth.
 #include <fluid/scene/fluid_scene.h>
 #include <fluid/stages/equation_of_state.h>
 
@@ -91,7 +93,10 @@ int run(const CommandLine& cl, const Config& scene) {
   runner.write_summary(
       {{"max_spurious_speed", speed}, {"spurious_speed_ratio", speed_ratio}, {"pressure_error", relative_error}});
   if (cl.check) {
-    const bool ok_speed = check_value("spurious_speed_ratio", speed_ratio, 0.0, 0.016 / cells);
+    // The projection holds the water at rest to its solver tolerance (surface_velocity_extension.h);
+    // the weakly compressible liquid rings with its sound waves.
+    const bool projection = pipeline.template find<fluid::stages::PressureProjection<dim>>() != nullptr;
+    const bool ok_speed = check_value("spurious_speed_ratio", speed_ratio, 0.0, projection ? 1e-8 : 0.016 / cells);
     const bool ok_pressure = check_value("pressure_error", relative_error, 0.0, 1.0 / cells);
     return ok_speed && ok_pressure ? 0 : 1;
   }

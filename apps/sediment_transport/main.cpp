@@ -29,6 +29,7 @@
 #include <mpm/core/app.h>
 #include <mpm/core/command_line.h>
 #include <mpm/core/error.h>
+#include <mpm/geometry/particle_spacing.h>
 #include <mpm/io/atomic_file.h>
 
 #include <algorithm>
@@ -68,6 +69,13 @@ int run(const CommandLine& cl, const Config& scene) {
   });
   runner.add_column(
       "discrete", [](const coupling::CoupledState<dim>& st) { return double(coupling::count_sediment(st).discrete); });
+  // How evenly the water's particles fill it (geometry/particle_spacing.h).
+  const auto spacing = [&](const coupling::CoupledState<dim>& st) {
+    return geometry::particle_spacing<dim>(st.fluid.particles.x, st.fluid.grid.origin(), flume.settings.dx);
+  };
+  runner.add_column("water_spacing_cv", [&](const coupling::CoupledState<dim>& st) { return spacing(st).count_cv; });
+  runner.add_column("water_empty_share",
+                    [&](const coupling::CoupledState<dim>& st) { return spacing(st).empty_share; });
   runner.run(s, pipeline);
 
   // The bed profile at the end, and the balances from the diagnostics.
@@ -99,7 +107,9 @@ int run(const CommandLine& cl, const Config& scene) {
                         {"final_deposition_height", final_deposit},
                         {"sediment_outflow_mass", runner.history_or_zero("outflow_mass_sediment").back()},
                         {"fluid_mass_balance_error", fluid_error},
-                        {"sediment_mass_balance_error", grain_error}});
+                        {"sediment_mass_balance_error", grain_error},
+                        {"water_spacing_cv", runner.history("water_spacing_cv").back()},
+                        {"water_empty_share", runner.history("water_empty_share").back()}});
   if (!cl.check) return 0;
   bool ok = check_value("fluid_mass_balance_error", fluid_error, 0.0, 1e-12);
   ok = check_value("sediment_mass_balance_error", grain_error, 0.0, 1e-12) && ok;

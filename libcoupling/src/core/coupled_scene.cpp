@@ -4,6 +4,8 @@
 #include <coupling/stages/mixture_projection.h>
 #include <coupling/stages/on_phase.h>
 #include <coupling/stages/volume_fraction_stage.h>
+#include <fluid/stages/density_correction.h>
+#include <fluid/stages/surface_velocity_extension.h>
 #include <mpm/core/error.h>
 #include <mpm/core/stages/grid_boundary.h>
 #include <mpm/core/stages/grid_to_particles.h>
@@ -142,6 +144,8 @@ mpm::Pipeline<CoupledState<dim>> make_coupled_pipeline(const CoupledScene<dim>& 
   if (wet && sandy) {
     p.add(std::make_unique<stages::MixtureProjection<dim>>(scene.fluid->density, scene.sediment->density,
                                                            scene.colliders, scene.pressure));
+    if (scene.pressure.surface_extension)
+      on(Phase::fluid, std::make_unique<fluid::stages::SurfaceVelocityExtension<dim>>(scene.colliders));
     // The sediment correction reaches nodes next to walls that the fluid's prescribed
     // nodes do not shield: impose the sediment's wall conditions again.
     on(Phase::sediment, std::make_unique<ms::GridBoundary<dim>>(scene.colliders));
@@ -153,6 +157,9 @@ mpm::Pipeline<CoupledState<dim>> make_coupled_pipeline(const CoupledScene<dim>& 
   if (sandy)
     for (auto& stage : scene.solid_solver->particle_update()) on(Phase::sediment, std::move(stage));
   both([] { return std::make_unique<ms::GridToParticles<dim>>(); });
+  if (wet && scene.pressure.density_correction && scene.fluid_solver->incompressible())
+    on(Phase::fluid, std::make_unique<fluid::stages::DensityCorrection<dim>>(scene.fluid->density, scene.colliders,
+                                                                            scene.pressure.solver));
   if (switching)
     p.add(
         std::make_unique<stages::ReclassifySediment<dim>>(*scene.sediment->switching, scene.sediment->density, 0, wet));

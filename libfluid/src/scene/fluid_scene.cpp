@@ -1,4 +1,5 @@
 #include <fluid/scene/fluid_scene.h>
+#include <fluid/stages/density_correction.h>
 
 #include <mpm/core/error.h>
 #include <mpm/core/stages/grid_boundary.h>
@@ -50,6 +51,8 @@ stages::PressureSettings parse_pressure_settings(const Config& scene) {
   s.control.max_iterations = p->integer("max_iterations", s.control.max_iterations, 1, 1000000);
   s.on_failure =
       p->choice("on_failure", "stop", {"stop", "warn"}) == "stop" ? stages::OnFailure::stop : stages::OnFailure::warn;
+  s.surface_extension = p->flag("surface_extension", s.surface_extension);
+  s.density_correction = p->flag("density_correction", s.density_correction);
   return s;
 }
 
@@ -123,6 +126,8 @@ mpm::Pipeline<mpm::MpmState<dim>> make_fluid_pipeline(const FluidScene<dim>& sce
   if (periodic) p.add(std::make_unique<ms::PeriodicFill<dim>>());
   for (auto& stage : scene.solver->particle_update()) p.add(std::move(stage));
   p.add(std::make_unique<ms::GridToParticles<dim>>());
+  if (scene.pressure.density_correction && scene.solver->incompressible())
+    p.add(std::make_unique<stages::DensityCorrection<dim>>(scene.fluid.density, scene.colliders, scene.pressure.solver));
   if (periodic) p.add(std::make_unique<ms::PeriodicWrap<dim>>());
   return p;
 }

@@ -1,6 +1,7 @@
 #include <fluid/solver/projection_solver.h>
 
 #include <fluid/stages/pressure_projection.h>
+#include <fluid/stages/surface_velocity_extension.h>
 
 #include <mpm/core/stages/grid_velocity_update.h>
 
@@ -18,6 +19,7 @@ template <int dim>
 typename ProjectionSolver<dim>::Stages ProjectionSolver<dim>::projection() const {
   Stages s;
   s.push_back(std::make_unique<stages::PressureProjection<dim>>(fluid_.density, colliders_, pressure_));
+  if (pressure_.surface_extension) s.push_back(std::make_unique<stages::SurfaceVelocityExtension<dim>>(colliders_));
   return s;
 }
 

@@ -9,25 +9,31 @@
 namespace fluid::stages {
 
 template <int dim>
+bool is_prescribed(const mpm::SparseGrid<dim>& grid, const mpm::geometry::ColliderSet<dim>& colliders, std::size_t k,
+                   double t) {
+  if (colliders.empty() || grid.mass[k] <= 0.0) return false;
+  mpm::Vec<dim> a;
+  for (int d = 0; d < dim; ++d) a[d] = 1.0 / std::sqrt(d + 1.0);
+  const mpm::Vec<dim> x = grid.node_position(k);
+  mpm::Vec<dim> up = a, down = -a;
+  colliders.project(x, t, up);
+  colliders.project(x, t, down);
+  return up != a || down != -a;
+}
+
+template <int dim>
 std::vector<std::uint8_t> prescribed_nodes(const mpm::SparseGrid<dim>& grid,
                                            const mpm::geometry::ColliderSet<dim>& colliders, double t) {
   std::vector<std::uint8_t> mask(grid.node_storage(), 0);
   if (colliders.empty()) return mask;
-  mpm::Vec<dim> a;
-  for (int d = 0; d < dim; ++d) a[d] = 1.0 / std::sqrt(d + 1.0);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, grid.node_storage(), 1024), [&](const auto& r) {
-    for (std::size_t k = r.begin(); k != r.end(); ++k) {
-      if (grid.mass[k] <= 0.0) continue;
-      const mpm::Vec<dim> x = grid.node_position(k);
-      mpm::Vec<dim> up = a, down = -a;
-      colliders.project(x, t, up);
-      colliders.project(x, t, down);
-      mask[k] = up != a || down != -a;
-    }
+    for (std::size_t k = r.begin(); k != r.end(); ++k) mask[k] = is_prescribed(grid, colliders, k, t);
   });
   return mask;
 }
 
+template bool is_prescribed(const mpm::SparseGrid<2>&, const mpm::geometry::ColliderSet<2>&, std::size_t, double);
+template bool is_prescribed(const mpm::SparseGrid<3>&, const mpm::geometry::ColliderSet<3>&, std::size_t, double);
 template std::vector<std::uint8_t> prescribed_nodes(const mpm::SparseGrid<2>&, const mpm::geometry::ColliderSet<2>&,
                                                     double);
 template std::vector<std::uint8_t> prescribed_nodes(const mpm::SparseGrid<3>&, const mpm::geometry::ColliderSet<3>&,

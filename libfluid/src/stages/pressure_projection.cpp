@@ -28,6 +28,8 @@
 #include <fluid/stages/prescribed_nodes.h>
 #include <fluid/stages/pressure_projection.h>
 
+#include "fluid_cell.h"
+
 #include <mpm/core/error.h>
 #include <mpm/core/solve/vector_space.h>
 
@@ -48,32 +50,6 @@ PressureProjection<dim>::PressureProjection(double density, mpm::geometry::Colli
       solver_(make_pressure_solver<dim>(settings_.solver)),
       fallback_(settings_.fallback.empty() ? nullptr : make_pressure_solver<dim>(settings_.fallback)) {}
 
-namespace {
-//! Grid cell holding x; on a periodic axis the canonical cell (in [periodic_lo, + period)).
-template <int dim>
-IVec<dim> cell_of(const mpm::SparseGrid<dim>& g, const Vec<dim>& x) {
-  IVec<dim> c;
-  for (int a = 0; a < dim; ++a)
-    c[a] = std::clamp(static_cast<int>(std::floor((x[a] - g.origin()[a]) / g.dx())), 0, g.node_counts()[a] - 2);
-  return g.periodic_image(c);
-}
-
-//! Calls f(local coordinate, local index) for every point of a box with `n` points per axis.
-template <int dim, class Fn>
-void for_each_point(const IVec<dim>& n, Fn&& f) {
-  IVec<dim> c = IVec<dim>::Zero();
-  const std::int64_t count = n.template cast<std::int64_t>().prod();
-  for (std::int64_t i = 0; i < count; ++i) {
-    f(c, i);
-    for (int a = 0; a < dim; ++a) {
-      if (++c[a] < n[a]) break;
-      c[a] = 0;
-    }
-  }
-}
-
-}  // namespace
-
 template <int dim>
 void PressureProjection<dim>::run(mpm::MpmState<dim>& s) {
   mpm::SparseGrid<dim>& g = s.grid;
@@ -81,27 +57,11 @@ void PressureProjection<dim>::run(mpm::MpmState<dim>& s) {
   if (X.empty()) return;
 
   // 1. Fluid cells and their bounding box (the whole period along periodic axes).
-  IVec<dim> lo = cell_of(g, X[0]), hi = lo;
-  for (const Vec<dim>& x : X) {
-    const IVec<dim> c = cell_of(g, x);
-    lo = lo.cwiseMin(c);
-    hi = hi.cwiseMax(c);
-  }
-  for (int a = 0; a < dim; ++a) {
-    op_.periodic[a] = g.period()[a] > 0;
-    if (!op_.periodic[a]) continue;
-    lo[a] = g.periodic_lo()[a];
-    hi[a] = lo[a] + g.period()[a] - 1;
-  }
   const IVec<dim> old_lo = box_lo_, old_cells = op_.cells;
   std::vector<double> old_p;
   old_p.swap(p_);
-  op_.kind = CellOperator<dim>::Kind::node_cell;
-  op_.dx = g.dx();
-  op_.cells = hi - lo + IVec<dim>::Ones();
+  const IVec<dim> lo = fluid_cell_box(g, X, op_);
   box_lo_ = lo;
-  op_.type.assign(static_cast<std::size_t>(op_.cell_count()), CellType::empty);
-  for (const Vec<dim>& x : X) op_.type[op_.cell_index(cell_of(g, x) - lo)] = CellType::fluid;
 
   // 2. Node fields of the box.
   const std::vector<std::uint8_t> fixed = prescribed_nodes(g, colliders_, s.time + s.dt);
@@ -119,18 +79,7 @@ void PressureProjection<dim>::run(mpm::MpmState<dim>& s) {
     op_.beta[i] = mixture_ ? s.dt * (mixture_->fluid_fraction[k] / density_ + mixture_->solid_mobility[k]) : fluid_beta;
   });
 
-  // A fluid cell whose corners are all prescribed (a particle inside a wall) has no pressure
-  // unknown that could change its divergence: it is left out (p = 0) instead of making the
-  // system inconsistent.
-  for_each_point<dim>(op_.cells, [&](const IVec<dim>& c, std::int64_t ci) {
-    if (op_.type[ci] != CellType::fluid) return;
-    for (int k = 0; k < (1 << dim); ++k) {
-      IVec<dim> n = c;
-      for (int a = 0; a < dim; ++a) n[a] += (k >> a) & 1;
-      if (op_.beta[op_.node_index(n)] > 0.0) return;
-    }
-    op_.type[ci] = CellType::empty;
-  });
+  drop_cells_without_unknowns(op_);
 
   // 3. Solve, starting from the previous pressure where the boxes overlap.
   op_.divergence(u_, b_);
@@ -200,7 +149,7 @@ std::string PressureProjection<dim>::failure(const mpm::MpmState<dim>& s, const 
 
 template <int dim>
 double PressureProjection<dim>::pressure_at(const mpm::SparseGrid<dim>& grid, const Vec<dim>& x) const {
-  const IVec<dim> c = cell_of(grid, x) - box_lo_;
+  const IVec<dim> c = fluid_cell_of(grid, x) - box_lo_;
   if ((c.array() < 0).any() || (c.array() >= op_.cells.array()).any()) return 0.0;
   const std::int64_t i = op_.cell_index(c);
   return op_.type[i] == CellType::fluid ? p_[i] : 0.0;

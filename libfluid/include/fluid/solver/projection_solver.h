@@ -1,7 +1,9 @@
 #pragma once
 //! The incompressible free-surface LANS step (Gao et al. 2018; docs/architecture.md, "The fluid
 //! step"): grid_update() = grid_update (gravity) -> viscosity (implicit, only when mu > 0);
-//! projection() = pressure (the node/cell projection, fluid/stages/pressure_projection.h);
+//! projection() = pressure (the node/cell projection, fluid/stages/pressure_projection.h) ->
+//! surface_extension (fluid/stages/surface_velocity_extension.h, unless pressure.surface_extension
+//! is off);
 //! particle_update() = nothing. Its time step is limited by the free fall of the surface, not
 //! by a wave: the pressure is implicit.
 #include <fluid/solver/fluid_solver.h>

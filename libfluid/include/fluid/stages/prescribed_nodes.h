@@ -20,4 +20,9 @@ template <int dim>
 std::vector<std::uint8_t> prescribed_nodes(const mpm::SparseGrid<dim>& grid,
                                            const mpm::geometry::ColliderSet<dim>& colliders, double t);
 
+//! The same test for one storage node k (with mass) only.
+template <int dim>
+bool is_prescribed(const mpm::SparseGrid<dim>& grid, const mpm::geometry::ColliderSet<dim>& colliders, std::size_t k,
+                   double t);
+
 }  // namespace fluid::stages

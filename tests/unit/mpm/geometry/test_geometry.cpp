@@ -5,6 +5,7 @@
 #include <mpm/geometry/collider.h>
 #include <mpm/geometry/collider_config.h>
 #include <mpm/geometry/level_set.h>
+#include <mpm/geometry/particle_spacing.h>
 #include <mpm/geometry/seeding.h>
 #include <mpm/geometry/signed_distance.h>
 #include <mpm/geometry/triangle_mesh.h>
@@ -552,4 +553,35 @@ TEST_CASE("lattice seeding") {
     CHECK_THROWS_AS(seed_box<2>(Vec<2>(0, 0), Vec<2>(1, 1), 0.1, 0, 0.0, 1), InputError);
     CHECK_THROWS_AS(seed_box<2>(Vec<2>(0, 0), Vec<2>(1, 1), 0.1, 4, 1.0, 1), InputError);
   }
+}
+
+TEST_CASE("particle spacing: a lattice is even, a hole shows, the surface layer does not count") {
+  // 10 x 10 cells of 4 particles: the inside is the 8 x 8 cells one cell from the edge.
+  const double dx = 0.1;
+  const Vec<2> origin(-1.0, -1.0);
+  std::vector<Vec<2>> x = seed_box<2>(Vec<2>(0.0, 0.0), Vec<2>(1.0, 1.0), dx, 4, 0.0, 1);
+  ParticleSpacing even = particle_spacing<2>(x, origin, dx);
+  CHECK(even.inside_cells == 64);
+  CHECK(even.mean_count == 4.0);
+  CHECK(even.count_cv == 0.0);
+  CHECK(even.empty_share == 0.0);
+  // A cell emptied inside: still inside (the closing fills it), counted empty and sparse.
+  std::vector<Vec<2>> holed;
+  for (const Vec<2>& p : x)
+    if (!(p[0] > 0.5 && p[0] < 0.6 && p[1] > 0.3 && p[1] < 0.4)) holed.push_back(p);
+  const ParticleSpacing hole = particle_spacing<2>(holed, origin, dx);
+  CHECK(hole.inside_cells == 64);
+  CHECK(hole.empty_share == doctest::Approx(1.0 / 64.0));
+  CHECK(hole.sparse_share == doctest::Approx(1.0 / 64.0));
+  CHECK(hole.mean_count == doctest::Approx(252.0 / 64.0));
+  // 3 and 5 particles in two cells: std = sqrt(2 / 64) over a mean of 4.
+  std::vector<Vec<2>> moved = x;
+  for (Vec<2>& p : moved)
+    if (p[0] > 0.5 && p[0] < 0.55 && p[1] > 0.3 && p[1] < 0.35) p[0] += dx;
+  const ParticleSpacing uneven = particle_spacing<2>(moved, origin, dx);
+  CHECK(uneven.count_cv == doctest::Approx(std::sqrt(2.0 / 64.0) / 4.0));
+  CHECK(uneven.empty_share == 0.0);
+  // In 3D: 6^3 cells give 4^3 inside.
+  const auto cube = seed_box<3>(Vec<3>::Zero(), Vec<3>::Constant(0.6), dx, 8, 0.0, 1);
+  CHECK(particle_spacing<3>(cube, Vec<3>::Constant(-1.0), dx).inside_cells == 64);
 }
