@@ -4,7 +4,6 @@
 #include <coupling/stages/mixture_projection.h>
 #include <coupling/stages/on_phase.h>
 #include <coupling/stages/volume_fraction_stage.h>
-#include <fluid/stages/density_correction.h>
 #include <fluid/stages/surface_velocity_extension.h>
 #include <mpm/core/error.h>
 #include <mpm/core/stages/grid_boundary.h>
@@ -157,9 +156,6 @@ mpm::Pipeline<CoupledState<dim>> make_coupled_pipeline(const CoupledScene<dim>& 
   if (sandy)
     for (auto& stage : scene.solid_solver->particle_update()) on(Phase::sediment, std::move(stage));
   both([] { return std::make_unique<ms::GridToParticles<dim>>(); });
-  if (wet && scene.pressure.density_correction && scene.fluid_solver->incompressible())
-    on(Phase::fluid, std::make_unique<fluid::stages::DensityCorrection<dim>>(scene.fluid->density, scene.colliders,
-                                                                            scene.pressure.solver));
   if (switching)
     p.add(
         std::make_unique<stages::ReclassifySediment<dim>>(*scene.sediment->switching, scene.sediment->density, 0, wet));

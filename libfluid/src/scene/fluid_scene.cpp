@@ -1,5 +1,4 @@
 #include <fluid/scene/fluid_scene.h>
-#include <fluid/stages/density_correction.h>
 
 #include <mpm/core/error.h>
 #include <mpm/core/stages/grid_boundary.h>
@@ -52,7 +51,6 @@ stages::PressureSettings parse_pressure_settings(const Config& scene) {
   s.on_failure =
       p->choice("on_failure", "stop", {"stop", "warn"}) == "stop" ? stages::OnFailure::stop : stages::OnFailure::warn;
   s.surface_extension = p->flag("surface_extension", s.surface_extension);
-  s.density_correction = p->flag("density_correction", s.density_correction);
   return s;
 }
 
@@ -126,8 +124,6 @@ mpm::Pipeline<mpm::MpmState<dim>> make_fluid_pipeline(const FluidScene<dim>& sce
   if (periodic) p.add(std::make_unique<ms::PeriodicFill<dim>>());
   for (auto& stage : scene.solver->particle_update()) p.add(std::move(stage));
   p.add(std::make_unique<ms::GridToParticles<dim>>());
-  if (scene.pressure.density_correction && scene.solver->incompressible())
-    p.add(std::make_unique<stages::DensityCorrection<dim>>(scene.fluid.density, scene.colliders, scene.pressure.solver));
   if (periodic) p.add(std::make_unique<ms::PeriodicWrap<dim>>());
   return p;
 }

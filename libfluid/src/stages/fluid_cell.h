@@ -1,6 +1,6 @@
 #pragma once
 //! Private: the one rule by which the fluid stages call a cell fluid (it holds a particle), and
-//! the operator box built on it, shared by the pressure projection and the density correction.
+//! the operator box the pressure projection builds on it.
 #include <fluid/pressure/cell_operator.h>
 
 #include <mpm/core/sparse_grid.h>

@@ -30,8 +30,6 @@ struct PressureSettings {
   //! Extend the projected velocity to the loose surface nodes after the solve
   //! (surface_velocity_extension.h); off: they keep their free fall (the spurious currents).
   bool surface_extension = true;
-  //! Relax the particle positions towards the rest density after G2P (density_correction.h).
-  bool density_correction = false;
 };
 
 //! The second phase of the mixture constraint div(n_w v_w + n_s v_s) = 0 (Gao et al. 2018),
