@@ -75,8 +75,23 @@ Material<dim> parse_material(const Config& cfg) {
     if (const std::optional<Config> rate = plastic->optional_child("rate")) {
       const double mu_1 = rate_independent.friction();
       flow.mu_2 = rate->number("mu_2", Range::closed(mu_1, 1e6));  // the message names mu_1's bound
-      flow.j_0 = rate->number("j_0", 0.005, Range::positive());
-      flow.viscosity = rate->number("viscosity", Range::positive());
+      // The inertial number I (dry grains) when a grain diameter is given, else the viscous J.
+      if (rate->has("grain_diameter")) {
+        for (const char* viscous : {"j_0", "viscosity"})
+          if (rate->has(viscous))
+            rate->fail(viscous,
+                       "belongs to the viscous number J; with grain_diameter the friction follows the "
+                       "inertial number I (keys i_0, grain_diameter, grain_density)");
+        flow.grain_diameter = rate->number("grain_diameter", Range::positive());
+        flow.grain_density = rate->number("grain_density", material.density, Range::positive());
+        flow.j_0 = rate->number("i_0", 0.279, Range::positive());
+      } else {
+        if (rate->has("i_0") || rate->has("grain_density"))
+          rate->fail(rate->has("i_0") ? "i_0" : "grain_density",
+                     "belongs to the inertial number I, which needs grain_diameter");
+        flow.j_0 = rate->number("j_0", 0.005, Range::positive());
+        flow.viscosity = rate->number("viscosity", Range::positive());
+      }
     }
     material.plasticity = plasticity::DruckerPrager<dim>(friction_angle, cohesion, material.lame, flow);
   } else if (model == plasticity::VonMises<dim>::name) {

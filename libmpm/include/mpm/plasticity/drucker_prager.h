@@ -39,14 +39,17 @@
 //! det F^E_new / det F^E_trial (the total volume does not change within the map), which keeps
 //! phi_r / det F^E the true packing in all three cases.
 //!
-//! Rate-dependent friction (optional; the mu(J) of dense suspensions, Boyer, Guazzelli &
-//! Pouliquen 2011, eq. 6): with mu_2 > mu_cone the friction grows with the viscous number
-//! J = eta_f gamma_dot / P of the plastic flow,
-//!   mu(J) = mu_cone + (mu_2 - mu_cone) J / (J + J_0),
-//! gamma_dot = sqrt(2) dgamma / dt, P = -tr tau / d of the returned state (P <= 0: J = inf).
+//! Rate-dependent friction (optional): with mu_2 > mu_cone the friction grows with a
+//! dimensionless shear rate X of the plastic flow,
+//!   mu(X) = mu_cone + (mu_2 - mu_cone) X / (X + X_0),
+//! either the viscous number of dense suspensions, X = J = eta_f gamma_dot / P (Boyer,
+//! Guazzelli & Pouliquen 2011, eq. 6), or the inertial number of dry grains,
+//! X = I = d gamma_dot / sqrt(P / rho_s) (GDR MiDi 2004; Jop, Forterre & Pouliquen 2006, eq. 2),
+//! gamma_dot = sqrt(2) dgamma / dt, P = -tr tau / d of the returned state (P <= 0: X = inf).
 //! Case III then solves y(dgamma) = 0 with the friction of its own dgamma (y decreases
-//! monotonically in dgamma: bisection); a slow flow (J -> 0) is the rate-independent map, a
-//! flow at vanishing pressure meets mu_2.
+//! monotonically in dgamma: bisection); a slow flow (X -> 0) is the rate-independent map, a
+//! flow at vanishing pressure meets mu_2. With the inertial number a thin, fast layer (a
+//! collapse's front) is the most frictional part of the flow.
 #include <mpm/constitutive/hencky_stvk.h>
 #include <mpm/constitutive/lame.h>
 #include <mpm/core/error.h>
@@ -71,9 +74,12 @@ public:
   struct Flow {
     double dilatancy = 0.0;         //!< K of tan psi = K (phi - phi_c) [-]; 0: none
     double critical_packing = 0.6;  //!< phi_c [-], in (0, 1)
-    double mu_2 = 0.0;              //!< mu(J) at large J [-]; 0: rate independent, else >= mu_cone
-    double j_0 = 0.005;             //!< J_0 [-] > 0
-    double viscosity = 0.0;         //!< eta_f of J [Pa s] > 0 where mu_2 is set
+    double mu_2 = 0.0;              //!< mu(X) at large X [-]; 0: rate independent, else >= mu_cone
+    double j_0 = 0.005;             //!< X_0 [-] > 0: J_0, or I_0 for the inertial number
+    double viscosity = 0.0;         //!< eta_f of J [Pa s]; > 0 selects the viscous number
+    double grain_diameter = 0.0;    //!< d of I [m]; > 0 selects the inertial number
+    double grain_density = 0.0;     //!< rho_s of I [kg/m^3] > 0 with grain_diameter
+    bool inertial() const { return grain_diameter > 0.0; }
   };
 
   //! friction_angle [deg] in [0, 90), cohesion [Pa] >= 0; lame of the Hencky StVK elasticity.
@@ -97,9 +103,15 @@ public:
       verify<InputError>(flow.mu_2 >= friction(), "Drucker-Prager mu_2 " + std::to_string(flow.mu_2) +
                                                       ": expected a value >= the static friction mu_1 = " +
                                                       std::to_string(friction()) + " of the friction angle");
-      verify<InputError>(flow.j_0 > 0.0, "Drucker-Prager J_0 " + std::to_string(flow.j_0) + ": expected > 0");
-      verify<InputError>(flow.viscosity > 0.0,
-                         "Drucker-Prager viscosity " + std::to_string(flow.viscosity) + " Pa s: expected > 0");
+      verify<InputError>(flow.j_0 > 0.0, std::string("Drucker-Prager ") + (flow.inertial() ? "I_0 " : "J_0 ") +
+                                             std::to_string(flow.j_0) + ": expected > 0");
+      if (flow.inertial())
+        verify<InputError>(flow.grain_density > 0.0 && flow.viscosity == 0.0,
+                           "Drucker-Prager inertial number: the grain density " + std::to_string(flow.grain_density) +
+                               " kg/m^3 must be > 0 and no viscosity given");
+      else
+        verify<InputError>(flow.viscosity > 0.0,
+                           "Drucker-Prager viscosity " + std::to_string(flow.viscosity) + " Pa s: expected > 0");
     }
   }
 
@@ -186,13 +198,19 @@ private:
     return (tau - Vec<dim>::Constant(trace / dim)).norm() + alpha * trace - k_;
   }
 
-  //! The cone's alpha that mu(J) adds at the plastic strain dgamma of a step dt [-].
+  //! The cone's alpha that mu(X) adds at the plastic strain dgamma of a step dt [-].
   double rate_friction(double dgamma, double trace, double tan_psi, double dt) const {
     const double bulk = dim * elastic_.lambda + 2.0 * elastic_.mu;
     const double pressure = -bulk * (trace - std::numbers::sqrt2 * tan_psi * dgamma) / dim;
-    const double strain_rate = flow_.viscosity * std::numbers::sqrt2 * dgamma / dt;  // eta gamma_dot
-    // J / (J + J_0) = eta gamma_dot / (eta gamma_dot + J_0 P), 1 where P <= 0
-    const double share = pressure > 0.0 ? strain_rate / (strain_rate + flow_.j_0 * pressure) : 1.0;
+    const double gamma_dot = std::numbers::sqrt2 * dgamma / dt;
+    // X / (X + X_0) as a / (a + X_0 P^m), 1 where P <= 0:
+    //   J: a = eta gamma_dot, m = 1;  I: a = d gamma_dot sqrt(rho_s), m = 1/2.
+    double share = 1.0;
+    if (pressure > 0.0) {
+      const double a = flow_.inertial() ? flow_.grain_diameter * gamma_dot * std::sqrt(flow_.grain_density)
+                                        : flow_.viscosity * gamma_dot;
+      share = a / (a + flow_.j_0 * (flow_.inertial() ? std::sqrt(pressure) : pressure));
+    }
     return (flow_.mu_2 - friction()) * share * std::numbers::sqrt2 / dim;
   }
 

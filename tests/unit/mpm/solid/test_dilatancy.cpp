@@ -255,6 +255,21 @@ TEST_CASE("dilatant sand: scene keys and their errors") {
                        doctest::Contains("plasticity.rate.viscosity"), InputError);
   CHECK_THROWS_WITH_AS(parse_material<2>(Config::parse(base + ", rate: {mu_2: 0.7}}\n")),
                        doctest::Contains("viscosity"), InputError);
+  // mu(I): a grain diameter selects the inertial number; I_0 and rho_s default to 0.279 and the
+  // material's density; the keys of J are refused beside it, and those of I without it.
+  const auto& inertial = std::get<plasticity::DruckerPrager<2>>(
+      parse_material<2>(Config::parse(base + ", rate: {mu_2: 0.7, grain_diameter: 5.0e-4}}\n")).plasticity);
+  CHECK(inertial.rate_dependent());
+  CHECK(inertial.flow().inertial());
+  CHECK(inertial.flow().j_0 == 0.279);
+  CHECK(inertial.flow().grain_density == 2650.0);
+  CHECK_THROWS_WITH_AS(
+      parse_material<2>(Config::parse(base + ", rate: {mu_2: 0.7, grain_diameter: 5.0e-4, viscosity: 0.01}}\n")),
+      doctest::Contains("plasticity.rate.viscosity"), InputError);
+  CHECK_THROWS_WITH_AS(parse_material<2>(Config::parse(base + ", rate: {mu_2: 0.7, grain_diameter: -1}}\n")),
+                       doctest::Contains("plasticity.rate.grain_diameter"), InputError);
+  CHECK_THROWS_WITH_AS(parse_material<2>(Config::parse(base + ", rate: {mu_2: 0.7, i_0: 0.3, viscosity: 0.01}}\n")),
+                       doctest::Contains("plasticity.rate.i_0"), InputError);
 }
 
 namespace {
@@ -312,6 +327,26 @@ TEST_CASE_TEMPLATE("mu(J): steady simple shear at an imposed rate and pressure r
     for (int n = 0; n < 4000; ++n) shear_drained(model, gamma_dot * dt, dt, p_target, Fe, plastic, nullptr);
     const double J = kEta * gamma_dot / p_target;
     const double mu = mu_1 + (kMu2 - mu_1) * J / (J + kJ0);
+    CAPTURE(gamma_dot);
+    CHECK(stress_ratio(kirchhoff(Fe)) == doctest::Approx(mu * std::numbers::sqrt2 / dim).epsilon(2e-3));
+  }
+}
+
+TEST_CASE_TEMPLATE(
+    "mu(I): steady simple shear at an imposed rate and pressure reaches mu(d gamma_dot / sqrt(P / "
+    "rho_s))",
+    Matrix, Mat<2>, Mat<3>) {
+  constexpr int dim = Matrix::RowsAtCompileTime;
+  constexpr double d = 5e-4, rho_s = 2650.0, I0 = 0.279;
+  const plasticity::DruckerPrager<dim> model(kFriction, 0.0, kLame,
+                                             {.mu_2 = kMu2, .j_0 = I0, .grain_diameter = d, .grain_density = rho_s});
+  const double mu_1 = cone_alpha() * dim / std::numbers::sqrt2, p_target = 200.0, dt = 1e-3;
+  for (const double gamma_dot : {1.0, 50.0, 500.0}) {
+    Mat<dim> Fe = Mat<dim>::Identity();
+    double plastic = 0.0;
+    for (int n = 0; n < 4000; ++n) shear_drained(model, gamma_dot * dt, dt, p_target, Fe, plastic, nullptr);
+    const double I = d * gamma_dot / std::sqrt(p_target / rho_s);  // 0.0018, 0.091, 0.91
+    const double mu = mu_1 + (kMu2 - mu_1) * I / (I + I0);
     CAPTURE(gamma_dot);
     CHECK(stress_ratio(kirchhoff(Fe)) == doctest::Approx(mu * std::numbers::sqrt2 / dim).epsilon(2e-3));
   }
