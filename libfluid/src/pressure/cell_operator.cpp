@@ -28,15 +28,8 @@ inline double corner_sign(int k, int a) { return ((k >> a) & 1) ? 1.0 : -1.0; }
 
 template <int dim, class Fn>
 void for_each_cell(const IVec<dim>& cells, Fn&& fn) {
-  IVec<dim> c = IVec<dim>::Zero();
-  const std::int64_t n = cells.template cast<std::int64_t>().prod();
-  for (std::int64_t index = 0; index < n; ++index) {
-    fn(c, index);
-    for (int a = 0; a < dim; ++a) {
-      if (++c[a] < cells[a]) break;
-      c[a] = 0;
-    }
-  }
+  std::int64_t index = 0;
+  mpm::for_each_in_box<dim>(IVec<dim>::Zero(), cells - IVec<dim>::Ones(), [&](const IVec<dim>& c) { fn(c, index++); });
 }
 }  // namespace
 

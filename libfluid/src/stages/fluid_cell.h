@@ -21,18 +21,13 @@ mpm::IVec<dim> fluid_cell_of(const mpm::SparseGrid<dim>& g, const mpm::Vec<dim>&
   return g.periodic_image(c);
 }
 
-//! Calls f(local coordinate, local index) for every point of a box with `n` points per axis.
+//! Calls f(local coordinate, local index) for every point of a box with `n` points per axis
+//! (x fastest, so the index counts the points in order).
 template <int dim, class Fn>
 void for_each_point(const mpm::IVec<dim>& n, Fn&& f) {
-  mpm::IVec<dim> c = mpm::IVec<dim>::Zero();
-  const std::int64_t count = n.template cast<std::int64_t>().prod();
-  for (std::int64_t i = 0; i < count; ++i) {
-    f(c, i);
-    for (int a = 0; a < dim; ++a) {
-      if (++c[a] < n[a]) break;
-      c[a] = 0;
-    }
-  }
+  std::int64_t i = 0;
+  mpm::for_each_in_box<dim>(mpm::IVec<dim>::Zero(), n - mpm::IVec<dim>::Ones(),
+                            [&](const mpm::IVec<dim>& c) { f(c, i++); });
 }
 
 //! Makes `op` the node/cell operator box of the particles X (non-empty): the bounding box of

@@ -13,15 +13,8 @@ namespace {
 //! Calls f(cell, index) for every cell of a box with n cells per axis, x fastest.
 template <int dim, class Fn>
 void for_each_cell(const IVec<dim>& n, Fn&& f) {
-  IVec<dim> c = IVec<dim>::Zero();
-  const std::int64_t count = n.template cast<std::int64_t>().prod();
-  for (std::int64_t i = 0; i < count; ++i) {
-    f(c, i);
-    for (int a = 0; a < dim; ++a) {
-      if (++c[a] < n[a]) break;
-      c[a] = 0;
-    }
-  }
+  std::int64_t i = 0;
+  for_each_in_box<dim>(IVec<dim>::Zero(), n - IVec<dim>::Ones(), [&](const IVec<dim>& c) { f(c, i++); });
 }
 
 //! out_c = 1 iff (any / every) cell of the 3^dim box around c has in = 1 (outside the box: 0).
