@@ -7,6 +7,9 @@
 
 #include <tbb/parallel_for.h>
 
+#include <atomic>
+#include <limits>
+
 namespace mpm::stages {
 
 template <int dim>
@@ -19,22 +22,30 @@ void GridVelocityUpdate<dim>::update(SparseGrid<dim>& g, const MpmState<dim>& s)
   momentum_to_velocity(g, s.transfer);
   const double dt = s.dt;
   const Vec<dim> dv_gravity = dt * s.gravity;
+  // The finite check rides in the same pass; the smallest offending node is reported, so the
+  // message does not depend on the thread count.
+  std::atomic<std::size_t> first_bad{std::numeric_limits<std::size_t>::max()};
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, g.node_storage(), 4096), [&](const auto& r) {
     for (std::size_t k = r.begin(); k != r.end(); ++k) {
-      if (g.mass[k] <= 0.0) continue;
-      if (with_forces_) g.velocity[k] += (dt / g.mass[k]) * g.force[k];
-      g.velocity[k] += dv_gravity;
+      if (!(g.mass[k] <= 0.0)) {  // a NaN mass too: the check below must see what it does
+        if (with_forces_) g.velocity[k] += (dt / g.mass[k]) * g.force[k];
+        g.velocity[k] += dv_gravity;
+      }
+      if (!g.velocity[k].allFinite()) {
+        std::size_t seen = first_bad.load(std::memory_order_relaxed);
+        while (k < seen && !first_bad.compare_exchange_weak(seen, k, std::memory_order_relaxed)) {
+        }
+      }
     }
   });
-  for (std::size_t k = 0; k < g.node_storage(); ++k)
-    if (!g.velocity[k].allFinite()) {
-      const IVec<dim> node = g.node_coord(k);
-      std::string where;
-      for (int a = 0; a < dim; ++a) where += (a ? ", " : "") + std::to_string(node[a]);
-      throw NumericalError("stage '" + name() + "': grid node (" + where +
-                           ") of the grid with dx = " + std::to_string(g.dx()) + " m has non-finite velocity (mass " +
-                           std::to_string(g.mass[k]) + " kg)");
-    }
+  if (const std::size_t k = first_bad.load(); k != std::numeric_limits<std::size_t>::max()) {
+    const IVec<dim> node = g.node_coord(k);
+    std::string where;
+    for (int a = 0; a < dim; ++a) where += (a ? ", " : "") + std::to_string(node[a]);
+    throw NumericalError("stage '" + name() + "': grid node (" + where +
+                         ") of the grid with dx = " + std::to_string(g.dx()) + " m has non-finite velocity (mass " +
+                         std::to_string(g.mass[k]) + " kg)");
+  }
 }
 
 template class GridVelocityUpdate<2>;
