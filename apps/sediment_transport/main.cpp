@@ -20,10 +20,13 @@
 // bed_profile.csv: x [, z], initial and final bed height [m] of every column.
 // summary.json: max_scour_depth, final_scour_depth, final_deposition_height [m],
 // sediment_outflow_mass [kg], fluid_mass_balance_error and sediment_mass_balance_error
-// (|M(0) + M_in - M_out - M| / (M(0) + M_in), round-off).
+// (|M(0) + M_in - M_out - M| / (M(0) + M_in), round-off), the water's particle spacing, and with
+// `pipeline: {diameter: D}` the comparison with pipeline-scour experiments
+// (coupling/pipeline_scour.h, data/reference/sumer_fredsoe2002.md).
 // --check: both mass balances below 1e-12 and a scour hole formed (max_scour_depth > 0).
 #include <coupling/bed_profile.h>
 #include <coupling/coupled_runner.h>
+#include <coupling/pipeline_scour.h>
 #include <coupling/scene_loader.h>
 #include <coupling/stages/reclassify_sediment.h>
 #include <mpm/core/app.h>
@@ -35,7 +38,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <sstream>
+#include <string>
+#include <utility>
 #include <vector>
 
 using namespace mpm;
@@ -49,6 +55,19 @@ int run(const CommandLine& cl, const Config& scene) {
                      scene.file() + ": sediment_transport needs a `fluid`, a `sediment` and a sediment body");
   const Config window = scene.child("scour_window");
   const Vec<dim> window_lo = window.template vector<dim>("lo"), window_hi = window.template vector<dim>("hi");
+  // The comparison with pipeline-scour experiments (coupling/pipeline_scour.h): the undisturbed
+  // current is the inflow's (speed along its face, depth = the inlet's height), the grains the
+  // drag law's, the pipe the scene's `pipeline.diameter`.
+  std::optional<coupling::PipelineScourPrediction> predicted;
+  if (const std::optional<Config> pipe = scene.optional_child("pipeline")) {
+    const double diameter = pipe->number("diameter", Range::positive());
+    verify<InputError>(flume.flow.inflow.has_value(), scene.file() + ": `pipeline` needs an `inflow` (the current)");
+    const auto& in = *flume.flow.inflow;
+    predicted =
+        coupling::predict_pipeline_scour(diameter, std::abs(in.velocity[in.face.axis]), in.hi[1] - in.lo[1],
+                                         scene.child("drag").number("grain_diameter", Range::positive()),
+                                         flume.sediment->density / flume.fluid->density, flume.settings.gravity.norm());
+  }
   scene.reject_unknown_keys();
 
   coupling::CoupledState<dim>& s = flume.state;
@@ -102,14 +121,30 @@ int run(const CommandLine& cl, const Config& scene) {
   const std::vector<double> scour = runner.history("scour_depth");
   const double max_scour = *std::max_element(scour.begin(), scour.end());
   const auto [final_scour, final_deposit] = change(s);
-  runner.write_summary({{"max_scour_depth", max_scour},
-                        {"final_scour_depth", final_scour},
-                        {"final_deposition_height", final_deposit},
-                        {"sediment_outflow_mass", runner.history_or_zero("outflow_mass_sediment").back()},
-                        {"fluid_mass_balance_error", fluid_error},
-                        {"sediment_mass_balance_error", grain_error},
-                        {"water_spacing_cv", runner.history("water_spacing_cv").back()},
-                        {"water_empty_share", runner.history("water_empty_share").back()}});
+  std::vector<std::pair<std::string, double>> results = {
+      {"max_scour_depth", max_scour},
+      {"final_scour_depth", final_scour},
+      {"final_deposition_height", final_deposit},
+      {"sediment_outflow_mass", runner.history_or_zero("outflow_mass_sediment").back()},
+      {"fluid_mass_balance_error", fluid_error},
+      {"sediment_mass_balance_error", grain_error},
+      {"water_spacing_cv", runner.history("water_spacing_cv").back()},
+      {"water_empty_share", runner.history("water_empty_share").back()}};
+  const std::vector<double> times = runner.history("time");
+  if (predicted && std::count_if(times.begin(), times.end(), [](double t) { return t > 0.0; }) >= 2) {
+    // Against Sumer & Fredsoe (data/reference/sumer_fredsoe2002.md): the scour history fitted
+    // by S_eq (1 - exp(-t / T)); a run shorter than T extrapolates S_eq.
+    const coupling::ScourFit fit = coupling::fit_scour_history(times, scour);
+    results.insert(results.end(), {{"shields_number", predicted->shields_number},
+                                   {"predicted_scour_depth", predicted->scour_depth},
+                                   {"predicted_time_scale", predicted->time_scale},
+                                   {"fitted_scour_depth", fit.equilibrium_depth},
+                                   {"fitted_time_scale", fit.time_scale},
+                                   {"fit_rms_error", fit.rms_error},
+                                   {"scour_depth_ratio", fit.equilibrium_depth / predicted->scour_depth},
+                                   {"time_scale_ratio", fit.time_scale / predicted->time_scale}});
+  }
+  runner.write_summary(results);
   if (!cl.check) return 0;
   bool ok = check_value("fluid_mass_balance_error", fluid_error, 0.0, 1e-12);
   ok = check_value("sediment_mass_balance_error", grain_error, 0.0, 1e-12) && ok;

@@ -6,4 +6,5 @@ list(APPEND COUPLING_SOURCES
   src/core/scene_loader.cpp
   src/core/coupled_runner.cpp
   src/core/bed_profile.cpp
+  src/core/pipeline_scour.cpp
 )
