@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 namespace mpm::geometry {
 
@@ -45,10 +46,13 @@ std::vector<std::uint8_t> box_filter(const std::vector<std::uint8_t>& in, const 
 }  // namespace
 
 template <int dim>
-ParticleSpacing particle_spacing(const std::vector<Vec<dim>>& x, const Vec<dim>& origin, double dx) {
+ParticleSpacing particle_spacing(const std::vector<Vec<dim>>& x, const Vec<dim>& origin, double dx,
+                                 const std::function<bool(const IVec<dim>&)>& excluded) {
   verify<InputError>(dx > 0.0, "particle_spacing: the cell size must be positive");
   ParticleSpacing result;
   if (x.empty()) return result;
+  for (const Vec<dim>& p : x)
+    verify<NumericalError>(p.allFinite(), "particle_spacing: a particle position is not finite");
   auto cell = [&](const Vec<dim>& p) {
     IVec<dim> c;
     for (int a = 0; a < dim; ++a) c[a] = static_cast<int>(std::floor((p[a] - origin[a]) / dx));
@@ -61,6 +65,10 @@ ParticleSpacing particle_spacing(const std::vector<Vec<dim>>& x, const Vec<dim>&
   }
   lo -= IVec<dim>::Constant(2);
   const IVec<dim> n = hi - lo + IVec<dim>::Constant(3);
+  // The dense box of cells: a few bytes per cell, bounded so that a body spread over a huge
+  // domain is refused rather than allocated.
+  verify<InputError>(n.template cast<double>().prod() <= 1e9,
+                     "particle_spacing: the particles span more than 1e9 cells of size " + std::to_string(dx) + " m");
   std::vector<std::int64_t> count(static_cast<std::size_t>(n.template cast<std::int64_t>().prod()), 0);
   for (const Vec<dim>& p : x) {
     const IVec<dim> c = cell(p) - lo;
@@ -70,8 +78,12 @@ ParticleSpacing particle_spacing(const std::vector<Vec<dim>>& x, const Vec<dim>&
   }
   std::vector<std::uint8_t> occupied(count.size());
   std::transform(count.begin(), count.end(), occupied.begin(), [](std::int64_t k) { return k > 0; });
-  const std::vector<std::uint8_t> inside =
+  std::vector<std::uint8_t> inside =
       box_filter<dim>(box_filter<dim>(box_filter<dim>(occupied, n, true), n, false), n, false);
+  if (excluded)
+    for_each_cell<dim>(n, [&](const IVec<dim>& c, std::int64_t i) {
+      if (inside[static_cast<std::size_t>(i)] && excluded(c + lo)) inside[static_cast<std::size_t>(i)] = 0;
+    });
 
   double sum = 0.0, sum2 = 0.0;
   for (std::size_t i = 0; i < count.size(); ++i)
@@ -95,7 +107,9 @@ ParticleSpacing particle_spacing(const std::vector<Vec<dim>>& x, const Vec<dim>&
   return result;
 }
 
-template ParticleSpacing particle_spacing(const std::vector<Vec<2>>&, const Vec<2>&, double);
-template ParticleSpacing particle_spacing(const std::vector<Vec<3>>&, const Vec<3>&, double);
+template ParticleSpacing particle_spacing(const std::vector<Vec<2>>&, const Vec<2>&, double,
+                                          const std::function<bool(const IVec<2>&)>&);
+template ParticleSpacing particle_spacing(const std::vector<Vec<3>>&, const Vec<3>&, double,
+                                          const std::function<bool(const IVec<3>&)>&);
 
 }  // namespace mpm::geometry

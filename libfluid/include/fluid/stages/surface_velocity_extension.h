@@ -14,9 +14,11 @@
 //! result does not depend on node order), as FLIP liquids extrapolate the grid velocity into
 //! the air (Zhu & Bridson 2005). Water at rest
 //! then stays at rest to the tolerance of the pressure solve. It changes the momentum by
-//! sum_loose m_i (v_i - v_i*): nothing in free fall (every node has v*), and at most the
-//! gravity impulse of the surface's loose mass otherwise; the projection's own conservation is
-//! untouched (it runs before). Runs after the projection, before periodic_fill.
+//! sum_loose m_i (v_i - v_i*): nothing in free fall (every node has v*), the gravity impulse of
+//! the loose mass for water at rest, and in general the pressure impulse of the neighbours the
+//! loose nodes now share (a squeezed falling blob: 0.45 % of sum m |v| against 0.30 % without,
+//! test_coupled_step); the projection's own conservation is untouched (it runs before). Runs
+//! after the projection, before periodic_fill.
 #include <mpm/core/stage.h>
 #include <mpm/core/state.h>
 #include <mpm/geometry/collider.h>

@@ -16,6 +16,7 @@
 #include <mpm/core/types.h>
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace mpm::geometry {
@@ -28,7 +29,11 @@ struct ParticleSpacing {
   double sparse_share = 0.0;
 };
 
+//! `excluded` (optional) drops cells from the inside after the closing and erosion (cells another
+//! phase fills, e.g. a sand bed with its pore water): they are neither counted nor holes.
+//! Cell c is the cell of the points origin + dx (c + [0, 1)^dim).
 template <int dim>
-ParticleSpacing particle_spacing(const std::vector<Vec<dim>>& x, const Vec<dim>& origin, double dx);
+ParticleSpacing particle_spacing(const std::vector<Vec<dim>>& x, const Vec<dim>& origin, double dx,
+                                 const std::function<bool(const IVec<dim>&)>& excluded = {});
 
 }  // namespace mpm::geometry

@@ -581,6 +581,11 @@ TEST_CASE("particle spacing: a lattice is even, a hole shows, the surface layer 
   const ParticleSpacing uneven = particle_spacing<2>(moved, origin, dx);
   CHECK(uneven.count_cv == doctest::Approx(std::sqrt(2.0 / 64.0) / 4.0));
   CHECK(uneven.empty_share == 0.0);
+  // Excluded cells (another phase's) leave the inside: the hole's row drops out, hole and all.
+  const ParticleSpacing without_row =
+      particle_spacing<2>(holed, origin, dx, [](const IVec<2>& c) { return c[1] == 13; });
+  CHECK(without_row.inside_cells == 56);
+  CHECK(without_row.empty_share == 0.0);
   // In 3D: 6^3 cells give 4^3 inside.
   const auto cube = seed_box<3>(Vec<3>::Zero(), Vec<3>::Constant(0.6), dx, 8, 0.0, 1);
   CHECK(particle_spacing<3>(cube, Vec<3>::Constant(-1.0), dx).inside_cells == 64);
