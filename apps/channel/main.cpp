@@ -14,8 +14,9 @@
 // --check: the ratio within channel.tolerance (default 5 %) of 1 (a steady state reached), the
 // mass balance below 1e-12, and over the steady window the water's particle spacing
 // (geometry/particle_spacing.h) even: count_cv at most channel.max_spacing_cv (default 0.35;
-// measured 0.28, 0.43 with the pressure solves capped at 2 CG iterations) and empty_share at
-// most channel.max_empty_share (default 0.01; measured 0).
+// measured 0.28; 0.43 with the pressure solves capped at 2 CG iterations; 0.63 with
+// transfer.scheme: flip) and empty_share at most channel.max_empty_share (default 0.01;
+// measured 0; 0.007 with flip).
 #include <fluid/scene/fluid_scene.h>
 
 #include <mpm/geometry/particle_spacing.h>
