@@ -257,8 +257,8 @@ TEST_CASE("dilatant sand: scene keys and their errors") {
                        doctest::Contains("viscosity"), InputError);
   // mu(I): a grain diameter selects the inertial number; I_0 and rho_s default to 0.279 and the
   // material's density; the keys of J are refused beside it, and those of I without it.
-  const auto& inertial = std::get<plasticity::DruckerPrager<2>>(
-      parse_material<2>(Config::parse(base + ", rate: {mu_2: 0.7, grain_diameter: 5.0e-4}}\n")).plasticity);
+  const Material<2> dry = parse_material<2>(Config::parse(base + ", rate: {mu_2: 0.7, grain_diameter: 5.0e-4}}\n"));
+  const auto& inertial = std::get<plasticity::DruckerPrager<2>>(dry.plasticity);
   CHECK(inertial.rate_dependent());
   CHECK(inertial.flow().inertial());
   CHECK(inertial.flow().j_0 == 0.279);
