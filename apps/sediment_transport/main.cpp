@@ -41,7 +41,6 @@
 #include <optional>
 #include <sstream>
 #include <string>
-#include <unordered_set>
 #include <utility>
 #include <vector>
 
@@ -99,19 +98,8 @@ int run(const CommandLine& cl, const Config& scene) {
   const auto spacing = [&](const coupling::CoupledState<dim>& st) -> const geometry::ParticleSpacing& {
     if (st.step == cached.step) return cached.value;
     cached.step = st.step;
-    const double dx = flume.settings.dx;
-    const Vec<dim> origin = st.fluid.grid.origin();
-    const IVec<dim> cells = st.fluid.grid.node_counts();
-    const auto key = [&](const IVec<dim>& c) {
-      std::int64_t k = 0;
-      for (int a = dim - 1; a >= 0; --a) k = k * (cells[a] + 2) + std::clamp(c[a] + 1, 0, cells[a] + 1);
-      return k;
-    };
-    std::unordered_set<std::int64_t> sandy;
-    for (const Vec<dim>& x : st.sediment.particles.x)
-      sandy.insert(key(((x - origin) / dx).array().floor().template cast<int>().matrix()));
-    cached.value = geometry::particle_spacing<dim>(st.fluid.particles.x, origin, dx,
-                                                   [&](const IVec<dim>& c) { return sandy.count(key(c)) > 0; });
+    cached.value = geometry::particle_spacing<dim>(st.fluid.particles.x, st.fluid.grid.origin(), flume.settings.dx,
+                                                   st.sediment.particles.x);
     return cached.value;
   };
   runner.add_column("water_spacing_cv", [&](const coupling::CoupledState<dim>& st) { return spacing(st).count_cv; });

@@ -47,7 +47,7 @@ std::vector<std::uint8_t> box_filter(const std::vector<std::uint8_t>& in, const 
 
 template <int dim>
 ParticleSpacing particle_spacing(const std::vector<Vec<dim>>& x, const Vec<dim>& origin, double dx,
-                                 const std::function<bool(const IVec<dim>&)>& excluded) {
+                                 const std::vector<Vec<dim>>& excluding) {
   verify<InputError>(dx > 0.0, "particle_spacing: the cell size must be positive");
   ParticleSpacing result;
   if (x.empty()) return result;
@@ -69,21 +69,24 @@ ParticleSpacing particle_spacing(const std::vector<Vec<dim>>& x, const Vec<dim>&
   // domain is refused rather than allocated.
   verify<InputError>(n.template cast<double>().prod() <= 1e9,
                      "particle_spacing: the particles span more than 1e9 cells of size " + std::to_string(dx) + " m");
-  std::vector<std::int64_t> count(static_cast<std::size_t>(n.template cast<std::int64_t>().prod()), 0);
-  for (const Vec<dim>& p : x) {
+  // Box index of the cell holding p, or -1 outside the box.
+  auto index_of = [&](const Vec<dim>& p) -> std::int64_t {
     const IVec<dim> c = cell(p) - lo;
+    if ((c.array() < 0).any() || (c.array() >= n.array()).any()) return -1;
     std::int64_t j = 0;
     for (int a = dim - 1; a >= 0; --a) j = j * n[a] + c[a];
-    ++count[static_cast<std::size_t>(j)];
-  }
+    return j;
+  };
+  std::vector<std::int64_t> count(static_cast<std::size_t>(n.template cast<std::int64_t>().prod()), 0);
+  for (const Vec<dim>& p : x) ++count[static_cast<std::size_t>(index_of(p))];
   std::vector<std::uint8_t> occupied(count.size());
   std::transform(count.begin(), count.end(), occupied.begin(), [](std::int64_t k) { return k > 0; });
   std::vector<std::uint8_t> inside =
       box_filter<dim>(box_filter<dim>(box_filter<dim>(occupied, n, true), n, false), n, false);
-  if (excluded)
-    for_each_cell<dim>(n, [&](const IVec<dim>& c, std::int64_t i) {
-      if (inside[static_cast<std::size_t>(i)] && excluded(c + lo)) inside[static_cast<std::size_t>(i)] = 0;
-    });
+  for (const Vec<dim>& p : excluding) {
+    if (!p.allFinite()) continue;
+    if (const std::int64_t j = index_of(p); j >= 0) inside[static_cast<std::size_t>(j)] = 0;
+  }
 
   double sum = 0.0, sum2 = 0.0;
   for (std::size_t i = 0; i < count.size(); ++i)
@@ -108,8 +111,8 @@ ParticleSpacing particle_spacing(const std::vector<Vec<dim>>& x, const Vec<dim>&
 }
 
 template ParticleSpacing particle_spacing(const std::vector<Vec<2>>&, const Vec<2>&, double,
-                                          const std::function<bool(const IVec<2>&)>&);
+                                          const std::vector<Vec<2>>&);
 template ParticleSpacing particle_spacing(const std::vector<Vec<3>>&, const Vec<3>&, double,
-                                          const std::function<bool(const IVec<3>&)>&);
+                                          const std::vector<Vec<3>>&);
 
 }  // namespace mpm::geometry

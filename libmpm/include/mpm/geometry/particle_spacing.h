@@ -16,7 +16,6 @@
 #include <mpm/core/types.h>
 
 #include <cstdint>
-#include <functional>
 #include <vector>
 
 namespace mpm::geometry {
@@ -29,11 +28,10 @@ struct ParticleSpacing {
   double sparse_share = 0.0;
 };
 
-//! `excluded` (optional) drops cells from the inside after the closing and erosion (cells another
-//! phase fills, e.g. a sand bed with its pore water): they are neither counted nor holes.
-//! Cell c is the cell of the points origin + dx (c + [0, 1)^dim).
+//! The cells that hold a point of `excluding` (another phase, e.g. a sand bed with its pore water)
+//! leave the inside after the closing and erosion: they are neither counted nor holes.
 template <int dim>
 ParticleSpacing particle_spacing(const std::vector<Vec<dim>>& x, const Vec<dim>& origin, double dx,
-                                 const std::function<bool(const IVec<dim>&)>& excluded = {});
+                                 const std::vector<Vec<dim>>& excluding = {});
 
 }  // namespace mpm::geometry

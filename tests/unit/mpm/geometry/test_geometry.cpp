@@ -582,8 +582,9 @@ TEST_CASE("particle spacing: a lattice is even, a hole shows, the surface layer 
   CHECK(uneven.count_cv == doctest::Approx(std::sqrt(2.0 / 64.0) / 4.0));
   CHECK(uneven.empty_share == 0.0);
   // Excluded cells (another phase's) leave the inside: the hole's row drops out, hole and all.
-  const ParticleSpacing without_row =
-      particle_spacing<2>(holed, origin, dx, [](const IVec<2>& c) { return c[1] == 13; });
+  std::vector<Vec<2>> row;  // one point per cell of row 13 (y in [0.3, 0.4))
+  for (int i = 0; i < 10; ++i) row.emplace_back(0.05 + 0.1 * i, 0.35);
+  const ParticleSpacing without_row = particle_spacing<2>(holed, origin, dx, row);
   CHECK(without_row.inside_cells == 56);
   CHECK(without_row.empty_share == 0.0);
   // In 3D: 6^3 cells give 4^3 inside.
