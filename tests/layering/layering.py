@@ -6,7 +6,7 @@
 Every source and header under ROOT/libmpm, ROOT/libfluid, ROOT/libcoupling and ROOT/apps
 belongs to a target, and may include only the headers of the targets it links:
 
-  mpm::core           mpm/{core,adaptive,io,geometry,math}
+  mpm::core           mpm/{core,adaptive,domains,io,geometry,math}
   mpm::solid          + mpm/{solid,constitutive,plasticity}
   fluid::fluid        mpm::core + fluid/        (never solid code, never coupling)
   coupling::coupling  everything above + coupling/
@@ -20,7 +20,7 @@ import pathlib
 import re
 import sys
 
-CORE = ("mpm/core/", "mpm/adaptive/", "mpm/io/", "mpm/geometry/", "mpm/math/")
+CORE = ("mpm/core/", "mpm/adaptive/", "mpm/domains/", "mpm/io/", "mpm/geometry/", "mpm/math/")
 SOLID = CORE + ("mpm/solid/", "mpm/constitutive/", "mpm/plasticity/")
 FLUID = CORE + ("fluid/",)
 COUPLING = SOLID + ("fluid/", "coupling/")

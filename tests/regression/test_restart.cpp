@@ -77,6 +77,10 @@ const RestartCase kColumnAdaptive{COLUMN_COLLAPSE_APP,
 const RestartCase kJelloAdaptive{
     JELLO_COLLIDE_APP, "jello_collide_adaptive.yaml", "", 0.004, {""}, {""}, {"particles"}, {}, true};
 #endif
+// Particle domains: the particles follow their domain corners, which checkpoints store beside
+// the stages' data; a restart that lost them would move every particle back.
+const RestartCase kFlattenDomains{SOLID_SCENE_APP, "flatten_recover.yaml", "", 0.05, {""}, {""},
+                                  {"particles"},   {"rest_state_error"}};
 #ifdef SETTLING_APP
 // Discrete grains (no sediment material): no phase is solid.
 const RestartCase kSettling{SETTLING_APP,
@@ -314,6 +318,7 @@ TEST_CASE("a run continued from a checkpoint is bit-identical to the uninterrupt
   SUBCASE("solid on an adaptive grid with resampling: column collapse") {
     check_restart(kColumnAdaptive, "column_collapse_adaptive");
   }
+  SUBCASE("solid with particle domains: flatten and recover") { check_restart(kFlattenDomains, "flatten_domains"); }
 #ifdef JELLO_COLLIDE_APP
   SUBCASE("solid on an adaptive grid: jello collide") { check_restart(kJelloAdaptive, "jello_adaptive"); }
 #endif

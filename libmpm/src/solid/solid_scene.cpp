@@ -4,6 +4,7 @@
 #include <mpm/core/stages/ghost_velocities.h>
 #include <mpm/core/stages/grid_boundary.h>
 #include <mpm/core/stages/grid_to_particles.h>
+#include <mpm/core/stages/grid_velocity_update.h>
 #include <mpm/core/stages/particles_to_grid.h>
 #include <mpm/core/stages/refine_grid.h>
 #include <mpm/core/stages/resample_particles.h>
@@ -14,6 +15,7 @@
 #include <mpm/geometry/seeding.h>
 #include <mpm/solid/solid_channels.h>
 #include <mpm/solid/solid_scene.h>
+#include <mpm/solid/stages/domain_transfer.h>
 
 #include <Eigen/Geometry>
 
@@ -97,6 +99,8 @@ void seed_body(SolidScene<dim>& scene, const Config& body) {
   const std::size_t first = scene.state.particles.size();
   Particles<dim>& P = scene.state.particles;
   add_particles(scene, x, body_particles.volume, m, velocity, body.path());
+  if (scene.state.domains)
+    domains::add_body(*scene.state.domains, first, x, std::pow(body_particles.volume, 1.0 / dim), stretch);
   for (std::size_t p = first; p < P.size(); ++p) {  // the rest state of a stretched body
     P.volume0[p] /= std::fabs(stretch.prod());
     P.mass[p] = scene.materials.at(m).density * P.volume0[p];
@@ -158,6 +162,25 @@ void seed_bodies(SolidScene<dim>& solid, const Config& scene) {
   for (const Config& body : scene.list("bodies")) seed_body(solid, body);
 }
 
+namespace {
+//! The scenes particle domains support (particle_domains.h): explicit elastic solids on a
+//! uniform, non-periodic grid with the PIC/FLIP transfer of Zhu et al.
+template <int dim>
+void check_particle_domains(const SolidScene<dim>& s, const Config& scene) {
+  const std::string why = "particle_domains: true needs ";
+  if (s.solver->name() != "explicit")
+    scene.fail("particle_domains", why + "solver: explicit (solver is '" + s.solver->name() + "')");
+  if (s.state.adaptive) scene.fail("particle_domains", why + "a uniform grid (remove the key 'adaptive')");
+  for (int a = 0; a < dim; ++a)
+    if (s.settings.periodic[a]) scene.fail("particle_domains", why + "walls on every axis (no periodic axis)");
+  if (s.settings.transfer.type != TransferScheme::Type::flip)
+    scene.fail("particle_domains", why + "transfer.scheme: flip (the domains blend PIC and FLIP; flip_ratio 0 is PIC)");
+  for (const Material<dim>& m : s.materials)
+    if (!std::holds_alternative<plasticity::NoPlasticity>(m.plasticity))
+      scene.fail("particle_domains", why + "elastic materials (material '" + m.name + "' is plastic)");
+}
+}  // namespace
+
 template <int dim>
 SolidScene<dim> load_solid_scene(const Config& scene) {
   SceneSettings<dim> settings = parse_scene_settings<dim>(scene);
@@ -174,13 +197,27 @@ SolidScene<dim> load_solid_scene(const Config& scene) {
   SolidScene<dim> s =
       make_solid_scene(std::move(settings), parse_materials<dim>(scene), std::move(colliders), solver, implicit);
   read_adaptive_key(s, scene);
+  if (scene.flag("particle_domains", false)) {
+    check_particle_domains(s, scene);
+    s.state.domains.emplace();
+  }
   seed_bodies(s, scene);
+  if (s.state.domains) domains::index_sharing(*s.state.domains);
   return s;
 }
 
 template <int dim>
 Pipeline<MpmState<dim>> make_solid_pipeline(const SolidScene<dim>& scene) {
   Pipeline<MpmState<dim>> p(particle_fields(scene.state.particles));
+  if (scene.state.domains) {  // the explicit step through the domains (domain_transfer.h)
+    p.add(std::make_unique<stages::TimeStepControl<dim>>(
+        stages::time_step_settings(scene.settings, scene.solver->wave_speed())));
+    p.add(std::make_unique<stages::DomainsToGrid<dim>>(scene.materials));
+    p.add(std::make_unique<stages::GridVelocityUpdate<dim>>(true));
+    p.add(std::make_unique<stages::GridBoundary<dim>>(scene.colliders));
+    p.add(std::make_unique<stages::GridToDomains<dim>>());
+    return p;
+  }
   if (scene.refinement && scene.refinement->resample) {
     std::vector<std::string> deformation;
     if (scene.state.particles.has_channel(kElasticF)) deformation.push_back(kElasticF);

@@ -30,6 +30,15 @@
 namespace mpm {
 
 namespace runner_detail {
+
+//! A state without data besides its particles and stages (CoupledState): checkpoints store
+//! nothing more. MpmState's own overloads (state.h), more specialised, take precedence.
+template <class State>
+CarriedData carried_state(const State& /*state*/) {
+  return {};
+}
+template <class State>
+void restore_state(State& /*state*/, const CarriedData& /*data*/) {}
 inline std::string number(double value) {
   char text[32];
   std::snprintf(text, sizeof text, "%.6g", value);
@@ -201,6 +210,8 @@ int Runner<dim, State>::open_output(State& state, Pipeline<State>& pipeline) {
   state.dt = header.dt_previous;
   steps_at_last_frame_ = header.frame_step;
   pipeline.restore(header.stage_data);
+  using runner_detail::restore_state;
+  restore_state(state, header.stage_data);
   const std::string first_series = runner_detail::series_stem(phases(state).front().name);
   for (int f = 0; f <= header.frame; ++f)
     if (std::filesystem::exists(out_ / io::particle_file_name(f, first_series)))
@@ -352,11 +363,14 @@ void Runner<dim, State>::write_checkpoint(State& state, const Pipeline<State>& p
                                           const std::filesystem::path& path) {
   std::vector<io::CheckpointPhase<dim>> stored;
   for (const PhaseRef<dim>& phase : phases(state)) stored.push_back({phase.name, phase.particles});
+  CarriedData carried = pipeline.carried();
+  using runner_detail::carried_state;
+  for (auto& entry : carried_state(std::as_const(state))) carried.push_back(std::move(entry));
   io::CheckpointHeader h{dim,        frame,
                          state.step, state.time,
                          state.dt,   scene_digest(),
                          run_id_,    steps_at_last_frame_,
-                         inputs_,    pipeline.carried()};
+                         inputs_,    std::move(carried)};
   state_checksum_ = io::save_checkpoint<dim>(path, stored, h);
   last_checkpoint_ = std::chrono::steady_clock::now();
   if (path.filename() != runner_detail::kStoppedCheckpoint) prune_checkpoints();

@@ -8,6 +8,7 @@
 #include <mpm/core/scene_settings.h>
 #include <mpm/core/sparse_grid.h>
 #include <mpm/core/transfer.h>
+#include <mpm/domains/particle_domains.h>
 
 #include <optional>
 #include <string>
@@ -21,6 +22,9 @@ struct MpmState {
   SparseGrid<dim> grid;  //!< the uniform grid (unused on an adaptive grid)
   //! The adaptive grid, in place of `grid`; absent on a uniform scene, which builds none of it.
   std::optional<adaptive::AdaptiveGrid<dim>> adaptive;
+  //! The particles' domains (mpm/domains/), through which they reach the grid; absent unless the
+  //! scene has the key `particle_domains`.
+  std::optional<domains::ParticleDomains<dim>> domains;
   ParticleBuckets<dim> buckets;
   Kernel kernel = QuadraticBSpline{};
   TransferScheme transfer;
@@ -78,7 +82,19 @@ struct PhaseRef {
 
 template <int dim>
 std::size_t index_bytes(const MpmState<dim>& s) {
-  return s.buckets.memory_bytes() + (s.adaptive ? s.adaptive->index_bytes() : 0);
+  return s.buckets.memory_bytes() + (s.adaptive ? s.adaptive->index_bytes() : 0) +
+         (s.domains ? s.domains->memory_bytes() : 0);
+}
+
+//! What a restart needs of the state besides its particles and the stages' carried data: the
+//! domain corners (stored in checkpoints beside the stages' data; runner_impl.h).
+template <int dim>
+CarriedData carried_state(const MpmState<dim>& s) {
+  return s.domains ? domains::carried(*s.domains) : CarriedData{};
+}
+template <int dim>
+void restore_state(MpmState<dim>& s, const CarriedData& data) {
+  if (s.domains) domains::restore(*s.domains, data);
 }
 
 template <int dim>

@@ -1,0 +1,114 @@
+#pragma once
+//! Particle domains (Zhu et al., "Dynamically Enriched MPM for Invertible Elasticity", sec. 4):
+//! each particle owns a quadrilateral (2D) or hexahedral (3D) domain whose corners are shared
+//! with its lattice neighbours, and the particles reach the grid only through the corners.
+//!
+//! Reference domain: the particle's seeding cell, an axis-aligned box of sides L_a centred on
+//! the particle, with bilinear/trilinear corner functions N_alpha. Their averages over the box
+//! (eq. 6) are constant,
+//!   w_alpha_p = 1 / 2^dim,     grad_X w_alpha_p = s_alpha / (2^(dim-1) L)   (componentwise),
+//! s_alpha in {-1, +1}^dim the corner's side along each axis, so that the two-step weights are
+//!   w_ip = sum_alpha w_alpha_p w_i(x_alpha),   grad_X w_ip = sum_alpha w_i(x_alpha) grad_X w_alpha_p   (eq. 5)
+//! with w_i the scene's grid kernel evaluated at the corner (a point). Hence
+//!   P2G:  m_alpha = sum_p w_alpha_p m_p,  p_alpha = sum_p w_alpha_p m_p v_p,
+//!         f_alpha = - sum_p V_p^0 P_p grad_X w_alpha_p          (eq. 8: the FEM nodal force),
+//!         then m_i, (m v)_i, f_i = sum_alpha w_i(x_alpha) (m, p, f)_alpha.
+//!   G2P:  v_alpha = sum_i w_i(x_alpha) v_i,  x_alpha += dt v_alpha          (eq. 9)
+//!         v_p = PIC/FLIP blend of sum_alpha w_alpha_p v_alpha (and of the corner increments),
+//!         x_p = sum_alpha w_alpha_p x_alpha,  F_p = sum_alpha x_alpha grad_X w_alpha_p^T  (eq. 7)
+//! F_p is the mean deformation gradient of the trilinear map over the domain: it follows the
+//! corners exactly, so neighbours that share corners stay connected (no numerical fracture).
+//!
+//! Particles of a scene with domains are never reordered (no sort moves them, no source or
+//! sink adds or removes any): the corner table indexes them by storage position.
+#include <mpm/core/kernels.h>
+#include <mpm/core/particle_buckets.h>
+#include <mpm/core/sparse_grid.h>
+#include <mpm/core/stage.h>
+#include <mpm/core/types.h>
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace mpm::domains {
+
+template <int dim>
+struct ParticleDomains {
+  static constexpr int corners = 1 << dim;  //!< corners per domain
+
+  std::vector<Vec<dim>> x;                                    //!< corner positions [m]
+  std::vector<std::array<std::uint32_t, corners>> corner_of;  //!< per particle: corner alpha -> corner index
+  std::vector<Vec<dim>> inverse_side;                         //!< per particle: 1 / L_a of its reference box [1/m]
+  //! Corner -> (particle, alpha) pairs, packed as particle * corners + alpha: a corner's sums run
+  //! in parallel over corners without two threads writing one corner.
+  std::vector<std::uint32_t> sharing_begin, sharing;
+
+  // Per-step scratch, kept to avoid allocations.
+  ParticleBuckets<dim> buckets;    //!< corners ordered by grid block
+  std::vector<double> mass;        //!< m_alpha [kg]
+  std::vector<Vec<dim>> momentum;  //!< p_alpha [kg m/s]; after G2P the corner velocity v_alpha [m/s]
+  std::vector<Vec<dim>> force;     //!< f_alpha [N]; after G2P the FLIP increment of v_alpha [m/s]
+
+  std::size_t corner_count() const { return x.size(); }
+  std::size_t particle_count() const { return corner_of.size(); }
+  std::size_t memory_bytes() const;
+
+  //! grad_X w_alpha_p of eq. 6 for particle p [1/m].
+  Vec<dim> weight_gradient(std::size_t p, int alpha) const {
+    Vec<dim> g;
+    for (int a = 0; a < dim; ++a) g[a] = ((alpha >> a) & 1 ? 1.0 : -1.0) * inverse_side[p][a] / (corners / 2);
+    return g;
+  }
+  //! F_p = sum_alpha x_alpha grad_X w_alpha_p^T from the current corners.
+  Mat<dim> deformation(std::size_t p) const {
+    Mat<dim> F = Mat<dim>::Zero();
+    for (int alpha = 0; alpha < corners; ++alpha)
+      F.noalias() += x[corner_of[p][alpha]] * weight_gradient(p, alpha).transpose();
+    return F;
+  }
+  //! x_p = sum_alpha w_alpha_p x_alpha.
+  Vec<dim> centre(std::size_t p) const {
+    Vec<dim> c = Vec<dim>::Zero();
+    for (int alpha = 0; alpha < corners; ++alpha) c += x[corner_of[p][alpha]];
+    return c / corners;
+  }
+};
+
+//! Gives the particles [first, first + positions.size()) domains: `positions` lie on an
+//! axis-aligned lattice of spacing `spacing` [m] (geometry/seeding.h) and start deformed by the
+//! diagonal `stretch` (a body's F = diag(stretch) at seeding), so each reference box has sides
+//! spacing / |stretch_a| and the corners sit at the deformed lattice's cell corners. Corners
+//! are shared within this call only: separate bodies do not stick together. Error when a
+//! position is off the lattice by more than 1e-6 spacings or `first` is not the particle count
+//! so far.
+template <int dim>
+void add_body(ParticleDomains<dim>& domains, std::size_t first, const std::vector<Vec<dim>>& positions, double spacing,
+              const Vec<dim>& stretch);
+
+//! Corner -> particle table (sharing_begin, sharing) after the last add_body.
+template <int dim>
+void index_sharing(ParticleDomains<dim>& domains);
+
+//! Sorts the corners into buckets of `grid` (allocating the blocks their stencils touch) and
+//! scatters m_alpha, p_alpha, f_alpha (in domains.mass, momentum, force) into grid.mass,
+//! grid.velocity (momentum) and grid.force, each zeroed first. NumericalError naming `stage`
+//! when a corner is not finite or its stencil leaves the grid.
+template <int dim>
+void corners_to_grid(ParticleDomains<dim>& domains, const Kernel& kernel, SparseGrid<dim>& grid,
+                     const std::string& stage);
+
+//! v_alpha = sum_i w_i(x_alpha) v_i into domains.momentum, with `flip` the increment
+//! sum_i w_i (v_i - v_i^old) into domains.force, and x_alpha += dt v_alpha.
+template <int dim>
+void grid_to_corners(ParticleDomains<dim>& domains, const Kernel& kernel, const SparseGrid<dim>& grid, bool flip,
+                     double dt);
+
+//! The corner positions, for a checkpoint ("domains/x"), and their restoration into domains
+//! seeded the same way: IoError-free check, Error when the sizes differ.
+template <int dim>
+CarriedData carried(const ParticleDomains<dim>& domains);
+template <int dim>
+void restore(ParticleDomains<dim>& domains, const CarriedData& data);
+
+}  // namespace mpm::domains

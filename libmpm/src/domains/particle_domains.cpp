@@ -1,0 +1,185 @@
+// Particle domains: corners shared on the seeding lattice, and the corner <-> grid transfers
+// (equations in particle_domains.h). The corners take the place of particles in the bucketed
+// loops of the uniform transfers (core/detail/bucket_loops.h): a corner is a point, so its
+// weights are the scene kernel's at the corner.
+#include <mpm/core/detail/transfer_loops.h>
+#include <mpm/core/error.h>
+#include <mpm/domains/particle_domains.h>
+
+#include <cmath>
+#include <string>
+#include <unordered_map>
+
+namespace mpm::domains {
+
+using detail::ChannelView;
+using detail::PatchFrame;
+using detail::Stencil;
+
+template <int dim>
+std::size_t ParticleDomains<dim>::memory_bytes() const {
+  return x.capacity() * sizeof(Vec<dim>) + corner_of.capacity() * sizeof(corner_of[0]) +
+         inverse_side.capacity() * sizeof(Vec<dim>) +
+         (sharing_begin.capacity() + sharing.capacity()) * sizeof(std::uint32_t) + buckets.memory_bytes() +
+         mass.capacity() * sizeof(double) + (momentum.capacity() + force.capacity()) * sizeof(Vec<dim>);
+}
+
+template <int dim>
+void add_body(ParticleDomains<dim>& domains, std::size_t first, const std::vector<Vec<dim>>& positions, double spacing,
+              const Vec<dim>& stretch) {
+  MPM_VERIFY(first == domains.particle_count(), Error,
+             "particle domains: particles must get their domains in the order they were added");
+  MPM_VERIFY(spacing > 0.0 && (stretch.array().abs() > 0.0).all(), Error,
+             "particle domains: the lattice spacing and every stretch must be nonzero");
+  if (positions.empty()) return;
+  Vec<dim> lo = positions.front();
+  for (const Vec<dim>& x : positions) lo = lo.cwiseMin(x);
+  // Lattice cell of each particle, and a key per corner of the corner lattice (21 bits an axis).
+  constexpr int bits = 63 / dim;
+  std::unordered_map<std::uint64_t, std::uint32_t> corner_at;
+  for (const Vec<dim>& x : positions) {
+    IVec<dim> cell;
+    for (int a = 0; a < dim; ++a) {
+      const double u = (x[a] - lo[a]) / spacing;
+      cell[a] = static_cast<int>(std::lround(u));
+      if (std::fabs(u - cell[a]) > 1e-6 || cell[a] + std::int64_t{1} >= (std::int64_t{1} << bits))
+        throw Error("particle domains: the particle at offset " + std::to_string(u) + " spacings along axis " +
+                    std::to_string(a) + " is not on the body's seeding lattice (domains need lattice-seeded bodies)");
+    }
+    std::array<std::uint32_t, ParticleDomains<dim>::corners> own;
+    for (int alpha = 0; alpha < ParticleDomains<dim>::corners; ++alpha) {
+      std::uint64_t key = 0;
+      Vec<dim> corner;
+      for (int a = dim - 1; a >= 0; --a) {
+        const int c = cell[a] + ((alpha >> a) & 1);
+        key = (key << bits) | static_cast<std::uint64_t>(c);
+        corner[a] = lo[a] + (c - 0.5) * spacing;
+      }
+      const auto [it, added] = corner_at.try_emplace(key, static_cast<std::uint32_t>(domains.x.size()));
+      if (added) domains.x.push_back(corner);
+      own[alpha] = it->second;
+    }
+    domains.corner_of.push_back(own);
+    domains.inverse_side.push_back(stretch / spacing);
+  }
+}
+
+template <int dim>
+void index_sharing(ParticleDomains<dim>& d) {
+  constexpr int K = ParticleDomains<dim>::corners;
+  d.sharing_begin.assign(d.corner_count() + 1, 0);
+  for (const auto& own : d.corner_of)
+    for (const std::uint32_t c : own) ++d.sharing_begin[c + 1];
+  for (std::size_t c = 0; c < d.corner_count(); ++c) d.sharing_begin[c + 1] += d.sharing_begin[c];
+  d.sharing.resize(d.particle_count() * K);
+  std::vector<std::uint32_t> next(d.sharing_begin.begin(), d.sharing_begin.end() - 1);
+  for (std::size_t p = 0; p < d.particle_count(); ++p)
+    for (int alpha = 0; alpha < K; ++alpha)
+      d.sharing[next[d.corner_of[p][alpha]]++] = static_cast<std::uint32_t>(p * K + alpha);
+}
+
+template <int dim>
+void corners_to_grid(ParticleDomains<dim>& d, const Kernel& kernel, SparseGrid<dim>& grid, const std::string& stage) {
+  sort_into_buckets<dim, double>(d.x, kernel, grid, d.buckets, {}, stage);
+  const std::size_t n = grid.node_storage();
+  std::fill(grid.mass.begin(), grid.mass.end(), 0.0);
+  std::fill(grid.velocity.begin(), grid.velocity.end(), Vec<dim>::Zero());
+  grid.force.assign(n, Vec<dim>::Zero());
+  constexpr int Ch = 1 + 2 * dim;  // mass, momentum, force
+  std::array<ChannelView, Ch> channels;
+  channels[0] = detail::scalar_view(grid.mass);
+  for (int a = 0; a < dim; ++a) {
+    channels[1 + a] = detail::component_view<dim>(grid.velocity, a);
+    channels[1 + dim + a] = detail::component_view<dim>(grid.force, a);
+  }
+  using Node = Eigen::Matrix<double, Ch, 1>;
+  std::visit(
+      [&](const auto& k) {
+        using K = std::decay_t<decltype(k)>;
+        detail::scatter<dim, Ch>(grid, d.buckets, channels,
+                                 [&](std::uint32_t c, const PatchFrame<dim>& f, double* patch) {
+                                   Stencil<dim, K::support> st;
+                                   st.template compute<false>(k, f.cells(d.x[c]), f.origin);
+                                   Node values[dim + 1];
+                                   for (Node& v : values) v.setZero();
+                                   values[0] << d.mass[c], d.momentum[c], d.force[c];
+                                   detail::spread<false>(st, values, patch);
+                                 });
+      },
+      kernel);
+}
+
+template <int dim>
+void grid_to_corners(ParticleDomains<dim>& d, const Kernel& kernel, const SparseGrid<dim>& grid, bool flip, double dt) {
+  const auto run = [&](auto channel_count) {
+    constexpr int Ch = decltype(channel_count)::value;
+    std::array<ChannelView, Ch> channels;
+    for (int a = 0; a < dim; ++a) channels[a] = detail::component_view<dim>(grid.velocity, a);
+    if constexpr (Ch == 2 * dim)
+      for (int a = 0; a < dim; ++a) channels[dim + a] = detail::component_view<dim>(grid.velocity_old, a);
+    std::visit(
+        [&](const auto& k) {
+          using K = std::decay_t<decltype(k)>;
+          detail::gather<dim, Ch>(grid, d.buckets, channels,
+                                  [&](std::uint32_t c, const PatchFrame<dim>& f, const double* patch) {
+                                    Stencil<dim, K::support> st;
+                                    st.template compute<false>(k, f.cells(d.x[c]), f.origin);
+                                    Vec<dim> v = Vec<dim>::Zero(), dv = Vec<dim>::Zero();
+                                    st.for_each_node([&](int node, double w, const Vec<dim>&, const Vec<dim>&) {
+                                      const Eigen::Map<const Vec<dim>> vi(patch + node * Ch);
+                                      v.noalias() += w * vi;
+                                      if constexpr (Ch == 2 * dim)
+                                        dv.noalias() += w * (vi - Eigen::Map<const Vec<dim>>(patch + node * Ch + dim));
+                                    });
+                                    d.momentum[c] = v;
+                                    d.force[c] = dv;
+                                  });
+        },
+        kernel);
+  };
+  d.momentum.resize(d.corner_count());
+  d.force.resize(d.corner_count());
+  if (flip)
+    run(std::integral_constant<int, 2 * dim>{});
+  else
+    run(std::integral_constant<int, dim>{});
+  // After the gather: a corner's stencil reads the grid, never another corner.
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, d.corner_count(), 4096), [&](const auto& r) {
+    for (std::size_t c = r.begin(); c != r.end(); ++c) d.x[c] += dt * d.momentum[c];
+  });
+}
+
+template <int dim>
+CarriedData carried(const ParticleDomains<dim>& d) {
+  std::vector<double> flat(d.corner_count() * dim);
+  for (std::size_t c = 0; c < d.corner_count(); ++c)
+    for (int a = 0; a < dim; ++a) flat[c * dim + a] = d.x[c][a];
+  return {{"domains/x", std::move(flat)}};
+}
+
+template <int dim>
+void restore(ParticleDomains<dim>& d, const CarriedData& data) {
+  for (const auto& [name, values] : data) {
+    if (name != "domains/x") continue;
+    MPM_VERIFY(values.size() == d.corner_count() * dim, Error,
+               "particle domains: the checkpoint holds " + std::to_string(values.size() / dim) +
+                   " domain corners, the scene seeds " + std::to_string(d.corner_count()));
+    for (std::size_t c = 0; c < d.corner_count(); ++c)
+      for (int a = 0; a < dim; ++a) d.x[c][a] = values[c * dim + a];
+    return;
+  }
+  throw Error("particle domains: the checkpoint holds no domain corners (written by a scene without particle_domains)");
+}
+
+#define MPM_INSTANTIATE(dim)                                                                                         \
+  template struct ParticleDomains<dim>;                                                                              \
+  template void add_body(ParticleDomains<dim>&, std::size_t, const std::vector<Vec<dim>>&, double, const Vec<dim>&); \
+  template void index_sharing(ParticleDomains<dim>&);                                                                \
+  template void corners_to_grid(ParticleDomains<dim>&, const Kernel&, SparseGrid<dim>&, const std::string&);         \
+  template void grid_to_corners(ParticleDomains<dim>&, const Kernel&, const SparseGrid<dim>&, bool, double);         \
+  template CarriedData carried(const ParticleDomains<dim>&);                                                         \
+  template void restore(ParticleDomains<dim>&, const CarriedData&);
+MPM_INSTANTIATE(2)
+MPM_INSTANTIATE(3)
+
+}  // namespace mpm::domains

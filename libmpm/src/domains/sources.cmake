@@ -1,0 +1,3 @@
+list(APPEND MPM_CORE_SOURCES
+  src/domains/particle_domains.cpp
+)

@@ -1,0 +1,84 @@
+// The two-step transfers through particle domains (Zhu et al. sec. 4, eq. 5-9; equations in
+// mpm/domains/particle_domains.h). The corner sums run over the corners (each reads the
+// particles that share it), so no two threads write one corner and the sums do not depend on
+// the thread count.
+#include <mpm/core/finite_guard.h>
+#include <mpm/solid/solid_channels.h>
+#include <mpm/solid/stages/domain_transfer.h>
+
+#include <tbb/parallel_for.h>
+
+namespace mpm::stages {
+
+template <int dim>
+void DomainsToGrid<dim>::run(MpmState<dim>& s) {
+  domains::ParticleDomains<dim>& d = *s.domains;
+  const Particles<dim>& P = s.particles;
+  const std::vector<Mat<dim>>& F = solid::elastic_F(P);
+  weighted_stress_.resize(P.size());
+  for (std::size_t m = 0; m < materials_.size(); ++m)
+    std::visit(
+        [&](const auto& model) {
+          tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.size(), 4096), [&](const auto& r) {
+            for (std::size_t p = r.begin(); p != r.end(); ++p)
+              if (P.material[p] == m) weighted_stress_[p] = P.volume0[p] * model.first_piola(F[p]);
+          });
+        },
+        materials_[m].elastic);
+  check_finite(weighted_stress_, name(), "particle", "first Piola-Kirchhoff stress");
+
+  constexpr int K = domains::ParticleDomains<dim>::corners;
+  d.mass.resize(d.corner_count());
+  d.momentum.resize(d.corner_count());
+  d.force.resize(d.corner_count());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, d.corner_count(), 4096), [&](const auto& r) {
+    for (std::size_t c = r.begin(); c != r.end(); ++c) {
+      double m = 0.0;
+      Vec<dim> momentum = Vec<dim>::Zero(), force = Vec<dim>::Zero();
+      for (std::uint32_t k = d.sharing_begin[c]; k != d.sharing_begin[c + 1]; ++k) {
+        const std::size_t p = d.sharing[k] / K;
+        const int alpha = static_cast<int>(d.sharing[k] % K);
+        m += P.mass[p];
+        momentum += P.mass[p] * P.v[p];
+        force.noalias() -= weighted_stress_[p] * d.weight_gradient(p, alpha);
+      }
+      d.mass[c] = m / K;  // w_alpha_p = 1 / 2^dim
+      d.momentum[c] = momentum / K;
+      d.force[c] = force;
+    }
+  });
+  domains::corners_to_grid(d, s.kernel, s.grid, name());
+}
+
+template <int dim>
+void GridToDomains<dim>::run(MpmState<dim>& s) {
+  domains::ParticleDomains<dim>& d = *s.domains;
+  Particles<dim>& P = s.particles;
+  std::vector<Mat<dim>>& F = solid::elastic_F(P);
+  const bool flip = s.transfer.uses_old_velocity();
+  const double a = flip ? s.transfer.flip_ratio : 0.0;
+  domains::grid_to_corners(d, s.kernel, s.grid, flip, s.dt);
+  constexpr int K = domains::ParticleDomains<dim>::corners;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.size(), 4096), [&](const auto& r) {
+    for (std::size_t p = r.begin(); p != r.end(); ++p) {
+      Vec<dim> pic = Vec<dim>::Zero(), increment = Vec<dim>::Zero();
+      for (const std::uint32_t c : d.corner_of[p]) {
+        pic += d.momentum[c];  // the corner velocity after grid_to_corners
+        increment += d.force[c];
+      }
+      pic /= K;
+      P.v[p] = flip ? Vec<dim>(a * (P.v[p] + increment / K) + (1.0 - a) * pic) : pic;
+      P.x[p] = d.centre(p);
+      F[p] = d.deformation(p);
+    }
+  });
+  check_finite(P.v, name(), "particle", "velocity");
+  check_finite(F, name(), "particle", "deformation gradient");
+}
+
+template class DomainsToGrid<2>;
+template class DomainsToGrid<3>;
+template class GridToDomains<2>;
+template class GridToDomains<3>;
+
+}  // namespace mpm::stages

@@ -1,0 +1,206 @@
+// Particle domains (mpm/domains/particle_domains.h, stages domains_to_grid / grid_to_domains):
+// shared corners and F from the corners; the two-step transfer conserves mass and momentum,
+// reproduces an affine velocity field and its deformation exactly; the grid forces are the
+// negative gradient of the elastic energy with respect to the node positions (central
+// differences); a free body keeps its momentum over many steps; bad input names the key.
+#include <doctest/doctest.h>
+
+#include <mpm/core/config.h>
+#include <mpm/core/error.h>
+#include <mpm/core/kernels.h>
+#include <mpm/solid/solid_channels.h>
+#include <mpm/solid/solid_scene.h>
+#include <mpm/solid/stages/domain_transfer.h>
+
+#include <cmath>
+#include <random>
+#include <string>
+#include <vector>
+
+using namespace mpm;
+
+namespace {
+
+template <int dim>
+std::string scene_yaml(const std::string& stretch = "") {
+  const std::string lo = dim == 2 ? "[0, 0]" : "[0, 0, 0]", hi = dim == 2 ? "[1, 1]" : "[1, 1, 1]";
+  const std::string blo = dim == 2 ? "[0.3, 0.4]" : "[0.3, 0.4, 0.4]",
+                    bhi = dim == 2 ? "[0.6, 0.5]" : "[0.5, 0.5, 0.5]";
+  const std::string g = dim == 2 ? "[0, 0]" : "[0, 0, 0]";
+  return "dim: " + std::to_string(dim) + "\ndomain: {lo: " + lo + ", hi: " + hi + "}\ngrid: {dx: 0.05}\n" +
+         "time: {end: 0.1}\ngravity: " + g + "\nwalls: {contact: separate}\ntransfer: {scheme: flip}\n" +
+         "particle_domains: true\n" +
+         "materials: [{name: m, density: 1000, youngs_modulus: 1e5, poisson_ratio: 0.3, elasticity: neo_hookean}]\n" +
+         "bodies: [{shape: box, lo: " + blo + ", hi: " + bhi + ", material: m" + stretch + "}]\n";
+}
+
+double uniform(std::mt19937& rng, double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(rng); }
+
+template <int dim>
+double total_elastic_energy(const solid::SolidScene<dim>& scene, const domains::ParticleDomains<dim>& d) {
+  double e = 0.0;
+  for (std::size_t p = 0; p < scene.state.particles.size(); ++p)
+    e += scene.state.particles.volume0[p] * scene.materials[0].energy(d.deformation(p));
+  return e;
+}
+
+//! w_i(x) of the quadratic B-spline for node `node`.
+template <int dim>
+double node_weight(const SparseGrid<dim>& grid, const IVec<dim>& node, const Vec<dim>& x) {
+  double w = 1.0;
+  for (int a = 0; a < dim; ++a) {
+    int base;
+    double wa[3], dwa[3];
+    QuadraticBSpline{}((x[a] - grid.origin()[a]) / grid.dx(), base, wa, dwa);
+    const int k = node[a] - base;
+    w *= (k >= 0 && k < 3) ? wa[k] : 0.0;
+  }
+  return w;
+}
+
+}  // namespace
+
+TEST_CASE_TEMPLATE("particle domains: corners are shared and F follows them", Dim, std::integral_constant<int, 2>,
+                   std::integral_constant<int, 3>) {
+  constexpr int dim = Dim::value;
+  const std::string stretch = dim == 2 ? ", stretch: [1.5, -0.5]" : ", stretch: [1.5, -0.5, 0.2]";
+  const solid::SolidScene<dim> scene = solid::load_solid_scene<dim>(Config::parse(scene_yaml<dim>(stretch)));
+  const domains::ParticleDomains<dim>& d = *scene.state.domains;
+  const Particles<dim>& P = scene.state.particles;
+  // A box of n_a particles per axis has prod (n_a + 1) corners.
+  Vec<dim> lo = P.x[0], hi = P.x[0];
+  for (const Vec<dim>& x : P.x) lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
+  const double h = std::pow(P.volume0[0] * std::fabs(dim == 2 ? 1.5 * 0.5 : 1.5 * 0.5 * 0.2), 1.0 / dim);
+  std::size_t corners = 1;
+  for (int a = 0; a < dim; ++a) corners *= static_cast<std::size_t>(std::lround((hi[a] - lo[a]) / h)) + 2;
+  CHECK(d.corner_count() == corners);
+  CHECK(d.particle_count() == P.size());
+  CHECK(d.sharing.size() == P.size() * d.corners);
+  const std::vector<Mat<dim>>& F = solid::elastic_F(P);
+  for (std::size_t p = 0; p < P.size(); ++p) {
+    CHECK((d.deformation(p) - F[p]).norm() < 1e-13);  // F = diag(stretch) from the corners
+    CHECK((d.centre(p) - P.x[p]).norm() < 1e-14);
+  }
+}
+
+TEST_CASE_TEMPLATE("particle domains: the two-step transfer conserves and reproduces affine motion", Dim,
+                   std::integral_constant<int, 2>, std::integral_constant<int, 3>) {
+  constexpr int dim = Dim::value;
+  std::mt19937 rng(7);
+  solid::SolidScene<dim> scene =
+      solid::load_solid_scene<dim>(Config::parse(scene_yaml<dim>(), "<string>", {"transfer.flip_ratio=0"}));
+  MpmState<dim>& s = scene.state;
+  Particles<dim>& P = s.particles;
+  for (Vec<dim>& v : P.v) v = Vec<dim>::NullaryExpr([&] { return uniform(rng, -1.0, 1.0); });
+  s.dt = 1e-3;
+  stages::DomainsToGrid<dim> to_grid(scene.materials);
+  to_grid.run(s);
+  // Mass and momentum reach the grid whole; at rest (F = I) the forces vanish.
+  double m_grid = 0.0;
+  Vec<dim> p_grid = Vec<dim>::Zero(), p_particles = Vec<dim>::Zero(), f_sum = Vec<dim>::Zero();
+  for (std::size_t k = 0; k < s.grid.node_storage(); ++k) {
+    m_grid += s.grid.mass[k];
+    p_grid += s.grid.velocity[k];
+    f_sum += s.grid.force[k];
+  }
+  for (std::size_t p = 0; p < P.size(); ++p) p_particles += P.mass[p] * P.v[p];
+  CHECK(std::fabs(m_grid - P.total_mass()) < 1e-12 * P.total_mass());
+  CHECK((p_grid - p_particles).norm() < 1e-12 * P.total_mass());
+  CHECK(f_sum.norm() < 1e-9);
+  // An affine grid velocity v = b + A x: PIC gives v_p = b + A x_p and F = (I + dt A) F exactly.
+  const Vec<dim> b = Vec<dim>::NullaryExpr([&] { return uniform(rng, -1.0, 1.0); });
+  const Mat<dim> A = Mat<dim>::NullaryExpr([&] { return uniform(rng, -2.0, 2.0); });
+  for (std::size_t k = 0; k < s.grid.node_storage(); ++k) s.grid.velocity[k] = b + A * s.grid.node_position(k);
+  s.grid.velocity_old = s.grid.velocity;
+  std::vector<Vec<dim>> x0 = P.x;
+  const std::vector<Mat<dim>> F0 = solid::elastic_F(P);
+  stages::GridToDomains<dim>().run(s);
+  const std::vector<Mat<dim>>& F = solid::elastic_F(P);
+  double v_error = 0.0, x_error = 0.0, F_error = 0.0;
+  for (std::size_t p = 0; p < P.size(); ++p) {
+    v_error = std::max(v_error, (P.v[p] - (b + A * x0[p])).norm());
+    x_error = std::max(x_error, (P.x[p] - (x0[p] + s.dt * (b + A * x0[p]))).norm());
+    F_error = std::max(F_error, (F[p] - (Mat<dim>::Identity() + s.dt * A) * F0[p]).norm());
+  }
+  CHECK(v_error < 1e-12);
+  CHECK(x_error < 1e-14);
+  CHECK(F_error < 1e-12);
+}
+
+TEST_CASE_TEMPLATE("particle domains: grid forces are minus the energy gradient", Dim, std::integral_constant<int, 2>,
+                   std::integral_constant<int, 3>) {
+  constexpr int dim = Dim::value;
+  std::mt19937 rng(11);
+  solid::SolidScene<dim> scene = solid::load_solid_scene<dim>(Config::parse(scene_yaml<dim>()));
+  MpmState<dim>& s = scene.state;
+  domains::ParticleDomains<dim>& d = *s.domains;
+  for (Vec<dim>& x : d.x) x += Vec<dim>::NullaryExpr([&] { return uniform(rng, -0.004, 0.004); });
+  std::vector<Mat<dim>>& F = solid::elastic_F(s.particles);
+  for (std::size_t p = 0; p < F.size(); ++p) F[p] = d.deformation(p);
+  stages::DomainsToGrid<dim>(scene.materials).run(s);
+  // Moving node i by u moves each corner by w_i(x_alpha) u: E(u) of the new corners.
+  const std::vector<Vec<dim>> corners = d.x;
+  const double eps = 1e-6;
+  double worst = 0.0, largest = 0.0;
+  for (std::size_t k = 0; k < s.grid.node_storage(); k += 7) {
+    if (s.grid.mass[k] <= 0.0) continue;
+    const IVec<dim> node = s.grid.node_coord(k);
+    for (int a = 0; a < dim; ++a) {
+      double e[2];
+      for (int side = 0; side < 2; ++side) {
+        for (std::size_t c = 0; c < corners.size(); ++c)
+          d.x[c] = corners[c] + (side ? eps : -eps) * node_weight(s.grid, node, corners[c]) * Vec<dim>::Unit(a);
+        e[side] = total_elastic_energy(scene, d);
+      }
+      const double f_difference = -(e[1] - e[0]) / (2 * eps);
+      worst = std::max(worst, std::fabs(f_difference - s.grid.force[k][a]));
+      largest = std::max(largest, std::fabs(s.grid.force[k][a]));
+    }
+  }
+  d.x = corners;
+  CHECK(largest > 1.0);  // the perturbed body is stressed
+  CHECK(worst < 1e-6 * largest);
+}
+
+TEST_CASE_TEMPLATE("particle domains: a free spinning, deforming body keeps its momentum", Dim,
+                   std::integral_constant<int, 2>, std::integral_constant<int, 3>) {
+  constexpr int dim = Dim::value;
+  std::mt19937 rng(3);
+  solid::SolidScene<dim> scene = solid::load_solid_scene<dim>(Config::parse(scene_yaml<dim>()));
+  MpmState<dim>& s = scene.state;
+  Particles<dim>& P = s.particles;
+  for (Vec<dim>& v : P.v) v = Vec<dim>::NullaryExpr([&] { return uniform(rng, -0.3, 0.3); });
+  Vec<dim> p0 = Vec<dim>::Zero();
+  for (std::size_t p = 0; p < P.size(); ++p) p0 += P.mass[p] * P.v[p];
+  Pipeline<MpmState<dim>> pipeline = solid::make_solid_pipeline(scene);
+  double scale = 0.0;
+  for (std::size_t p = 0; p < P.size(); ++p) scale += P.mass[p] * P.v[p].norm();
+  for (int n = 0; n < 40; ++n) {
+    s.dt_limit = 1e-3;
+    pipeline.step(s);
+    s.time += s.dt;
+  }
+  Vec<dim> p1 = Vec<dim>::Zero();
+  for (std::size_t p = 0; p < P.size(); ++p) p1 += P.mass[p] * P.v[p];
+  CHECK((p1 - p0).norm() < 1e-12 * scale);
+  for (std::size_t p = 0; p < P.size(); ++p) CHECK((s.domains->centre(p) - P.x[p]).norm() == 0.0);
+}
+
+TEST_CASE("particle domains: bad input names the key") {
+  const std::string yaml = scene_yaml<2>();
+  const auto error = [&](const std::vector<std::string>& overrides) {
+    try {
+      solid::load_solid_scene<2>(Config::parse(yaml, "scene.yaml", overrides));
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  CHECK(error({}).empty());
+  CHECK(error({"transfer.scheme=apic"}).find("transfer.scheme: flip") != std::string::npos);
+  CHECK(error({"solver=implicit"}).find("solver: explicit") != std::string::npos);
+  CHECK(error({"adaptive={levels: 2}"}).find("uniform grid") != std::string::npos);
+  CHECK(error({"materials.0.elasticity=hencky_stvk", "materials.0.plasticity={model: von_mises, yield_stress: 1e4}"})
+            .find("is plastic") != std::string::npos);
+  CHECK(error({"particle_domains=maybe"}).find("particle_domains") != std::string::npos);
+}
