@@ -6,7 +6,9 @@
 #include <mpm/core/error.h>
 #include <mpm/domains/particle_domains.h>
 
+#include <algorithm>
 #include <cmath>
+#include <map>
 #include <string>
 #include <unordered_map>
 
@@ -20,7 +22,8 @@ template <int dim>
 std::size_t ParticleDomains<dim>::memory_bytes() const {
   return x.capacity() * sizeof(Vec<dim>) + corner_of.capacity() * sizeof(corner_of[0]) +
          inverse_side.capacity() * sizeof(Vec<dim>) +
-         (sharing_begin.capacity() + sharing.capacity()) * sizeof(std::uint32_t) + buckets.memory_bytes() +
+         (sharing_begin.capacity() + sharing.capacity()) * sizeof(std::uint32_t) +
+         surface.capacity() * sizeof(surface[0]) + buckets.memory_bytes() +
          mass.capacity() * sizeof(double) + (momentum.capacity() + force.capacity()) * sizeof(Vec<dim>);
 }
 
@@ -64,8 +67,42 @@ void add_body(ParticleDomains<dim>& domains, std::size_t first, const std::vecto
   }
 }
 
+namespace {
+//! The faces of every domain that no other domain has (surface above). Face (a, side) of a
+//! domain holds the corners whose bit a is `side`, taken around the face in the order of the
+//! other axes (b, c) = (a + 1, a + 2) mod dim, so that e_b x e_c = e_a: outward for side 1,
+//! reversed for side 0. In 2D the edge runs along the other axis b, counter-clockwise.
+template <int dim>
+void find_surface(ParticleDomains<dim>& d) {
+  constexpr int K = ParticleDomains<dim>::corners / 2;
+  using Face = std::array<std::uint32_t, K>;
+  std::map<Face, std::pair<int, Face>> seen;  // sorted corners -> (count, oriented face)
+  for (const auto& own : d.corner_of)
+    for (int a = 0; a < dim; ++a)
+      for (int side = 0; side < 2; ++side) {
+        Face face;
+        for (int k = 0; k < K; ++k) {
+          // k walks the face: in 3D (0,0), (1,0), (1,1), (0,1) over the axes (b, c).
+          const int u = dim == 2 ? k : (k == 1 || k == 2), w = dim == 2 ? 0 : k / 2;
+          const int b = (a + 1) % dim, c = (a + 2) % dim;
+          face[k] = own[(side << a) | (u << b) | (dim == 3 ? w << c : 0)];
+        }
+        const bool reverse = dim == 2 ? (side == 0) != (a == 1) : side == 0;
+        if (reverse) std::reverse(face.begin(), face.end());
+        Face key = face;
+        std::sort(key.begin(), key.end());
+        auto& [count, oriented] = seen[key];
+        if (count++ == 0) oriented = face;
+      }
+  d.surface.clear();
+  for (const auto& [key, entry] : seen)
+    if (entry.first == 1) d.surface.push_back(entry.second);
+}
+}  // namespace
+
 template <int dim>
 void index_sharing(ParticleDomains<dim>& d) {
+  find_surface(d);
   constexpr int K = ParticleDomains<dim>::corners;
   d.sharing_begin.assign(d.corner_count() + 1, 0);
   for (const auto& own : d.corner_of)

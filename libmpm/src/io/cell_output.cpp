@@ -4,6 +4,7 @@
 
 #include "hdf5_file.h"
 #include "number_text.h"
+#include "xdmf_text.h"
 
 #include <cstdint>
 #include <string>
@@ -45,11 +46,6 @@ std::string cell_grid(const std::string& h5_name, std::size_t n, double time, co
   return xml + indent + "</Grid>\n";
 }
 
-std::string document(const std::string& grids) {
-  return "<?xml version=\"1.0\" ?>\n<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n<Xdmf Version=\"3.0\">\n  <Domain>\n" +
-         grids + "  </Domain>\n</Xdmf>\n";
-}
-
 }  // namespace
 
 template <int dim>
@@ -80,7 +76,7 @@ void write_cells(const std::filesystem::path& h5_path, const adaptive::CellTree<
   }
   out.commit();
   write_file_atomically(std::filesystem::path(h5_path).replace_extension(".xdmf"),
-                        document(cell_grid<dim>(h5_path.filename().string(), level.size(), time, "    ")));
+                        detail::xdmf_document(cell_grid<dim>(h5_path.filename().string(), level.size(), time, "    ")));
 }
 
 template <int dim>
@@ -91,7 +87,7 @@ void write_cells_time_series(const std::filesystem::path& dir, const std::vector
     const detail::Hdf5File file(dir / name, detail::Hdf5File::Mode::read);
     grids += cell_grid<dim>(name, static_cast<std::size_t>(file.shape("level").at(0)), time, "      ");
   }
-  write_file_atomically(dir / "cells.xdmf", document(grids + "    </Grid>\n"));
+  write_file_atomically(dir / "cells.xdmf", detail::xdmf_document(grids + "    </Grid>\n"));
 }
 
 template void write_cells(const std::filesystem::path&, const adaptive::CellTree<2>&, double, int, const std::string&);

@@ -6,6 +6,7 @@
 #include "channel_sizes.h"
 #include "hdf5_file.h"
 #include "number_text.h"
+#include "xdmf_text.h"
 
 #include <Eigen/LU>  // determinant()
 
@@ -109,12 +110,6 @@ Attribute write_frame_dataset(detail::Hdf5File& file, const std::string& name, c
   }
 }
 
-std::string xdmf_document(const std::string& grids) {
-  return "<?xml version=\"1.0\" ?>\n<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n"
-         "<Xdmf Version=\"3.0\">\n  <Domain>\n" +
-         grids + "  </Domain>\n</Xdmf>\n";
-}
-
 }  // namespace
 
 std::string particle_file_name(int frame, const std::string& stem) {
@@ -156,7 +151,7 @@ void write_particles(const std::filesystem::path& h5_path, const Particles<dim>&
   out.commit();
 
   const std::string grid = frame_grid(h5_path.filename().string(), p.size(), attributes, time, "    ");
-  write_file_atomically(std::filesystem::path(h5_path).replace_extension(".xdmf"), xdmf_document(grid));
+  write_file_atomically(std::filesystem::path(h5_path).replace_extension(".xdmf"), detail::xdmf_document(grid));
 }
 
 void write_time_series_xdmf(const std::filesystem::path& dir, const std::vector<std::pair<int, double>>& frames,
@@ -183,7 +178,7 @@ void write_time_series_xdmf(const std::filesystem::path& dir, const std::vector<
     grids += frame_grid(name, position[0], attributes, time, "      ");
   }
   grids += "    </Grid>\n";
-  write_file_atomically(dir / (stem + ".xdmf"), xdmf_document(grids));
+  write_file_atomically(dir / (stem + ".xdmf"), detail::xdmf_document(grids));
 }
 
 template void write_particles<2>(const std::filesystem::path&, const Particles<2>&, double, int, const std::string&);

@@ -15,6 +15,7 @@
 #include <mpm/io/diagnostics_csv.h>
 #include <mpm/io/particle_output.h>
 #include <mpm/io/png_preview.h>
+#include <mpm/io/surface_output.h>
 #include <mpm/io/summary_json.h>
 
 #include <algorithm>
@@ -439,6 +440,11 @@ void Runner<dim, State>::write_frame(State& state, int frame) {
         io::write_cells(out_ / io::particle_file_name(frame, "cells"), state.adaptive->tree(), state.time, frame,
                         run_id_);
         io::write_cells_time_series<dim>(out_, frames_written_);
+      }
+    if constexpr (requires { state.domains; })  // the bodies' surface (io/surface_output.h)
+      if (state.domains && !state.domains->surface.empty()) {
+        io::write_surface(out_ / io::particle_file_name(frame, "surface"), *state.domains, state.time, frame, run_id_);
+        io::write_surface_time_series<dim>(out_, frames_written_);
       }
   }
   if (settings_.output.png) {

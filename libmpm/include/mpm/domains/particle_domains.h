@@ -43,6 +43,11 @@ struct ParticleDomains {
   //! Corner -> (particle, alpha) pairs, packed as particle * corners + alpha: a corner's sums run
   //! in parallel over corners without two threads writing one corner.
   std::vector<std::uint32_t> sharing_begin, sharing;
+  //! The bodies' surface: the domain faces no other domain shares (edges in 2D, quadrilaterals in
+  //! 3D), as corner indices ordered so that the normal points out of the body as it was seeded
+  //! (counter-clockwise boundary in 2D). It moves with the corners (Zhu et al.
+  //! sec. 4.1 embed a finer mesh in the domains; here the mesh is the domains' own boundary).
+  std::vector<std::array<std::uint32_t, corners / 2>> surface;
 
   // Per-step scratch, kept to avoid allocations.
   ParticleBuckets<dim> buckets;    //!< corners ordered by grid block
@@ -86,7 +91,7 @@ template <int dim>
 void add_body(ParticleDomains<dim>& domains, std::size_t first, const std::vector<Vec<dim>>& positions, double spacing,
               const Vec<dim>& stretch);
 
-//! Corner -> particle table (sharing_begin, sharing) after the last add_body.
+//! The corner -> particle table (sharing_begin, sharing) and the surface, after the last add_body.
 template <int dim>
 void index_sharing(ParticleDomains<dim>& domains);
 

@@ -83,6 +83,41 @@ TEST_CASE_TEMPLATE("particle domains: corners are shared and F follows them", Di
   }
 }
 
+TEST_CASE_TEMPLATE("particle domains: the surface is closed, outward and encloses the domains", Dim,
+                   std::integral_constant<int, 2>, std::integral_constant<int, 3>) {
+  constexpr int dim = Dim::value;
+  for (const std::string shape : {"box", "sphere"}) {
+    CAPTURE(shape);
+    const std::string body = dim == 2 ? "{shape: sphere, center: [0.5, 0.5], radius: 0.17, material: m}"
+                                      : "{shape: sphere, center: [0.5, 0.5, 0.5], radius: 0.17, material: m}";
+    const solid::SolidScene<dim> scene = solid::load_solid_scene<dim>(
+        Config::parse(scene_yaml<dim>(), "<string>",
+                      shape == "box" ? std::vector<std::string>{} : std::vector<std::string>{"bodies=[" + body + "]"}));
+    const domains::ParticleDomains<dim>& d = *scene.state.domains;
+    const Particles<dim>& P = scene.state.particles;
+    // The enclosed area (shoelace) or volume (divergence theorem, each quadrilateral as two
+    // triangles) equals the domains' total: only with every face outward and none missing.
+    double enclosed = 0.0;
+    for (const auto& f : d.surface) {
+      if constexpr (dim == 2)
+        enclosed += 0.5 * (d.x[f[0]][0] * d.x[f[1]][1] - d.x[f[1]][0] * d.x[f[0]][1]);
+      else
+        enclosed += (d.x[f[0]].dot(d.x[f[1]].cross(d.x[f[2]])) + d.x[f[0]].dot(d.x[f[2]].cross(d.x[f[3]]))) / 6.0;
+    }
+    double volume = 0.0;
+    for (const double v : P.volume0) volume += v;
+    CHECK(enclosed == doctest::Approx(volume).epsilon(1e-12));
+    if (shape == "box") {  // n_a particles per axis: 2 (n_x + n_y) edges, 2 (n_x n_y + ...) faces
+      Vec<dim> lo = P.x[0], hi = P.x[0];
+      for (const Vec<dim>& x : P.x) lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
+      const double h = std::pow(P.volume0[0], 1.0 / dim);
+      const Vec<dim> n = ((hi - lo) / h).array().round() + 1.0;
+      const double faces = dim == 2 ? 2 * (n[0] + n[1]) : 2 * (n[0] * n[1] + n[1] * n[2] + n[2] * n[0]);
+      CHECK(d.surface.size() == static_cast<std::size_t>(faces));
+    }
+  }
+}
+
 TEST_CASE_TEMPLATE("particle domains: the two-step transfer conserves and reproduces affine motion", Dim,
                    std::integral_constant<int, 2>, std::integral_constant<int, 3>) {
   constexpr int dim = Dim::value;
