@@ -23,8 +23,8 @@ std::size_t ParticleDomains<dim>::memory_bytes() const {
   return x.capacity() * sizeof(Vec<dim>) + corner_of.capacity() * sizeof(corner_of[0]) +
          inverse_side.capacity() * sizeof(Vec<dim>) +
          (sharing_begin.capacity() + sharing.capacity()) * sizeof(std::uint32_t) +
-         surface.capacity() * sizeof(surface[0]) + buckets.memory_bytes() +
-         mass.capacity() * sizeof(double) + (momentum.capacity() + force.capacity()) * sizeof(Vec<dim>);
+         surface.capacity() * sizeof(surface[0]) + buckets.memory_bytes() + mass.capacity() * sizeof(double) +
+         (momentum.capacity() + force.capacity()) * sizeof(Vec<dim>);
 }
 
 template <int dim>

@@ -16,8 +16,8 @@ template <int dim>
 std::string surface_grid(const std::string& h5_name, std::size_t points, std::size_t faces, double time,
                          const std::string& indent) {
   constexpr int per_face = 1 << (dim - 1);
-  const std::string topology = dim == 2 ? "TopologyType=\"Polyline\" NodesPerElement=\"2\""
-                                        : "TopologyType=\"Quadrilateral\"";
+  const std::string topology =
+      dim == 2 ? "TopologyType=\"Polyline\" NodesPerElement=\"2\"" : "TopologyType=\"Quadrilateral\"";
   std::string xml = indent + "<Grid Name=\"surface\" GridType=\"Uniform\">\n";
   xml += indent + "  <Time Value=\"" + detail::to_text(time) + "\"/>\n";
   xml += indent + "  <Topology " + topology + " NumberOfElements=\"" + std::to_string(faces) + "\">\n";
@@ -56,10 +56,9 @@ void write_surface(const std::filesystem::path& h5_path, const domains::Particle
     file.close();
   }
   out.commit();
-  write_file_atomically(
-      std::filesystem::path(h5_path).replace_extension(".xdmf"),
-      detail::xdmf_document(
-          surface_grid<dim>(h5_path.filename().string(), d.corner_count(), d.surface.size(), time, "    ")));
+  write_file_atomically(std::filesystem::path(h5_path).replace_extension(".xdmf"),
+                        detail::xdmf_document(surface_grid<dim>(h5_path.filename().string(), d.corner_count(),
+                                                                d.surface.size(), time, "    ")));
 }
 
 template <int dim>

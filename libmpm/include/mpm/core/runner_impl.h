@@ -15,8 +15,8 @@
 #include <mpm/io/diagnostics_csv.h>
 #include <mpm/io/particle_output.h>
 #include <mpm/io/png_preview.h>
-#include <mpm/io/surface_output.h>
 #include <mpm/io/summary_json.h>
+#include <mpm/io/surface_output.h>
 
 #include <algorithm>
 #include <cmath>
