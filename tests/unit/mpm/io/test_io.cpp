@@ -10,6 +10,7 @@
 #include <mpm/io/particle_output.h>
 #include <mpm/io/png_preview.h>
 #include <mpm/io/summary_json.h>
+#include <mpm/io/surface_output.h>
 #include <mpm/solid/solid_channels.h>
 
 #include <doctest/doctest.h>
@@ -179,6 +180,32 @@ TEST_CASE("the leaves of an adaptive grid are written as cells with their level,
   const std::string series = read_text(dir.path() / "cells.xdmf");
   CHECK(series.find("TopologyType=\"Quadrilateral\" NumberOfElements=\"8\"") != std::string::npos);
   CHECK(series.find("cells_0000.h5:/level") != std::string::npos);
+}
+
+TEST_CASE("write_surface stores the domain corners and outward faces, and the series names them") {
+  ScratchDir dir("surface");
+  domains::ParticleDomains<2> d;  // a 2 x 1 block of particles with unit cells
+  domains::add_body<2>(d, 0, {Vec<2>(0.5, 0.5), Vec<2>(1.5, 0.5)}, 1.0, Vec<2>(1.0, 1.0));
+  domains::index_sharing(d);
+  io::write_surface(dir.path() / "surface_0003.h5", d, 0.25, 3);
+  io::write_surface_time_series<2>(dir.path(), {{3, 0.25}});
+  const hid_t file = H5Fopen((dir.path() / "surface_0003.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  REQUIRE(file >= 0);
+  CHECK(dataset_shape(file, "points") == std::vector<hsize_t>{6, 3});
+  CHECK(dataset_shape(file, "faces") == std::vector<hsize_t>{6, 2});
+  const auto points = read_dataset<double>(file, "points", H5T_NATIVE_DOUBLE);
+  const auto faces = read_dataset<std::int32_t>(file, "faces", H5T_NATIVE_INT32);
+  double area = 0.0;  // shoelace over the edges: counter-clockwise, the block's area 2
+  for (std::size_t e = 0; e < 6; ++e) {
+    const double* a = &points[faces[2 * e] * 3];
+    const double* b = &points[faces[2 * e + 1] * 3];
+    area += 0.5 * (a[0] * b[1] - b[0] * a[1]);
+  }
+  CHECK(area == doctest::Approx(2.0));
+  H5Fclose(file);
+  const std::string series = read_text(dir.path() / "surface.xdmf");
+  CHECK(series.find("TopologyType=\"Polyline\" NodesPerElement=\"2\" NumberOfElements=\"6\"") != std::string::npos);
+  CHECK(series.find("surface_0003.h5:/points") != std::string::npos);
 }
 
 TEST_CASE("write_file_atomically replaces the file and leaves no temporary file") {
