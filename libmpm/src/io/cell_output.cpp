@@ -2,8 +2,8 @@
 #include <mpm/io/cell_output.h>
 #include <mpm/io/particle_output.h>
 
+#include "frame_file.h"
 #include "hdf5_file.h"
-#include "number_text.h"
 #include "xdmf_text.h"
 
 #include <cstdint>
@@ -27,23 +27,12 @@ IVec<dim> vtk_corner(int c) {
 template <int dim>
 std::string cell_grid(const std::string& h5_name, std::size_t n, double time, const std::string& indent) {
   constexpr int corners = 1 << dim;
-  const std::string cells = std::to_string(n), points = std::to_string(n * corners);
-  std::string xml = indent + "<Grid Name=\"cells\" GridType=\"Uniform\">\n";
-  xml += indent + "  <Time Value=\"" + detail::to_text(time) + "\"/>\n";
-  xml += indent + "  <Topology TopologyType=\"" + (dim == 2 ? "Quadrilateral" : "Hexahedron") +
-         "\" NumberOfElements=\"" + cells + "\">\n";
-  xml += indent + "    <DataItem Dimensions=\"" + cells + " " + std::to_string(corners) +
-         "\" NumberType=\"Int\" Precision=\"4\" Format=\"HDF\">" + h5_name + ":/cells</DataItem>\n";
-  xml += indent + "  </Topology>\n";
-  xml += indent + "  <Geometry GeometryType=\"XYZ\">\n";
-  xml += indent + "    <DataItem Dimensions=\"" + points + " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" +
-         h5_name + ":/points</DataItem>\n";
-  xml += indent + "  </Geometry>\n";
-  xml += indent + "  <Attribute Name=\"level\" AttributeType=\"Scalar\" Center=\"Cell\">\n";
-  xml += indent + "    <DataItem Dimensions=\"" + cells + "\" NumberType=\"Int\" Precision=\"4\" Format=\"HDF\">" +
-         h5_name + ":/level</DataItem>\n";
-  xml += indent + "  </Attribute>\n";
-  return xml + indent + "</Grid>\n";
+  const std::string level = indent + "  <Attribute Name=\"level\" AttributeType=\"Scalar\" Center=\"Cell\">\n" +
+                            indent + "    <DataItem Dimensions=\"" + std::to_string(n) +
+                            "\" NumberType=\"Int\" Precision=\"4\" Format=\"HDF\">" + h5_name + ":/level</DataItem>\n" +
+                            indent + "  </Attribute>\n";
+  return detail::mesh_grid("cells", dim == 2 ? "TopologyType=\"Quadrilateral\"" : "TopologyType=\"Hexahedron\"", n,
+                           corners, "cells", n * corners, h5_name, time, indent, level);
 }
 
 }  // namespace
@@ -63,18 +52,11 @@ void write_cells(const std::filesystem::path& h5_path, const adaptive::CellTree<
     level.push_back(n);
   });
   const auto n = static_cast<hsize_t>(level.size());
-  AtomicFile out(h5_path);
-  {
-    detail::Hdf5File file(out.temp_path(), detail::Hdf5File::Mode::create, h5_path);
+  detail::write_frame_file(h5_path, time, frame, run_id, [&](detail::Hdf5File& file) {
     file.write("points", points.data(), {n * corners, 3});
     file.write("cells", cells.data(), {n, static_cast<hsize_t>(corners)});
     file.write("level", level.data(), {n});
-    file.write_attribute("time", time);
-    file.write_attribute<std::int32_t>("frame", frame);
-    if (!run_id.empty()) file.write_attribute("run_id", run_id);
-    file.close();
-  }
-  out.commit();
+  });
   write_file_atomically(std::filesystem::path(h5_path).replace_extension(".xdmf"),
                         detail::xdmf_document(cell_grid<dim>(h5_path.filename().string(), level.size(), time, "    ")));
 }

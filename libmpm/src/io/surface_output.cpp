@@ -2,8 +2,8 @@
 #include <mpm/io/particle_output.h>
 #include <mpm/io/surface_output.h>
 
+#include "frame_file.h"
 #include "hdf5_file.h"
-#include "number_text.h"
 #include "xdmf_text.h"
 
 #include <cstdint>
@@ -15,20 +15,9 @@ namespace {
 template <int dim>
 std::string surface_grid(const std::string& h5_name, std::size_t points, std::size_t faces, double time,
                          const std::string& indent) {
-  constexpr int per_face = 1 << (dim - 1);
-  const std::string topology =
-      dim == 2 ? "TopologyType=\"Polyline\" NodesPerElement=\"2\"" : "TopologyType=\"Quadrilateral\"";
-  std::string xml = indent + "<Grid Name=\"surface\" GridType=\"Uniform\">\n";
-  xml += indent + "  <Time Value=\"" + detail::to_text(time) + "\"/>\n";
-  xml += indent + "  <Topology " + topology + " NumberOfElements=\"" + std::to_string(faces) + "\">\n";
-  xml += indent + "    <DataItem Dimensions=\"" + std::to_string(faces) + " " + std::to_string(per_face) +
-         "\" NumberType=\"Int\" Precision=\"4\" Format=\"HDF\">" + h5_name + ":/faces</DataItem>\n";
-  xml += indent + "  </Topology>\n";
-  xml += indent + "  <Geometry GeometryType=\"XYZ\">\n";
-  xml += indent + "    <DataItem Dimensions=\"" + std::to_string(points) +
-         " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" + h5_name + ":/points</DataItem>\n";
-  xml += indent + "  </Geometry>\n";
-  return xml + indent + "</Grid>\n";
+  return detail::mesh_grid(
+      "surface", dim == 2 ? "TopologyType=\"Polyline\" NodesPerElement=\"2\"" : "TopologyType=\"Quadrilateral\"", faces,
+      1 << (dim - 1), "faces", points, h5_name, time, indent);
 }
 
 }  // namespace
@@ -45,17 +34,10 @@ void write_surface(const std::filesystem::path& h5_path, const domains::Particle
   faces.reserve(d.surface.size() * per_face);
   for (const auto& face : d.surface)
     for (const std::uint32_t c : face) faces.push_back(static_cast<std::int32_t>(c));
-  AtomicFile out(h5_path);
-  {
-    detail::Hdf5File file(out.temp_path(), detail::Hdf5File::Mode::create, h5_path);
+  detail::write_frame_file(h5_path, time, frame, run_id, [&](detail::Hdf5File& file) {
     file.write("points", points.data(), {static_cast<hsize_t>(d.corner_count()), 3});
     file.write("faces", faces.data(), {static_cast<hsize_t>(d.surface.size()), static_cast<hsize_t>(per_face)});
-    file.write_attribute("time", time);
-    file.write_attribute<std::int32_t>("frame", frame);
-    if (!run_id.empty()) file.write_attribute("run_id", run_id);
-    file.close();
-  }
-  out.commit();
+  });
   write_file_atomically(std::filesystem::path(h5_path).replace_extension(".xdmf"),
                         detail::xdmf_document(surface_grid<dim>(h5_path.filename().string(), d.corner_count(),
                                                                 d.surface.size(), time, "    ")));
