@@ -99,8 +99,11 @@ void seed_body(SolidScene<dim>& scene, const Config& body) {
   const std::size_t first = scene.state.particles.size();
   Particles<dim>& P = scene.state.particles;
   add_particles(scene, x, body_particles.volume, m, velocity, body.path());
-  if (scene.state.domains)
+  if (scene.state.domains) {  // the domains are the cells of the seeding lattice
+    if (body.number("jitter", 0.0, Range::any()) != 0.0)
+      body.fail("jitter", "particle_domains need particles on the seeding lattice: jitter must be 0");
     domains::add_body(*scene.state.domains, first, x, std::pow(body_particles.volume, 1.0 / dim), stretch);
+  }
   for (std::size_t p = first; p < P.size(); ++p) {  // the rest state of a stretched body
     P.volume0[p] /= std::fabs(stretch.prod());
     P.mass[p] = scene.materials.at(m).density * P.volume0[p];

@@ -238,4 +238,5 @@ TEST_CASE("particle domains: bad input names the key") {
   CHECK(error({"materials.0.elasticity=hencky_stvk", "materials.0.plasticity={model: von_mises, yield_stress: 1e4}"})
             .find("is plastic") != std::string::npos);
   CHECK(error({"particle_domains=maybe"}).find("particle_domains") != std::string::npos);
+  CHECK(error({"bodies.0.jitter=0.3"}).find("jitter must be 0") != std::string::npos);
 }
