@@ -45,9 +45,10 @@ struct RestartCase {
   std::string app, scene, sets;
   double frame_dt;
   std::vector<std::string> phases, solid_phases, series, final_results;
-  bool adaptive = false;  //!< solid particles carry their level (channel "level")
-  bool plastic = false;   //!< solid particles carry the stress cache (a plastic material)
-  bool dilatant = false;  //!< solid particles carry the rest packing (a dilatant sand)
+  bool adaptive = false;       //!< solid particles carry their level (channel "level")
+  bool plastic = false;        //!< solid particles carry the stress cache (a plastic material)
+  bool dilatant = false;       //!< solid particles carry the rest packing (a dilatant sand)
+  bool rest_position = false;  //!< solid particles carry their rest position (solid_scene rest_state)
 };
 
 const RestartCase kColumnCollapse{COLUMN_COLLAPSE_APP,
@@ -79,8 +80,8 @@ const RestartCase kJelloAdaptive{
 #endif
 // Particle domains: the particles follow their domain corners, which checkpoints store beside
 // the stages' data; a restart that lost them would move every particle back.
-const RestartCase kFlattenDomains{SOLID_SCENE_APP, "flatten_recover.yaml", "", 0.05, {""}, {""},
-                                  {"particles"},   {"rest_state_error"}};
+const RestartCase kFlattenDomains{SOLID_SCENE_APP, "flatten_recover.yaml", "",    0.05,  {""},  {""},
+                                  {"particles"},   {"rest_state_error"},   false, false, false, true};
 #ifdef SETTLING_APP
 // Discrete grains (no sediment material): no phase is solid.
 const RestartCase kSettling{SETTLING_APP,
@@ -149,6 +150,9 @@ void check_checkpoints_equal(const fs::path& a, const fs::path& b, const std::st
       mpm::solid::add_rest_packing(pa);
       mpm::solid::add_rest_packing(pb);
     }
+    if (app.rest_position)
+      for (mpm::Particles<2>* p : {&pa, &pb})
+        p->add_channel<mpm::Vec<2>>("rest_position", mpm::Vec<2>::Zero(), mpm::ChannelUse{false, true});
   }
   if (adaptive)
     for (mpm::Particles<2>* p : {&pa, &pb}) p->add_channel<std::uint16_t>("level", 0, mpm::ChannelUse{true, true, ""});

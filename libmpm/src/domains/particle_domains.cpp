@@ -198,14 +198,15 @@ template <int dim>
 void restore(ParticleDomains<dim>& d, const CarriedData& data) {
   for (const auto& [name, values] : data) {
     if (name != "domains/x") continue;
-    MPM_VERIFY(values.size() == d.corner_count() * dim, Error,
+    MPM_VERIFY(values.size() == d.corner_count() * dim, InputError,
                "particle domains: the checkpoint holds " + std::to_string(values.size() / dim) +
                    " domain corners, the scene seeds " + std::to_string(d.corner_count()));
     for (std::size_t c = 0; c < d.corner_count(); ++c)
       for (int a = 0; a < dim; ++a) d.x[c][a] = values[c * dim + a];
     return;
   }
-  throw Error("particle domains: the checkpoint holds no domain corners (written by a scene without particle_domains)");
+  throw InputError(
+      "particle domains: the checkpoint holds no domain corners (written by a scene without particle_domains)");
 }
 
 #define MPM_INSTANTIATE(dim)                                                                                         \

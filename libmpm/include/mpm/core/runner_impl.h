@@ -198,6 +198,11 @@ int Runner<dim, State>::open_output(State& state, Pipeline<State>& pipeline) {
                          " of the frames 0-" + std::to_string(header.frame) + " that checkpoint '" + *cl_.restart +
                          "' continues: restart from an earlier checkpoint of this folder");
 
+  // The state's own data (domain corners) first: a checkpoint without them is refused before
+  // anything in the folder changes.
+  using runner_detail::restore_state;
+  restore_state(state, header.stage_data);
+
   // Verified: the folder continues from the checkpoint. Later frames are written again.
   const std::filesystem::path from = std::filesystem::weakly_canonical(*cl_.restart);
   runner_detail::remove_files(out_, [&](const std::string& name) {
@@ -211,8 +216,6 @@ int Runner<dim, State>::open_output(State& state, Pipeline<State>& pipeline) {
   state.dt = header.dt_previous;
   steps_at_last_frame_ = header.frame_step;
   pipeline.restore(header.stage_data);
-  using runner_detail::restore_state;
-  restore_state(state, header.stage_data);
   const std::string first_series = runner_detail::series_stem(phases(state).front().name);
   for (int f = 0; f <= header.frame; ++f)
     if (std::filesystem::exists(out_ / io::particle_file_name(f, first_series)))

@@ -2,6 +2,7 @@
 // mpm/domains/particle_domains.h). The corner sums run over the corners (each reads the
 // particles that share it), so no two threads write one corner and the sums do not depend on
 // the thread count.
+#include <mpm/core/error.h>
 #include <mpm/core/finite_guard.h>
 #include <mpm/solid/solid_channels.h>
 #include <mpm/solid/stages/domain_transfer.h>
@@ -10,10 +11,22 @@
 
 namespace mpm::stages {
 
+namespace {
+//! The corner table indexes the particles by storage position: a stage that added, removed or
+//! reordered particles would pair them with the wrong corners.
+template <int dim>
+void check_pairing(const domains::ParticleDomains<dim>& d, const Particles<dim>& P, const std::string& stage) {
+  MPM_VERIFY(d.particle_count() == P.size(), Error,
+             "stage '" + stage + "': " + std::to_string(P.size()) + " particles but domains for " +
+                 std::to_string(d.particle_count()) + " (particles with domains are never added or removed)");
+}
+}  // namespace
+
 template <int dim>
 void DomainsToGrid<dim>::run(MpmState<dim>& s) {
   domains::ParticleDomains<dim>& d = *s.domains;
   const Particles<dim>& P = s.particles;
+  check_pairing(d, P, name());
   const std::vector<Mat<dim>>& F = solid::elastic_F(P);
   weighted_stress_.resize(P.size());
   for (std::size_t m = 0; m < materials_.size(); ++m)
@@ -54,6 +67,7 @@ template <int dim>
 void GridToDomains<dim>::run(MpmState<dim>& s) {
   domains::ParticleDomains<dim>& d = *s.domains;
   Particles<dim>& P = s.particles;
+  check_pairing(d, std::as_const(P), name());
   std::vector<Mat<dim>>& F = solid::elastic_F(P);
   const bool flip = s.transfer.uses_old_velocity();
   const double a = flip ? s.transfer.flip_ratio : 0.0;

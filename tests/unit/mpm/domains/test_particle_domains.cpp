@@ -166,7 +166,9 @@ TEST_CASE_TEMPLATE("particle domains: grid forces are minus the energy gradient"
                    std::integral_constant<int, 3>) {
   constexpr int dim = Dim::value;
   std::mt19937 rng(11);
-  solid::SolidScene<dim> scene = solid::load_solid_scene<dim>(Config::parse(scene_yaml<dim>()));
+  // Seeded stretched with one axis inverted: the reference gradients carry the sign.
+  solid::SolidScene<dim> scene = solid::load_solid_scene<dim>(
+      Config::parse(scene_yaml<dim>(dim == 2 ? ", stretch: [1.2, -0.8]" : ", stretch: [1.2, -0.8, 0.9]")));
   MpmState<dim>& s = scene.state;
   domains::ParticleDomains<dim>& d = *s.domains;
   for (Vec<dim>& x : d.x) x += Vec<dim>::NullaryExpr([&] { return uniform(rng, -0.004, 0.004); });
@@ -239,4 +241,6 @@ TEST_CASE("particle domains: bad input names the key") {
             .find("is plastic") != std::string::npos);
   CHECK(error({"particle_domains=maybe"}).find("particle_domains") != std::string::npos);
   CHECK(error({"bodies.0.jitter=0.3"}).find("jitter must be 0") != std::string::npos);
+  CHECK(error({"periodic=[true, false]", "walls={contact: separate, x_min: open, x_max: open}"})
+            .find("no periodic axis") != std::string::npos);
 }
