@@ -212,15 +212,6 @@ SolidScene<dim> load_solid_scene(const Config& scene) {
 template <int dim>
 Pipeline<MpmState<dim>> make_solid_pipeline(const SolidScene<dim>& scene) {
   Pipeline<MpmState<dim>> p(particle_fields(scene.state.particles));
-  if (scene.state.domains) {  // the explicit step through the domains (domain_transfer.h)
-    p.add(std::make_unique<stages::TimeStepControl<dim>>(
-        stages::time_step_settings(scene.settings, scene.solver->wave_speed())));
-    p.add(std::make_unique<stages::DomainsToGrid<dim>>(scene.materials));
-    p.add(std::make_unique<stages::GridVelocityUpdate<dim>>(true));
-    p.add(std::make_unique<stages::GridBoundary<dim>>(scene.colliders));
-    p.add(std::make_unique<stages::GridToDomains<dim>>());
-    return p;
-  }
   if (scene.refinement && scene.refinement->resample) {
     std::vector<std::string> deformation;
     if (scene.state.particles.has_channel(kElasticF)) deformation.push_back(kElasticF);
@@ -234,13 +225,24 @@ Pipeline<MpmState<dim>> make_solid_pipeline(const SolidScene<dim>& scene) {
   if (scene.refinement && scene.refinement->follow_particles)
     p.add(std::make_unique<stages::RefineGrid<dim>>(
         adaptive::build_tree(*scene.refinement, scene.settings, scene.colliders)));
-  p.add(std::make_unique<stages::SortParticles<dim>>());
-  p.add(std::make_unique<stages::ParticlesToGrid<dim>>());
-  for (auto& stage : scene.solver->grid_update()) p.add(std::move(stage));
+  // Particle domains (explicit elastic only) replace sort, p2g, the stress forces, the
+  // deformation update and g2p by the two transfers through the corners (domain_transfer.h).
+  if (scene.state.domains) {
+    p.add(std::make_unique<stages::DomainsToGrid<dim>>(scene.materials));
+    p.add(std::make_unique<stages::GridVelocityUpdate<dim>>(true));
+  } else {
+    p.add(std::make_unique<stages::SortParticles<dim>>());
+    p.add(std::make_unique<stages::ParticlesToGrid<dim>>());
+    for (auto& stage : scene.solver->grid_update()) p.add(std::move(stage));
+  }
   p.add(std::make_unique<stages::GridBoundary<dim>>(scene.colliders));
   if (scene.state.adaptive) p.add(std::make_unique<stages::GhostVelocities<dim>>());
-  for (auto& stage : scene.solver->particle_update()) p.add(std::move(stage));
-  p.add(std::make_unique<stages::GridToParticles<dim>>());
+  if (scene.state.domains) {
+    p.add(std::make_unique<stages::DomainsFromGrid<dim>>());
+  } else {
+    for (auto& stage : scene.solver->particle_update()) p.add(std::move(stage));
+    p.add(std::make_unique<stages::GridToParticles<dim>>());
+  }
   return p;
 }
 

@@ -64,7 +64,7 @@ void DomainsToGrid<dim>::run(MpmState<dim>& s) {
 }
 
 template <int dim>
-void GridToDomains<dim>::run(MpmState<dim>& s) {
+void DomainsFromGrid<dim>::run(MpmState<dim>& s) {
   domains::ParticleDomains<dim>& d = *s.domains;
   Particles<dim>& P = s.particles;
   check_pairing(d, std::as_const(P), name());
@@ -92,7 +92,7 @@ void GridToDomains<dim>::run(MpmState<dim>& s) {
 
 template class DomainsToGrid<2>;
 template class DomainsToGrid<3>;
-template class GridToDomains<2>;
-template class GridToDomains<3>;
+template class DomainsFromGrid<2>;
+template class DomainsFromGrid<3>;
 
 }  // namespace mpm::stages

@@ -1,4 +1,4 @@
-// Particle domains (mpm/domains/particle_domains.h, stages domains_to_grid / grid_to_domains):
+// Particle domains (mpm/domains/particle_domains.h, stages domains_to_grid / domains_from_grid):
 // shared corners and F from the corners; the two-step transfer conserves mass and momentum,
 // reproduces an affine velocity field and its deformation exactly; the grid forces are the
 // negative gradient of the elastic energy with respect to the node positions (central
@@ -149,7 +149,7 @@ TEST_CASE_TEMPLATE("particle domains: the two-step transfer conserves and reprod
   s.grid.velocity_old = s.grid.velocity;
   std::vector<Vec<dim>> x0 = P.x;
   const std::vector<Mat<dim>> F0 = solid::elastic_F(P);
-  stages::GridToDomains<dim>().run(s);
+  stages::DomainsFromGrid<dim>().run(s);
   const std::vector<Mat<dim>>& F = solid::elastic_F(P);
   double v_error = 0.0, x_error = 0.0, F_error = 0.0;
   for (std::size_t p = 0; p < P.size(); ++p) {

@@ -1,7 +1,7 @@
 #pragma once
 //! The transfers of a scene with particle domains (mpm/domains/particle_domains.h): they take the
 //! place of sort -> p2g -> stress_forces and of deformation -> g2p in the explicit step,
-//!   time_step -> domains_to_grid -> grid_update -> boundary -> grid_to_domains.
+//!   time_step -> domains_to_grid -> grid_update -> boundary -> domains_from_grid.
 //! Elastic materials only (a return map would need F^E apart from the corners' F).
 #include <mpm/core/stage.h>
 #include <mpm/core/state.h>
@@ -32,9 +32,9 @@ private:
 //! Corner velocities and positions from the grid (eq. 9), then per particle the PIC/FLIP
 //! velocity, x_p as the mean of its corners and F_p from them (eq. 7).
 template <int dim>
-class GridToDomains final : public Stage<MpmState<dim>> {
+class DomainsFromGrid final : public Stage<MpmState<dim>> {
 public:
-  std::string name() const override { return "grid_to_domains"; }
+  std::string name() const override { return "domains_from_grid"; }
   std::vector<std::string> reads() const override { return {"grid.velocity", "particle.v"}; }
   std::vector<std::string> writes() const override { return {"particle.x", "particle.v", "particle.F"}; }
   void run(MpmState<dim>& s) override;
