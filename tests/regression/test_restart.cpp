@@ -82,6 +82,20 @@ const RestartCase kJelloAdaptive{
 // the stages' data; a restart that lost them would move every particle back.
 const RestartCase kFlattenDomains{SOLID_SCENE_APP, "flatten_recover.yaml", "",    0.05,  {""},  {""},
                                   {"particles"},   {"rest_state_error"},   false, false, false, true};
+// Enriched: the corner flags are decided again from F at each step, so the checkpoint needs
+// nothing more (at the checkpoint, frame 4, most particles are enriched).
+const RestartCase kFlattenEnriched{SOLID_SCENE_APP,
+                                   "flatten_recover.yaml",
+                                   "--set domain_enrichment=0.6",
+                                   0.05,
+                                   {""},
+                                   {""},
+                                   {"particles"},
+                                   {"rest_state_error"},
+                                   false,
+                                   false,
+                                   false,
+                                   true};
 #ifdef SETTLING_APP
 // Discrete grains (no sediment material): no phase is solid.
 const RestartCase kSettling{SETTLING_APP,
@@ -323,6 +337,9 @@ TEST_CASE("a run continued from a checkpoint is bit-identical to the uninterrupt
     check_restart(kColumnAdaptive, "column_collapse_adaptive");
   }
   SUBCASE("solid with particle domains: flatten and recover") { check_restart(kFlattenDomains, "flatten_domains"); }
+  SUBCASE("solid with enriched particle domains: flatten and recover") {
+    check_restart(kFlattenEnriched, "flatten_enriched");
+  }
 #ifdef JELLO_COLLIDE_APP
   SUBCASE("solid on an adaptive grid: jello collide") { check_restart(kJelloAdaptive, "jello_adaptive"); }
 #endif

@@ -5,6 +5,11 @@
 #include <mpm/core/detail/transfer_loops.h>
 #include <mpm/core/error.h>
 #include <mpm/domains/particle_domains.h>
+#include <mpm/math/svd.h>
+
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+#include <Eigen/LU>
 
 #include <algorithm>
 #include <cmath>
@@ -24,7 +29,7 @@ std::size_t ParticleDomains<dim>::memory_bytes() const {
          inverse_side.capacity() * sizeof(Vec<dim>) +
          (sharing_begin.capacity() + sharing.capacity()) * sizeof(std::uint32_t) +
          surface.capacity() * sizeof(surface[0]) + buckets.memory_bytes() + mass.capacity() * sizeof(double) +
-         (momentum.capacity() + force.capacity()) * sizeof(Vec<dim>);
+         (momentum.capacity() + force.capacity()) * sizeof(Vec<dim>) + enriched.capacity();
 }
 
 template <int dim>
@@ -116,6 +121,60 @@ void index_sharing(ParticleDomains<dim>& d) {
 }
 
 template <int dim>
+double enrichment_metric(const Mat<dim>& F) {
+  const Vec<dim> sigma = math::svd(F).sigma;  // |sigma_0| >= ... >= |sigma_{d-1}|
+  return sigma[0] > 0.0 ? std::fabs(sigma[dim - 1]) / sigma[0] : 0.0;
+}
+
+template <int dim>
+void mark_enrichment(ParticleDomains<dim>& d, const std::vector<Mat<dim>>& F) {
+  MPM_VERIFY(F.size() == d.particle_count(), Error, "particle domains: enrichment needs F of every particle");
+  d.enriched_particles = 0;
+  d.enriched_length = std::numeric_limits<double>::infinity();
+  if (d.enrichment_threshold <= 0.0) {
+    d.enriched.clear();
+    return;
+  }
+  // Per particle first, then per corner over the particles sharing it: no two threads write
+  // one flag.
+  std::vector<std::uint8_t> particle_enriched(d.particle_count());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, d.particle_count(), 4096), [&](const auto& r) {
+    for (std::size_t p = r.begin(); p != r.end(); ++p)
+      particle_enriched[p] = enrichment_metric<dim>(F[p]) <= d.enrichment_threshold;
+  });
+  constexpr int K = ParticleDomains<dim>::corners;
+  d.enriched.resize(d.corner_count());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, d.corner_count(), 4096), [&](const auto& r) {
+    for (std::size_t c = r.begin(); c != r.end(); ++c) {
+      std::uint8_t any = 0;
+      for (std::uint32_t k = d.sharing_begin[c]; k != d.sharing_begin[c + 1]; ++k)
+        any |= particle_enriched[d.sharing[k] / K];
+      d.enriched[c] = any;
+    }
+  });
+  for (const std::uint8_t e : particle_enriched) d.enriched_particles += e;
+  if (d.enriched_particles == 0) return;
+  // The current thickness of a domain across its reference axis a: volume over the area of the
+  // opposite face, J L_a / |J F^-T e_a| = L_a / |F^-T e_a| (Nanson).
+  d.enriched_length = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, d.particle_count(), 4096), std::numeric_limits<double>::infinity(),
+      [&](const auto& r, double length) {
+        for (std::size_t p = r.begin(); p != r.end(); ++p) {
+          bool touches = false;
+          for (const std::uint32_t c : d.corner_of[p]) touches = touches || d.enriched[c];
+          if (!touches) continue;
+          const Mat<dim> inverse_transpose = F[p].inverse().transpose();
+          for (int a = 0; a < dim; ++a) {
+            const double h = 1.0 / (std::fabs(d.inverse_side[p][a]) * inverse_transpose.col(a).norm());
+            length = std::min(length, std::isfinite(h) ? h : 0.0);  // a flat domain: no step is stable
+          }
+        }
+        return length;
+      },
+      [](double a, double b) { return std::min(a, b); });
+}
+
+template <int dim>
 void corners_to_grid(ParticleDomains<dim>& d, const Kernel& kernel, SparseGrid<dim>& grid, const std::string& stage) {
   sort_into_buckets<dim, double>(d.x, kernel, grid, d.buckets, {}, stage);
   const std::size_t n = grid.node_storage();
@@ -135,6 +194,7 @@ void corners_to_grid(ParticleDomains<dim>& d, const Kernel& kernel, SparseGrid<d
         using K = std::decay_t<decltype(k)>;
         detail::scatter<dim, Ch>(grid, d.buckets, channels,
                                  [&](std::uint32_t c, const PatchFrame<dim>& f, double* patch) {
+                                   if (!d.enriched.empty() && d.enriched[c]) return;  // stops at the corner
                                    Stencil<dim, K::support> st;
                                    st.template compute<false>(k, f.cells(d.x[c]), f.origin);
                                    Node values[dim + 1];
@@ -147,7 +207,7 @@ void corners_to_grid(ParticleDomains<dim>& d, const Kernel& kernel, SparseGrid<d
 }
 
 template <int dim>
-void grid_to_corners(ParticleDomains<dim>& d, const Kernel& kernel, const SparseGrid<dim>& grid, bool flip, double dt) {
+void grid_to_corners(ParticleDomains<dim>& d, const Kernel& kernel, const SparseGrid<dim>& grid, bool flip) {
   const auto run = [&](auto channel_count) {
     constexpr int Ch = decltype(channel_count)::value;
     std::array<ChannelView, Ch> channels;
@@ -159,6 +219,7 @@ void grid_to_corners(ParticleDomains<dim>& d, const Kernel& kernel, const Sparse
           using K = std::decay_t<decltype(k)>;
           detail::gather<dim, Ch>(grid, d.buckets, channels,
                                   [&](std::uint32_t c, const PatchFrame<dim>& f, const double* patch) {
+                                    if (!d.enriched.empty() && d.enriched[c]) return;
                                     Stencil<dim, K::support> st;
                                     st.template compute<false>(k, f.cells(d.x[c]), f.origin);
                                     Vec<dim> v = Vec<dim>::Zero(), dv = Vec<dim>::Zero();
@@ -180,7 +241,26 @@ void grid_to_corners(ParticleDomains<dim>& d, const Kernel& kernel, const Sparse
     run(std::integral_constant<int, 2 * dim>{});
   else
     run(std::integral_constant<int, dim>{});
-  // After the gather: a corner's stencil reads the grid, never another corner.
+}
+
+template <int dim>
+void integrate_enriched(ParticleDomains<dim>& d, double dt, const Vec<dim>& gravity,
+                        const std::function<void(const Vec<dim>&, Vec<dim>&)>& constrain) {
+  if (d.enriched.empty()) return;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, d.corner_count(), 4096), [&](const auto& r) {
+    for (std::size_t c = r.begin(); c != r.end(); ++c) {
+      if (!d.enriched[c]) continue;
+      const Vec<dim> v_old = d.momentum[c] / d.mass[c];
+      Vec<dim> v = v_old + dt * (d.force[c] / d.mass[c] + gravity);
+      constrain(d.x[c], v);
+      d.momentum[c] = v;
+      d.force[c] = v - v_old;
+    }
+  });
+}
+
+template <int dim>
+void advance_corners(ParticleDomains<dim>& d, double dt) {
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, d.corner_count(), 4096), [&](const auto& r) {
     for (std::size_t c = r.begin(); c != r.end(); ++c) d.x[c] += dt * d.momentum[c];
   });
@@ -214,7 +294,12 @@ void restore(ParticleDomains<dim>& d, const CarriedData& data) {
   template void add_body(ParticleDomains<dim>&, std::size_t, const std::vector<Vec<dim>>&, double, const Vec<dim>&); \
   template void index_sharing(ParticleDomains<dim>&);                                                                \
   template void corners_to_grid(ParticleDomains<dim>&, const Kernel&, SparseGrid<dim>&, const std::string&);         \
-  template void grid_to_corners(ParticleDomains<dim>&, const Kernel&, const SparseGrid<dim>&, bool, double);         \
+  template double enrichment_metric<dim>(const Mat<dim>&);                                                           \
+  template void mark_enrichment(ParticleDomains<dim>&, const std::vector<Mat<dim>>&);                                \
+  template void grid_to_corners(ParticleDomains<dim>&, const Kernel&, const SparseGrid<dim>&, bool);                 \
+  template void integrate_enriched(ParticleDomains<dim>&, double, const Vec<dim>&,                                   \
+                                   const std::function<void(const Vec<dim>&, Vec<dim>&)>&);                          \
+  template void advance_corners(ParticleDomains<dim>&, double);                                                      \
   template CarriedData carried(const ParticleDomains<dim>&);                                                         \
   template void restore(ParticleDomains<dim>&, const CarriedData&);
 MPM_INSTANTIATE(2)

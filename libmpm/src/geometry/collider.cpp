@@ -11,6 +11,7 @@
 #include <Eigen/Geometry>
 
 #include <cmath>
+#include <limits>
 #include <string>
 
 namespace mpm::geometry {
@@ -37,6 +38,7 @@ Vec<dim> Collider<dim>::shape_position(const Vec<dim>& x, double t) const {
 
 template <int dim>
 double Collider<dim>::phi(const Vec<dim>& x, double t) const {
+  if (t > until_) return std::numeric_limits<double>::infinity();
   const Vec<dim> x0 = shape_position(x, t);
   const double d = std::visit([&](const auto& shape) { return shape.phi(x0); }, shape_);
   return hollow_ ? -d : d;

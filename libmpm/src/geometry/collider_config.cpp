@@ -114,6 +114,7 @@ Collider<dim> parse_collider(const Config& entry) {
     omega = entry.vector<3>("angular_velocity", Vec<3>::Zero());
   Collider<dim> collider(std::move(shape), contact, velocity);
   collider.set_hollow(entry.flag("hollow", false));
+  if (entry.has("until")) collider.set_until(entry.number("until", Range::positive()));
   if (omega.isZero(0.0)) return collider;
   // The surface turns about the shape's own axis; the shape stays (it is symmetric about it).
   if (!velocity.isZero(0.0)) entry.fail("angular_velocity", "a turning collider cannot also translate (velocity)");

@@ -203,6 +203,11 @@ SolidScene<dim> load_solid_scene(const Config& scene) {
   if (scene.flag("particle_domains", false)) {
     check_particle_domains(s, scene);
     s.state.domains.emplace();
+    // Dynamic enrichment (Zhu et al. sec. 5): epsilon of K(F) <= epsilon; the paper uses 0.6.
+    if (scene.has("domain_enrichment"))
+      s.state.domains->enrichment_threshold = scene.number("domain_enrichment", Range::open(0.0, 1.0));
+  } else if (scene.has("domain_enrichment")) {
+    scene.fail("domain_enrichment", "enriches particle domains: it needs particle_domains: true");
   }
   seed_bodies(s, scene);
   if (s.state.domains) domains::index_sharing(*s.state.domains);
@@ -219,6 +224,8 @@ Pipeline<MpmState<dim>> make_solid_pipeline(const SolidScene<dim>& scene) {
   }
   // A solver stable at any step (implicit, grains) still resolves free fall: a particle at
   // rest falls at most wave_cfl^2 dx / 2 in its first step, dt <= wave_cfl sqrt(dx / |g|).
+  if (scene.state.domains && scene.state.domains->enrichment_threshold > 0.0)
+    p.add(std::make_unique<stages::DomainEnrichment<dim>>());
   double wave_speed = scene.solver->wave_speed();
   if (wave_speed == 0.0) wave_speed = std::sqrt(scene.settings.gravity.norm() * scene.settings.dx);
   p.add(std::make_unique<stages::TimeStepControl<dim>>(stages::time_step_settings(scene.settings, wave_speed)));
@@ -238,7 +245,7 @@ Pipeline<MpmState<dim>> make_solid_pipeline(const SolidScene<dim>& scene) {
   p.add(std::make_unique<stages::GridBoundary<dim>>(scene.colliders));
   if (scene.state.adaptive) p.add(std::make_unique<stages::GhostVelocities<dim>>());
   if (scene.state.domains) {
-    p.add(std::make_unique<stages::DomainsFromGrid<dim>>());
+    p.add(std::make_unique<stages::DomainsFromGrid<dim>>(scene.colliders));
   } else {
     for (auto& stage : scene.solver->particle_update()) p.add(std::move(stage));
     p.add(std::make_unique<stages::GridToParticles<dim>>());

@@ -19,6 +19,17 @@
 //! F_p is the mean deformation gradient of the trilinear map over the domain: it follows the
 //! corners exactly, so neighbours that share corners stay connected (no numerical fracture).
 //!
+//! Dynamic enrichment (sec. 5): a particle whose F is badly conditioned, K(F) = 1 / (|F^-1| |F|)
+//! = sigma_min / sigma_max <= epsilon, marks its corners enriched for the step. An enriched
+//! corner stops at the corner layer: it keeps its m_alpha, p_alpha, f_alpha (no scatter to the
+//! grid) and is integrated as a degree of freedom of its own,
+//!   v_alpha = (p_alpha + dt f_alpha) / m_alpha + dt g,   x_alpha += dt v_alpha,
+//! with the colliders applied at the corner, while the others go on through the grid; a
+//! particle with both kinds of corners ("transitional") reaches both (eq. 11). Inside the
+//! enriched region the domains are a Lagrangian FEM mesh, so the corners no longer inherit the
+//! grid's interpolation error. Its explicit step is bounded by the thinnest enriched domain
+//! (enriched_length) instead of the cell.
+//!
 //! Particles of a scene with domains are never reordered (no sort moves them, no source or
 //! sink adds or removes any): the corner table indexes them by storage position.
 #include <mpm/core/kernels.h>
@@ -29,6 +40,8 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
+#include <limits>
 #include <vector>
 
 namespace mpm::domains {
@@ -48,6 +61,15 @@ struct ParticleDomains {
   //! (counter-clockwise boundary in 2D). It moves with the corners (Zhu et al.
   //! sec. 4.1 embed a finer mesh in the domains; here the mesh is the domains' own boundary).
   std::vector<std::array<std::uint32_t, corners / 2>> surface;
+
+  //! epsilon of the enrichment criterion K(F) <= epsilon, in (0, 1); 0: never enrich.
+  double enrichment_threshold = 0.0;
+  // Set by mark_enrichment at the start of each step (never stored: F decides again).
+  std::vector<std::uint8_t> enriched;  //!< per corner: 1 when a degree of freedom of its own this step
+  std::size_t enriched_particles = 0;  //!< particles with K(F) <= epsilon
+  //! The thinnest domain with an enriched corner, L_a / |F^-T e_a| over its axes [m]; infinite
+  //! when none is enriched.
+  double enriched_length = std::numeric_limits<double>::infinity();
 
   // Per-step scratch, kept to avoid allocations.
   ParticleBuckets<dim> buckets;    //!< corners ordered by grid block
@@ -95,19 +117,40 @@ void add_body(ParticleDomains<dim>& domains, std::size_t first, const std::vecto
 template <int dim>
 void index_sharing(ParticleDomains<dim>& domains);
 
+//! K(F) = 1 / (|F^-1|_2 |F|_2) = sigma_min / sigma_max in [0, 1]: 1 for a rotation, 0 for a
+//! flat domain (Zhu et al. eq. 10).
+template <int dim>
+double enrichment_metric(const Mat<dim>& F);
+
+//! Marks the corners of every particle with K(F_p) <= domains.enrichment_threshold and sets
+//! enriched_particles and enriched_length; clears the marks when the threshold is 0.
+template <int dim>
+void mark_enrichment(ParticleDomains<dim>& domains, const std::vector<Mat<dim>>& F);
+
 //! Sorts the corners into buckets of `grid` (allocating the blocks their stencils touch) and
-//! scatters m_alpha, p_alpha, f_alpha (in domains.mass, momentum, force) into grid.mass,
-//! grid.velocity (momentum) and grid.force, each zeroed first. NumericalError naming `stage`
+//! scatters m_alpha, p_alpha, f_alpha (in domains.mass, momentum, force) of the corners not
+//! enriched into grid.mass, grid.velocity (momentum) and grid.force, each zeroed first. NumericalError naming `stage`
 //! when a corner is not finite or its stencil leaves the grid.
 template <int dim>
 void corners_to_grid(ParticleDomains<dim>& domains, const Kernel& kernel, SparseGrid<dim>& grid,
                      const std::string& stage);
 
-//! v_alpha = sum_i w_i(x_alpha) v_i into domains.momentum, with `flip` the increment
-//! sum_i w_i (v_i - v_i^old) into domains.force, and x_alpha += dt v_alpha.
+//! For the corners not enriched: v_alpha = sum_i w_i(x_alpha) v_i into domains.momentum, with
+//! `flip` the increment sum_i w_i (v_i - v_i^old) into domains.force. Enriched corners keep
+//! their p_alpha and f_alpha for integrate_enriched.
 template <int dim>
-void grid_to_corners(ParticleDomains<dim>& domains, const Kernel& kernel, const SparseGrid<dim>& grid, bool flip,
-                     double dt);
+void grid_to_corners(ParticleDomains<dim>& domains, const Kernel& kernel, const SparseGrid<dim>& grid, bool flip);
+
+//! The enriched corners' own update: v_alpha = (p_alpha + dt f_alpha) / m_alpha + dt g, then
+//! `constrain(x_alpha, v_alpha)` (the colliders), into domains.momentum and the increment
+//! v_alpha - p_alpha / m_alpha into domains.force.
+template <int dim>
+void integrate_enriched(ParticleDomains<dim>& domains, double dt, const Vec<dim>& gravity,
+                        const std::function<void(const Vec<dim>&, Vec<dim>&)>& constrain);
+
+//! x_alpha += dt v_alpha for every corner (v_alpha in domains.momentum).
+template <int dim>
+void advance_corners(ParticleDomains<dim>& domains, double dt);
 
 //! The corner positions, for a checkpoint ("domains/x"), and their restoration into domains
 //! seeded the same way: IoError-free check, Error when the sizes differ.

@@ -13,6 +13,7 @@
 #include <mpm/geometry/signed_distance.h>
 
 #include <array>
+#include <limits>
 #include <optional>
 #include <utility>
 #include <variant>
@@ -39,6 +40,9 @@ public:
 
   //! A hollow obstacle is the outside of its shape: material sits inside (a drum, a tank).
   void set_hollow(bool hollow) { hollow_ = hollow; }
+  //! The obstacle exists until time `t` [s] and is gone after it (a grip that releases a body).
+  void set_until(double t) { until_ = t; }
+  double until() const { return until_; }
   //! The obstacle's surface turns at `omega` [rad/s] (2D: omega.z) about `center` [m]: its
   //! velocity at x is velocity + omega x (x - center). The shape itself does not turn, so this
   //! is for shapes symmetric about that axis (a sphere, a cylinder about its axis: a drum).
@@ -47,7 +51,7 @@ public:
     center_ = center;
   }
 
-  double phi(const Vec<dim>& x, double t) const;       //!< [m], negative inside the obstacle
+  double phi(const Vec<dim>& x, double t) const;       //!< [m], negative inside; +inf after until()
   Vec<dim> normal(const Vec<dim>& x, double t) const;  //!< unit, out of the obstacle
   //! The obstacle's velocity at x [m/s].
   Vec<dim> velocity_at(const Vec<dim>& x) const;
@@ -75,6 +79,7 @@ private:
   Vec<dim> velocity_;
   Motion motion_;
   bool hollow_ = false;
+  double until_ = std::numeric_limits<double>::infinity();
   Eigen::Vector3d omega_ = Eigen::Vector3d::Zero();
   Vec<dim> center_ = Vec<dim>::Zero();
   Vec<dim> shape_position(const Vec<dim>& x, double t) const;  // x in the frame of the shape

@@ -1,6 +1,8 @@
 // dt = min( cfl dx / max_p |v_p|,  wave_cfl dx / c,  max_dt,  t_frame_end - t )
 // with c = sqrt((lambda + 2 mu) / rho) the p-wave speed of the stiffest material: explicit
 // MPM is stable for dt < dx / c (Courant); the particle CFL keeps stencils from jumping cells.
+// Enriched particle domains (domains/particle_domains.h) add wave_cfl h / c with h the
+// thinnest enriched domain.
 #include <mpm/core/stages/time_step_control.h>
 
 #include <tbb/blocked_range.h>
@@ -24,7 +26,11 @@ double TimeStepControl<dim>::stable_dt(const MpmState<dim>& s) const {
   const double dx = finest_dx(s);
   double dt = settings_.max_dt;
   if (max_speed2 > 0.0) dt = std::min(dt, settings_.cfl * dx / std::sqrt(max_speed2));
-  if (settings_.wave_speed > 0.0) dt = std::min(dt, settings_.wave_cfl * dx / settings_.wave_speed);
+  if (settings_.wave_speed > 0.0) {
+    dt = std::min(dt, settings_.wave_cfl * dx / settings_.wave_speed);
+    // Enriched particle domains are a Lagrangian mesh: their own Courant bound.
+    if (s.domains) dt = std::min(dt, settings_.wave_cfl * s.domains->enriched_length / settings_.wave_speed);
+  }
   return dt;
 }
 

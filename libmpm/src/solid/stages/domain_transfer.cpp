@@ -1,5 +1,5 @@
-// The two-step transfers through particle domains (Zhu et al. sec. 4, eq. 5-9; equations in
-// mpm/domains/particle_domains.h). The corner sums run over the corners (each reads the
+// The two-step transfers through particle domains and their dynamic enrichment (Zhu et al.
+// sec. 4-5, eq. 5-11; equations in mpm/domains/particle_domains.h). The corner sums run over the corners (each reads the
 // particles that share it), so no two threads write one corner and the sums do not depend on
 // the thread count.
 #include <mpm/core/error.h>
@@ -21,6 +21,14 @@ void check_pairing(const domains::ParticleDomains<dim>& d, const Particles<dim>&
                  std::to_string(d.particle_count()) + " (particles with domains are never added or removed)");
 }
 }  // namespace
+
+template <int dim>
+void DomainEnrichment<dim>::run(MpmState<dim>& s) {
+  domains::ParticleDomains<dim>& d = *s.domains;
+  check_pairing(d, std::as_const(s.particles), name());
+  domains::mark_enrichment(d, solid::elastic_F(s.particles));
+  share_ = d.particle_count() ? static_cast<double>(d.enriched_particles) / d.particle_count() : 0.0;
+}
 
 template <int dim>
 void DomainsToGrid<dim>::run(MpmState<dim>& s) {
@@ -71,7 +79,12 @@ void DomainsFromGrid<dim>::run(MpmState<dim>& s) {
   std::vector<Mat<dim>>& F = solid::elastic_F(P);
   const bool flip = s.transfer.uses_old_velocity();
   const double a = flip ? s.transfer.flip_ratio : 0.0;
-  domains::grid_to_corners(d, s.kernel, s.grid, flip, s.dt);
+  domains::grid_to_corners(d, s.kernel, s.grid, flip);
+  // The enriched corners' own update, with the colliders the boundary stage applies to nodes.
+  const double t = s.time + s.dt;
+  domains::integrate_enriched<dim>(d, s.dt, s.gravity,
+                                   [&](const Vec<dim>& x, Vec<dim>& v) { colliders_.project(x, t, v); });
+  domains::advance_corners(d, s.dt);
   constexpr int K = domains::ParticleDomains<dim>::corners;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.size(), 4096), [&](const auto& r) {
     for (std::size_t p = r.begin(); p != r.end(); ++p) {
@@ -90,6 +103,8 @@ void DomainsFromGrid<dim>::run(MpmState<dim>& s) {
   check_finite(F, name(), "particle", "deformation gradient");
 }
 
+template class DomainEnrichment<2>;
+template class DomainEnrichment<3>;
 template class DomainsToGrid<2>;
 template class DomainsToGrid<3>;
 template class DomainsFromGrid<2>;

@@ -8,6 +8,7 @@
 #include <mpm/core/config.h>
 #include <mpm/core/error.h>
 #include <mpm/core/kernels.h>
+#include <mpm/math/svd.h>
 #include <mpm/solid/solid_channels.h>
 #include <mpm/solid/solid_scene.h>
 #include <mpm/solid/stages/domain_transfer.h>
@@ -149,7 +150,7 @@ TEST_CASE_TEMPLATE("particle domains: the two-step transfer conserves and reprod
   s.grid.velocity_old = s.grid.velocity;
   std::vector<Vec<dim>> x0 = P.x;
   const std::vector<Mat<dim>> F0 = solid::elastic_F(P);
-  stages::DomainsFromGrid<dim>().run(s);
+  stages::DomainsFromGrid<dim>(scene.colliders).run(s);
   const std::vector<Mat<dim>>& F = solid::elastic_F(P);
   double v_error = 0.0, x_error = 0.0, F_error = 0.0;
   for (std::size_t p = 0; p < P.size(); ++p) {
@@ -223,6 +224,127 @@ TEST_CASE_TEMPLATE("particle domains: a free spinning, deforming body keeps its 
   for (std::size_t p = 0; p < P.size(); ++p) CHECK((s.domains->centre(p) - P.x[p]).norm() == 0.0);
 }
 
+TEST_CASE_TEMPLATE("particle domains: the enrichment metric is sigma_min / sigma_max", Dim,
+                   std::integral_constant<int, 2>, std::integral_constant<int, 3>) {
+  constexpr int dim = Dim::value;
+  std::mt19937 rng(5);
+  const Mat<dim> R = math::polar(Mat<dim>(Mat<dim>::NullaryExpr([&] { return uniform(rng, -1.0, 1.0); }))).R;
+  CHECK(domains::enrichment_metric<dim>(R) == doctest::Approx(1.0).epsilon(1e-12));
+  Vec<dim> stretch = Vec<dim>::Constant(2.0);
+  stretch[0] = 0.5;
+  CHECK(domains::enrichment_metric<dim>(R * stretch.asDiagonal() * R.transpose()) ==
+        doctest::Approx(0.25).epsilon(1e-12));
+  stretch[0] = -1.0;  // inverted: the metric sees |sigma|
+  CHECK(domains::enrichment_metric<dim>(R * stretch.asDiagonal()) == doctest::Approx(0.5).epsilon(1e-12));
+  CHECK(domains::enrichment_metric<dim>(Mat<dim>::Zero()) == 0.0);
+}
+
+TEST_CASE_TEMPLATE("particle domains: enriched corners are degrees of freedom of their own", Dim,
+                   std::integral_constant<int, 2>, std::integral_constant<int, 3>) {
+  constexpr int dim = Dim::value;
+  std::mt19937 rng(13);
+  const auto step = [](solid::SolidScene<dim>& scene, Pipeline<MpmState<dim>>& pipeline, int steps) {
+    for (int n = 0; n < steps; ++n) {
+      scene.state.dt_limit = 1e-3;
+      pipeline.step(scene.state);
+      scene.state.time += scene.state.dt;
+    }
+  };
+  const auto momentum = [](const Particles<dim>& P) {
+    Vec<dim> sum = Vec<dim>::Zero();
+    for (std::size_t p = 0; p < P.size(); ++p) sum += P.mass[p] * P.v[p];
+    return sum;
+  };
+  SUBCASE("no particle enriched: the run is the run without enrichment, bit for bit") {
+    solid::SolidScene<dim> a = solid::load_solid_scene<dim>(Config::parse(scene_yaml<dim>()));
+    solid::SolidScene<dim> b =
+        solid::load_solid_scene<dim>(Config::parse(scene_yaml<dim>(), "<string>", {"domain_enrichment=1e-9"}));
+    for (solid::SolidScene<dim>* scene : {&a, &b}) {
+      std::mt19937 same(3);
+      for (Vec<dim>& v : scene->state.particles.v) v = Vec<dim>::NullaryExpr([&] { return uniform(same, -1.0, 1.0); });
+    }
+    Pipeline<MpmState<dim>> pa = solid::make_solid_pipeline(a), pb = solid::make_solid_pipeline(b);
+    step(a, pa, 30);
+    step(b, pb, 30);
+    CHECK(b.state.domains->enriched_particles == 0);
+    CHECK(b.state.domains->enriched.size() == b.state.domains->corner_count());
+    CHECK(a.state.particles.x == b.state.particles.x);
+    CHECK(a.state.particles.v == b.state.particles.v);
+  }
+  SUBCASE("a stretched body is all enriched: nothing reaches the grid, its thinnest domain bounds the step") {
+    // F = diag(1.5, 0.5[, 1]): K = 1/3 <= 0.6. A domain is one spacing thick across every axis.
+    solid::SolidScene<dim> scene = solid::load_solid_scene<dim>(
+        Config::parse(scene_yaml<dim>(dim == 2 ? ", stretch: [1.5, 0.5]" : ", stretch: [1.5, 0.5, 1]"), "<string>",
+                      {"domain_enrichment=0.6"}));
+    MpmState<dim>& s = scene.state;
+    Pipeline<MpmState<dim>> pipeline = solid::make_solid_pipeline(scene);
+    step(scene, pipeline, 1);
+    const domains::ParticleDomains<dim>& d = *s.domains;
+    CHECK(d.enriched_particles == s.particles.size());
+    const double spacing = (d.x[d.corner_of[0][1]] - d.x[d.corner_of[0][0]]).norm();  // after one small step
+    CHECK(d.enriched_length == doctest::Approx(spacing).epsilon(0.05));
+    double grid_mass = 0.0;
+    for (const double m : s.grid.mass) grid_mass += m;
+    CHECK(grid_mass == 0.0);
+    // The step the time-step stage chose respects the mesh's Courant bound.
+    CHECK(s.dt <= scene.settings.wave_cfl * d.enriched_length / scene.solver->wave_speed() * (1 + 1e-12));
+  }
+  SUBCASE("transitional particles: momentum is kept and the energy stays bounded") {
+    // Corners jostled so that some particles are enriched, some transitional, some not.
+    solid::SolidScene<dim> scene =
+        solid::load_solid_scene<dim>(Config::parse(scene_yaml<dim>(), "<string>", {"domain_enrichment=0.9"}));
+    MpmState<dim>& s = scene.state;
+    domains::ParticleDomains<dim>& d = *s.domains;
+    const double spacing = (d.x[d.corner_of[0][1]] - d.x[d.corner_of[0][0]]).norm();
+    for (Vec<dim>& x : d.x) x += Vec<dim>::NullaryExpr([&] { return uniform(rng, -0.06, 0.06) * spacing; });
+    std::vector<Mat<dim>>& F = solid::elastic_F(s.particles);
+    for (std::size_t p = 0; p < F.size(); ++p) {
+      F[p] = d.deformation(p);
+      s.particles.x[p] = d.centre(p);
+    }
+    for (Vec<dim>& v : s.particles.v) v = Vec<dim>::NullaryExpr([&] { return uniform(rng, -0.2, 0.2); });
+    const Vec<dim> p0 = momentum(s.particles);
+    double scale = 0.0;
+    for (std::size_t p = 0; p < F.size(); ++p) scale += s.particles.mass[p] * s.particles.v[p].norm();
+    const auto energy = [&] {
+      double e = total_elastic_energy(scene, d);
+      for (std::size_t p = 0; p < F.size(); ++p) e += 0.5 * s.particles.mass[p] * s.particles.v[p].squaredNorm();
+      return e;
+    };
+    const double e0 = energy();
+    Pipeline<MpmState<dim>> pipeline = solid::make_solid_pipeline(scene);
+    step(scene, pipeline, 1);
+    CHECK(d.enriched_particles > 0);
+    CHECK(d.enriched_particles < s.particles.size());
+    step(scene, pipeline, 59);
+    CHECK((momentum(s.particles) - p0).norm() < 1e-12 * scale);
+    CHECK(energy() < 1.05 * e0);  // PIC/FLIP dissipates; a wrong corner force would blow up
+    for (std::size_t p = 0; p < F.size(); ++p) CHECK((d.centre(p) - s.particles.x[p]).norm() == 0.0);
+  }
+}
+
+TEST_CASE("particle domains: enriched corners obey the walls") {
+  // A stretched block thrown at the floor, enriched wherever it deforms: the enriched corners
+  // that reach the floor stop at its wall layer (the colliders act on them as on nodes).
+  solid::SolidScene<2> scene = solid::load_solid_scene<2>(
+      Config::parse(scene_yaml<2>(", stretch: [1.5, 0.5], velocity: [0, -6]"), "<string>", {"domain_enrichment=0.98"}));
+  MpmState<2>& s = scene.state;
+  const domains::ParticleDomains<2>& d = *s.domains;
+  Pipeline<MpmState<2>> pipeline = solid::make_solid_pipeline(scene);
+  const double floor = scene.settings.domain_lo[1] + scene.colliders.walls()->thickness();
+  double lowest = 1.0, travel = 0.0;
+  for (int n = 0; n < 2000 && s.time < 0.15; ++n) {
+    s.dt_limit = 1e-3;
+    pipeline.step(s);
+    s.time += s.dt;
+    for (std::size_t c = 0; c < d.corner_count(); ++c)
+      if (d.enriched[c]) lowest = std::min(lowest, d.x[c][1]), travel = std::max(travel, s.dt * d.momentum[c].norm());
+  }
+  CHECK(s.time >= 0.15);
+  CHECK(lowest > floor - 1.5 * travel);             // within a step's travel of the layer
+  CHECK(lowest < floor + 0.1 * scene.settings.dx);  // enriched corners did reach the floor
+}
+
 TEST_CASE("particle domains: bad input names the key") {
   const std::string yaml = scene_yaml<2>();
   const auto error = [&](const std::vector<std::string>& overrides) {
@@ -240,6 +362,11 @@ TEST_CASE("particle domains: bad input names the key") {
   CHECK(error({"materials.0.elasticity=hencky_stvk", "materials.0.plasticity={model: von_mises, yield_stress: 1e4}"})
             .find("is plastic") != std::string::npos);
   CHECK(error({"particle_domains=maybe"}).find("particle_domains") != std::string::npos);
+  CHECK(error({"domain_enrichment=1"}).find("domain_enrichment") != std::string::npos);
+  CHECK(error({"domain_enrichment=1"}).find("(0, 1)") != std::string::npos);
+  CHECK(error({"domain_enrichment=-0.1"}).find("domain_enrichment") != std::string::npos);
+  CHECK(error({"particle_domains=false", "domain_enrichment=0.6"}).find("needs particle_domains: true") !=
+        std::string::npos);
   CHECK(error({"bodies.0.jitter=0.3"}).find("jitter must be 0") != std::string::npos);
   CHECK(error({"periodic=[true, false]", "walls={contact: separate, x_min: open, x_max: open}"})
             .find("no periodic axis") != std::string::npos);

@@ -18,6 +18,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <numbers>
 #include <random>
 #include <set>
@@ -322,6 +323,27 @@ walls:
   CHECK(error_of("colliders:\n  - {type: sphere, center: [0, 0, 0], radius: 1, velocity: [1, 0, 0], "
                  "angular_velocity: [0, 0, 1]}\n")
             .find("cannot also translate") != std::string::npos);
+  CHECK(
+      error_of("colliders:\n  - {type: sphere, center: [0, 0, 0], radius: 1, until: 0}\n").find("colliders[0].until") !=
+      std::string::npos);
+}
+
+TEST_CASE("a turning grip that lets go") {
+  // A capped cylinder about z turning at 1 rad/s until t = 0.5 s: a sticky node inside it takes
+  // omega x (x - c) before, and nothing acts on it after.
+  const Config scene = Config::parse(
+      "colliders:\n  - {type: cylinder, point: [0.5, 0.5, 0.2], axis: [0, 0, 1], radius: 0.2, half_length: 0.05, "
+      "angular_velocity: [0, 0, 1], contact: sticky, until: 0.5}\n");
+  const ColliderSet<3> set = parse_colliders<3>(scene, Vec<3>::Zero(), Vec<3>::Ones(), 0.05);
+  const Collider<3>& grip = set.colliders().at(0);
+  CHECK(grip.until() == 0.5);
+  Vec<3> v(3.0, -1.0, 2.0);
+  grip.project(Vec<3>(0.6, 0.5, 0.22), 0.5, v);
+  CHECK((v - Vec<3>(0.0, 0.1, 0.0)).norm() < 1e-12);
+  Vec<3> u(3.0, -1.0, 2.0);
+  grip.project(Vec<3>(0.6, 0.5, 0.22), 0.5 + 1e-9, u);
+  CHECK(u == Vec<3>(3.0, -1.0, 2.0));
+  CHECK(grip.phi(Vec<3>(0.6, 0.5, 0.22), 0.6) == std::numeric_limits<double>::infinity());
 }
 
 TEST_CASE("a hollow turning drum") {

@@ -1,13 +1,31 @@
 #pragma once
 //! The transfers of a scene with particle domains (mpm/domains/particle_domains.h): they take the
 //! place of sort -> p2g -> stress_forces and of deformation -> g2p in the explicit step,
-//!   time_step -> domains_to_grid -> grid_update -> boundary -> domains_from_grid.
+//!   [enrichment ->] time_step -> domains_to_grid -> grid_update -> boundary -> domains_from_grid.
 //! Elastic materials only (a return map would need F^E apart from the corners' F).
 #include <mpm/core/stage.h>
 #include <mpm/core/state.h>
+#include <mpm/geometry/collider.h>
 #include <mpm/solid/material.h>
 
 namespace mpm::stages {
+
+//! Dynamic enrichment (Zhu et al. sec. 5, Algorithm 1 line 2): at the start of the step, the
+//! corners of every particle with K(F_p) <= epsilon become degrees of freedom of their own
+//! (particle_domains.h). First in the step, so the time step sees the enriched domains.
+template <int dim>
+class DomainEnrichment final : public Stage<MpmState<dim>> {
+public:
+  std::string name() const override { return "enrichment"; }
+  std::vector<std::string> reads() const override { return {"particle.F"}; }
+  std::vector<std::string> writes() const override { return {"domains.enriched"}; }
+  void run(MpmState<dim>& s) override;
+  //! enriched_particles: the share of particles with K(F) <= epsilon.
+  std::vector<Diagnostic> diagnostics() const override { return {{"enriched_particles", share_}}; }
+
+private:
+  double share_ = 0.0;
+};
 
 //! Corner masses, momenta and forces f_alpha = - sum_p V_p^0 P(F_p) grad_X w_alpha_p (eq. 8),
 //! scattered to the grid from the corners.
@@ -29,15 +47,20 @@ private:
   std::vector<Mat<dim>> weighted_stress_;  // V_p^0 P_p per particle [N m]
 };
 
-//! Corner velocities and positions from the grid (eq. 9), then per particle the PIC/FLIP
-//! velocity, x_p as the mean of its corners and F_p from them (eq. 7).
+//! Corner velocities from the grid (eq. 9), the enriched corners' own update with the
+//! colliders, the corners moved; then per particle the PIC/FLIP velocity, x_p as the mean of its
+//! corners and F_p from them (eq. 7).
 template <int dim>
 class DomainsFromGrid final : public Stage<MpmState<dim>> {
 public:
+  explicit DomainsFromGrid(geometry::ColliderSet<dim> colliders) : colliders_(std::move(colliders)) {}
   std::string name() const override { return "domains_from_grid"; }
   std::vector<std::string> reads() const override { return {"grid.velocity", "particle.v"}; }
   std::vector<std::string> writes() const override { return {"particle.x", "particle.v", "particle.F"}; }
   void run(MpmState<dim>& s) override;
+
+private:
+  geometry::ColliderSet<dim> colliders_;  // act on the enriched corners as the boundary stage on nodes
 };
 
 }  // namespace mpm::stages
