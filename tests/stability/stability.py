@@ -162,6 +162,25 @@ CASES = [
     case("implicit_funnel_squeeze", "Neo-Hookean block (E = 2e4 Pa, 0.4 m wide) thrown at 10 m/s into a "
          "funnel whose outlet is 0.08 m wide, solver: implicit", "solid_scene", "data/scenes/stability/funnel.yaml",
          [], "completes", check=True, extra=passed_funnel),
+] + [
+    # Particle domains (explicit, PIC/FLIP through the corners) and their dynamic enrichment.
+    # The enriched block keeps the energy the grid-driven ones lose in the squeeze: it bounces
+    # back out of the outlet and wedges in the funnel (docs/verification.md section 7).
+    case(f"{name}_funnel_squeeze", f"the funnel squeeze, solver: explicit, {what}, 1.5 s", "solid_scene",
+         "data/scenes/stability/funnel.yaml",
+         ["solver=explicit", "transfer.scheme=flip", "particle_domains=true", "time.end=1.5"] + sets,
+         "completes", check=True, extra=extra)
+    for name, what, sets, extra in (
+        ("domains", "particle domains", [], passed_funnel),
+        ("enriched", "enriched particle domains (eps = 0.6)", ["domain_enrichment=0.6"], None))
+] + [
+    case(f"enriched_flatten_{model}", f"block crushed to 5 % of its height and released, {model}, "
+         "enriched particle domains (eps = 0.6)", "solid_scene", BASE,
+         ["transfer.scheme=flip", "particle_domains=true", "domain_enrichment=0.6", f"{BLOCK}.stretch=[1, 0.05]",
+          f"{BLOCK}.lo=[0.3, 0.2]", f"{BLOCK}.hi=[0.7, 0.22]", f"materials.0.elasticity={model}", "time.end=0.3"],
+         "completes", check=True, extra=recovered)
+    for model in ("fixed_corotated", "neo_hookean", "hencky_stvk")
+] + [
     case("snowball", "a snowball (snow plasticity, fixed corotated) thrown at the floor at 5.7 m/s", "solid_scene",
          "data/scenes/snowball.yaml", ["output.png=false"], "completes", check=True),
     case("implicit_no_converge_stop", "solver: implicit with Newton capped at 1 iteration and tolerance "
