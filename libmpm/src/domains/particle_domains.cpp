@@ -5,7 +5,6 @@
 #include <mpm/core/detail/transfer_loops.h>
 #include <mpm/core/error.h>
 #include <mpm/domains/particle_domains.h>
-#include <mpm/math/svd.h>
 
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
@@ -14,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <numbers>
 #include <string>
 #include <unordered_map>
 
@@ -120,10 +120,32 @@ void index_sharing(ParticleDomains<dim>& d) {
       d.sharing[next[d.corner_of[p][alpha]]++] = static_cast<std::uint32_t>(p * K + alpha);
 }
 
+// K(F) from the eigenvalues of C = F^T F (sigma^2), in closed form: a quarter of the cost of
+// the SVD (87 against 350 ns in 3D, docs/performance.md), which every particle needs every step.
+// The largest eigenvalue comes from the trigonometric formula for symmetric 3x3 matrices; the
+// smallest from det C = det(F)^2 over the two larger ones, so a thin domain keeps its relative
+// accuracy. Where two eigenvalues coincide the arccosine costs digits: K to about 1e-8.
 template <int dim>
 double enrichment_metric(const Mat<dim>& F) {
-  const Vec<dim> sigma = math::svd(F).sigma;  // |sigma_0| >= ... >= |sigma_{d-1}|
-  return sigma[0] > 0.0 ? std::fabs(sigma[dim - 1]) / sigma[0] : 0.0;
+  const Mat<dim> C = F.transpose() * F;
+  const double det2 = F.determinant() * F.determinant();
+  if constexpr (dim == 2) {
+    const double largest = 0.5 * C.trace() + std::hypot(0.5 * (C(0, 0) - C(1, 1)), C(0, 1));
+    return largest > 0.0 ? std::sqrt(det2) / largest : 0.0;  // sqrt(lambda_min / lambda_max)
+  } else {
+    const double q = C.trace() / 3.0;
+    if (!(q > 0.0)) return 0.0;
+    const double off = C(0, 1) * C(0, 1) + C(0, 2) * C(0, 2) + C(1, 2) * C(1, 2);
+    const double p = std::sqrt(((C.diagonal().array() - q).square().sum() + 2.0 * off) / 6.0);
+    if (p <= 1e-15 * q) return 1.0;  // C = q I: a rotation times a uniform scaling
+    const double r = std::clamp((C - q * Mat<dim>::Identity()).determinant() / (2.0 * p * p * p), -1.0, 1.0);
+    const double angle = std::acos(r) / 3.0;
+    const double largest = q + 2.0 * p * std::cos(angle);
+    const double smallest_guess = q + 2.0 * p * std::cos(angle + 2.0 * std::numbers::pi / 3.0);
+    const double middle = std::max(3.0 * q - largest - smallest_guess, 0.0);
+    if (!(middle > 0.0)) return 0.0;
+    return std::sqrt(det2 / (largest * middle) / largest);
+  }
 }
 
 template <int dim>
