@@ -94,13 +94,16 @@ def hundredfold_step(rows, summary):
     return None if steps <= explicit / 100 else f"{steps} steps against {explicit:.0f} explicit ones"
 
 
-def passed_funnel(rows, summary):
-    """the body passed the outlet (height of its centre of mass below 0.25 m) and recovered"""
+def passed_outlet(rows, summary):
+    """the body passed the outlet (height of its centre of mass below 0.25 m)"""
     mass = float(rows[-1]["mass"])
     height = float(rows[-1]["gravity_potential"]) / (9.81 * mass)
-    if height > 0.25:
-        return f"centre of mass still at {height:.3g} m"
-    return recovered(rows, summary)
+    return f"centre of mass still at {height:.3g} m" if height > 0.25 else None
+
+
+def passed_funnel(rows, summary):
+    """the body passed the outlet (height of its centre of mass below 0.25 m) and recovered"""
+    return passed_outlet(rows, summary) or recovered(rows, summary)
 
 
 CASES = [
@@ -164,15 +167,15 @@ CASES = [
          [], "completes", check=True, extra=passed_funnel),
 ] + [
     # Particle domains (explicit, PIC/FLIP through the corners) and their dynamic enrichment.
-    # The enriched block keeps the energy the grid-driven ones lose in the squeeze: it bounces
-    # back out of the outlet and wedges in the funnel (docs/verification.md section 7).
+    # The enriched block passes but keeps part of its deformation locked in the enriched
+    # region (user guide 4.5a, known weakness): it is not asked to recover.
     case(f"{name}_funnel_squeeze", f"the funnel squeeze, solver: explicit, {what}, 1.5 s", "solid_scene",
          "data/scenes/stability/funnel.yaml",
          ["solver=explicit", "transfer.scheme=flip", "particle_domains=true", "time.end=1.5"] + sets,
          "completes", check=True, extra=extra)
     for name, what, sets, extra in (
         ("domains", "particle domains", [], passed_funnel),
-        ("enriched", "enriched particle domains (eps = 0.6)", ["domain_enrichment=0.6"], None))
+        ("enriched", "enriched particle domains (eps = 0.6)", ["domain_enrichment=0.6"], passed_outlet))
 ] + [
     case(f"enriched_flatten_{model}", f"block crushed to 5 % of its height and released, {model}, "
          "enriched particle domains (eps = 0.6)", "solid_scene", BASE,

@@ -8,9 +8,10 @@
 
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
-#include <Eigen/LU>
+#include <Eigen/LU>  // determinant
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <map>
 #include <numbers>
@@ -120,7 +121,48 @@ void index_sharing(ParticleDomains<dim>& d) {
       d.sharing[next[d.corner_of[p][alpha]]++] = static_cast<std::uint32_t>(p * K + alpha);
 }
 
-// K(F) from the eigenvalues of C = F^T F (sigma^2), in closed form: a quarter of the cost of
+// Zhu et al. eq. 10 with Frobenius norms, scaled by dim so that the range is the paper's
+// (0, 1] (unscaled, a rotation would give 1/dim and every particle would be enriched at
+// epsilon = 0.6): K = dim / (|F|_F |F^-1|_F) = dim |det F| / (|F|_F |cof F|_F), with
+// F^-1 = cof(F)^T / det F, so a flat or singular F gives 0 without dividing by zero. K = 1
+// exactly for a rotation times a uniform scaling.
+namespace {
+//! cof F = det(F) F^-T, defined for a singular F too.
+template <int dim>
+Mat<dim> cofactor(const Mat<dim>& F) {
+  Mat<dim> c;
+  if constexpr (dim == 2) {
+    c << F(1, 1), -F(1, 0), -F(0, 1), F(0, 0);
+  } else {
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        c(i, j) = F((i + 1) % 3, (j + 1) % 3) * F((i + 2) % 3, (j + 2) % 3) -
+                  F((i + 1) % 3, (j + 2) % 3) * F((i + 2) % 3, (j + 1) % 3);
+  }
+  return c;
+}
+
+//! The current thickness of particle p's domain across its reference axes, the smallest of
+//! volume over the area of the opposite face, J L_a / |J F^-T e_a| = L_a |det F| / |cof(F) e_a|
+//! (Nanson), and the axis of it.
+template <int dim>
+std::pair<double, int> thinnest(const ParticleDomains<dim>& d, std::size_t p, const Mat<dim>& F) {
+  const Mat<dim> c = cofactor<dim>(F);
+  const double J = std::fabs(F.determinant());
+  std::pair<double, int> result{std::numeric_limits<double>::infinity(), 0};
+  for (int a = 0; a < dim; ++a) {
+    const double area = c.col(a).norm();
+    const double h = area > 0.0 ? J / (std::fabs(d.inverse_side[p][a]) * area) : 0.0;
+    if (h < result.first) result = {h, a};
+  }
+  return result;
+}
+}  // namespace
+
+// K(F) = sigma_min / sigma_max, the reciprocal of F's condition number in the 2-norm, which is
+// what Zhu et al. sec. 5.1 describe ("reciprocal of the condition number", "in the range of 0 to
+// 1"); their eq. 10 prints Frobenius norms, with which a rotation would give 1/dim and every
+// particle be enriched at epsilon = 0.6. From the eigenvalues of C = F^T F (sigma^2), in closed form: a quarter of the cost of
 // the SVD (87 against 350 ns in 3D, docs/performance.md), which every particle needs every step.
 // The largest eigenvalue comes from the trigonometric formula for symmetric 3x3 matrices; the
 // smallest from det C = det(F)^2 over the two larger ones, so a thin domain keeps its relative
@@ -176,24 +218,36 @@ void mark_enrichment(ParticleDomains<dim>& d, const std::vector<Mat<dim>>& F) {
   });
   for (const std::uint8_t e : particle_enriched) d.enriched_particles += e;
   if (d.enriched_particles == 0) return;
-  // The current thickness of a domain across its reference axis a: volume over the area of the
-  // opposite face, J L_a / |J F^-T e_a| = L_a / |F^-T e_a| (Nanson).
+  const auto touches_enriched = [&](std::size_t p) {
+    for (const std::uint32_t c : d.corner_of[p])
+      if (d.enriched[c]) return true;
+    return false;
+  };
+  // A flat enriched domain (thinner than 1e-6 of its rest size) has no stable explicit step.
+  const auto flat = [&](std::size_t p, double h, int axis) { return !(h > 1e-6 / std::fabs(d.inverse_side[p][axis])); };
+  std::atomic<bool> any_flat{false};
   d.enriched_length = tbb::parallel_reduce(
       tbb::blocked_range<std::size_t>(0, d.particle_count(), 4096), std::numeric_limits<double>::infinity(),
       [&](const auto& r, double length) {
         for (std::size_t p = r.begin(); p != r.end(); ++p) {
-          bool touches = false;
-          for (const std::uint32_t c : d.corner_of[p]) touches = touches || d.enriched[c];
-          if (!touches) continue;
-          const Mat<dim> inverse_transpose = F[p].inverse().transpose();
-          for (int a = 0; a < dim; ++a) {
-            const double h = 1.0 / (std::fabs(d.inverse_side[p][a]) * inverse_transpose.col(a).norm());
-            length = std::min(length, std::isfinite(h) ? h : 0.0);  // a flat domain: no step is stable
-          }
+          if (!touches_enriched(p)) continue;
+          const auto [h, axis] = thinnest(d, p, F[p]);
+          if (flat(p, h, axis)) any_flat.store(true, std::memory_order_relaxed);
+          length = std::min(length, h);
         }
         return length;
       },
       [](double a, double b) { return std::min(a, b); });
+  // Name the first flat one (the same for any thread count) rather than crawl at dt -> 0.
+  if (any_flat.load())
+    for (std::size_t p = 0; p < d.particle_count(); ++p) {
+      const auto [h, axis] = thinnest(d, p, F[p]);
+      if (touches_enriched(p) && flat(p, h, axis))
+        throw NumericalError("stage 'enrichment': the domain of particle " + std::to_string(p) + " is flat (" +
+                             std::to_string(h) + " m across reference axis " + std::to_string(axis) +
+                             ", below 1e-6 of its rest size): enriched corners cannot be stepped explicitly "
+                             "through it; lower domain_enrichment or remove it");
+    }
 }
 
 template <int dim>

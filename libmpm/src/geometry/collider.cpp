@@ -60,12 +60,12 @@ Vec<dim> Collider<dim>::velocity_at(const Vec<dim>& x) const {
 }
 
 template <int dim>
-void Collider<dim>::project(const Vec<dim>& x, double t, Vec<dim>& v) const {
+void Collider<dim>::project(const Vec<dim>& x, double t, Vec<dim>& v, ContactPoint point) const {
   if (phi(x, t) > 0.0) return;
   // A sticky node needs no normal, and the normal of a level set costs 2 dim samples.
   const Vec<dim> n = contact_.type == ContactType::sticky ? Vec<dim>::Zero() : normal(x, t);
   const Vec<dim> vc = velocity_at(x);
-  v = vc + contact_.apply<dim>(Vec<dim>(v - vc), n);
+  v = vc + contact_.apply<dim>(Vec<dim>(v - vc), n, point);
 }
 
 namespace {
@@ -108,15 +108,15 @@ void DomainWalls<dim>::set_wall(int axis, Side side, const std::optional<Contact
 }
 
 template <int dim>
-void DomainWalls<dim>::project(const Vec<dim>& x, Vec<dim>& v) const {
+void DomainWalls<dim>::project(const Vec<dim>& x, Vec<dim>& v, ContactPoint point) const {
   // A node on the inner face of the layer belongs to the wall: its coordinate lo + i dx may
   // round a few ulps beyond lo + thickness (dx = 1/24 is not exact in binary).
   const double layer = thickness_ * (1.0 + 1e-9);
   for (int axis = 0; axis < dim; ++axis) {
     const std::optional<Contact>& lower = walls_[index(axis, Side::lower)];
     const std::optional<Contact>& upper = walls_[index(axis, Side::upper)];
-    if (lower && x[axis] - lo_[axis] <= layer) v = lower->apply<dim>(v, Vec<dim>::Unit(axis));
-    if (upper && hi_[axis] - x[axis] <= layer) v = upper->apply<dim>(v, Vec<dim>(-Vec<dim>::Unit(axis)));
+    if (lower && x[axis] - lo_[axis] <= layer) v = lower->apply<dim>(v, Vec<dim>::Unit(axis), point);
+    if (upper && hi_[axis] - x[axis] <= layer) v = upper->apply<dim>(v, Vec<dim>(-Vec<dim>::Unit(axis)), point);
   }
 }
 
@@ -148,9 +148,9 @@ Mat<dim> ColliderSet<dim>::free_directions(const Vec<dim>& x, double t, const Ve
 }
 
 template <int dim>
-void ColliderSet<dim>::project(const Vec<dim>& x, double t, Vec<dim>& v) const {
-  for (const Collider<dim>& collider : colliders_) collider.project(x, t, v);
-  if (walls_) walls_->project(x, v);
+void ColliderSet<dim>::project(const Vec<dim>& x, double t, Vec<dim>& v, ContactPoint point) const {
+  for (const Collider<dim>& collider : colliders_) collider.project(x, t, v, point);
+  if (walls_) walls_->project(x, v, point);
 }
 
 template <int dim>

@@ -222,10 +222,11 @@ Pipeline<MpmState<dim>> make_solid_pipeline(const SolidScene<dim>& scene) {
     if (scene.state.particles.has_channel(kElasticF)) deformation.push_back(kElasticF);
     p.add(std::make_unique<stages::ResampleParticles<dim>>(*scene.refinement->resample, deformation));
   }
-  // A solver stable at any step (implicit, grains) still resolves free fall: a particle at
-  // rest falls at most wave_cfl^2 dx / 2 in its first step, dt <= wave_cfl sqrt(dx / |g|).
+  // Enrichment first: the time step needs the thinnest enriched domain.
   if (scene.state.domains && scene.state.domains->enrichment_threshold > 0.0)
     p.add(std::make_unique<stages::DomainEnrichment<dim>>());
+  // A solver stable at any step (implicit, grains) still resolves free fall: a particle at
+  // rest falls at most wave_cfl^2 dx / 2 in its first step, dt <= wave_cfl sqrt(dx / |g|).
   double wave_speed = scene.solver->wave_speed();
   if (wave_speed == 0.0) wave_speed = std::sqrt(scene.settings.gravity.norm() * scene.settings.dx);
   p.add(std::make_unique<stages::TimeStepControl<dim>>(stages::time_step_settings(scene.settings, wave_speed)));

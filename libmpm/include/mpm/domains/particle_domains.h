@@ -19,8 +19,8 @@
 //! F_p is the mean deformation gradient of the trilinear map over the domain: it follows the
 //! corners exactly, so neighbours that share corners stay connected (no numerical fracture).
 //!
-//! Dynamic enrichment (sec. 5): a particle whose F is badly conditioned, K(F) = 1 / (|F^-1| |F|)
-//! = sigma_min / sigma_max <= epsilon, marks its corners enriched for the step. An enriched
+//! Dynamic enrichment (sec. 5): a particle whose F is badly conditioned, K(F) = sigma_min /
+//! sigma_max <= epsilon (sec. 5.1), marks its corners enriched for the step. An enriched
 //! corner stops at the corner layer: it keeps its m_alpha, p_alpha, f_alpha (no scatter to the
 //! grid) and is integrated as a degree of freedom of its own,
 //!   v_alpha = (p_alpha + dt f_alpha) / m_alpha + dt g,   x_alpha += dt v_alpha,
@@ -28,7 +28,7 @@
 //! particle with both kinds of corners ("transitional") reaches both (eq. 11). Inside the
 //! enriched region the domains are a Lagrangian FEM mesh, so the corners no longer inherit the
 //! grid's interpolation error. Its explicit step is bounded by the thinnest enriched domain
-//! (enriched_length) instead of the cell.
+//! (enriched_length) as well as by the cell.
 //!
 //! Particles of a scene with domains are never reordered (no sort moves them, no source or
 //! sink adds or removes any): the corner table indexes them by storage position.
@@ -117,8 +117,9 @@ void add_body(ParticleDomains<dim>& domains, std::size_t first, const std::vecto
 template <int dim>
 void index_sharing(ParticleDomains<dim>& domains);
 
-//! K(F) = 1 / (|F^-1|_2 |F|_2) = sigma_min / sigma_max in [0, 1]: 1 for a rotation, 0 for a
-//! flat domain (Zhu et al. eq. 10).
+//! K(F) = 1 / (|F^-1|_2 |F|_2) = sigma_min / sigma_max in [0, 1], the reciprocal of F's condition
+//! number (Zhu et al. sec. 5.1; their eq. 10 prints Frobenius norms, which would give a
+//! rotation 1/dim): 1 for a rotation times a uniform scaling, 0 for a flat domain.
 template <int dim>
 double enrichment_metric(const Mat<dim>& F);
 

@@ -56,8 +56,8 @@ public:
   //! The obstacle's velocity at x [m/s].
   Vec<dim> velocity_at(const Vec<dim>& x) const;
   //! When phi(x, t) <= 0, replaces the node velocity v [m/s] by v_c + contact.apply(v - v_c, n)
-  //! with v_c = velocity_at(x).
-  void project(const Vec<dim>& x, double t, Vec<dim>& v) const;
+  //! with v_c = velocity_at(x) (for a material point: contact.h, ContactPoint).
+  void project(const Vec<dim>& x, double t, Vec<dim>& v, ContactPoint point = ContactPoint::node) const;
   //! The linear part of project for an implicit solve: appends to `fixed` the unit directions
   //! in which the obstacle prescribes the velocity v of a node at x (every axis for sticky
   //! contact, the normal for slip contact and for separating contact that v approaches; none
@@ -99,7 +99,7 @@ public:
   void set_wall(int axis, Side side, const std::optional<Contact>& contact);
   const std::optional<Contact>& wall(int axis, Side side) const { return walls_[index(axis, side)]; }
 
-  void project(const Vec<dim>& x, Vec<dim>& v) const;
+  void project(const Vec<dim>& x, Vec<dim>& v, ContactPoint point = ContactPoint::node) const;
   //! As Collider::fixed_directions, for the closed walls whose layer holds x.
   void fixed_directions(const Vec<dim>& x, const Vec<dim>& v, std::vector<Vec<dim>>& fixed) const;
 
@@ -123,7 +123,7 @@ public:
 
   //! Applies every collider in the order added, then the walls, so that no node velocity
   //! leaves the domain through a closed wall.
-  void project(const Vec<dim>& x, double t, Vec<dim>& v) const;
+  void project(const Vec<dim>& x, double t, Vec<dim>& v, ContactPoint point = ContactPoint::node) const;
   //! The orthogonal projector onto the velocity directions that no obstacle prescribes at x for
   //! a node moving at v (identity in free space, zero for a sticky node): the degrees of
   //! freedom an implicit solve leaves to the node (Collider::fixed_directions).

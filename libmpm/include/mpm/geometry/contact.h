@@ -12,6 +12,13 @@ enum class ContactType {
             //!< friction; separating nodes are left free
 };
 
+//! What a contact acts on: a grid node, fixed in space, or a material point that moves with
+//! the body (an enriched domain corner, domains/particle_domains.h). Slip contact holds a
+//! node's normal velocity to the obstacle's, which is right for a node the obstacle sweeps
+//! past but would glue a material point to an obstacle that moves away: a material point
+//! takes slip contact as frictionless separating contact.
+enum class ContactPoint { node, material };
+
 struct Contact {
   ContactType type = ContactType::separate;
   double friction = 0.0;  //!< Coulomb coefficient mu >= 0 (used by `separate` only)
@@ -22,7 +29,9 @@ struct Contact {
   //!   v_rel <- v_t (1 + mu v_n / |v_t|)           otherwise (|v_t| reduced by mu |v_n|).
   //! A zero n (no direction known) leaves slip and separate contact without effect.
   template <int dim>
-  Vec<dim> apply(const Vec<dim>& v_rel, const Vec<dim>& n) const {
+  Vec<dim> apply(const Vec<dim>& v_rel, const Vec<dim>& n, ContactPoint point = ContactPoint::node) const {
+    if (point == ContactPoint::material && type == ContactType::slip)
+      return Contact{ContactType::separate, 0.0}.apply<dim>(v_rel, n);
     switch (type) {
       case ContactType::sticky:
         return Vec<dim>::Zero();

@@ -82,8 +82,9 @@ void DomainsFromGrid<dim>::run(MpmState<dim>& s) {
   domains::grid_to_corners(d, s.kernel, s.grid, flip);
   // The enriched corners' own update, with the colliders the boundary stage applies to nodes.
   const double t = s.time + s.dt;
-  domains::integrate_enriched<dim>(d, s.dt, s.gravity,
-                                   [&](const Vec<dim>& x, Vec<dim>& v) { colliders_.project(x, t, v); });
+  domains::integrate_enriched<dim>(d, s.dt, s.gravity, [&](const Vec<dim>& x, Vec<dim>& v) {
+    colliders_.project(x, t, v, geometry::ContactPoint::material);
+  });
   domains::advance_corners(d, s.dt);
   constexpr int K = domains::ParticleDomains<dim>::corners;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.size(), 4096), [&](const auto& r) {

@@ -186,6 +186,13 @@ TEST_CASE("contact laws") {
     CHECK((v - Vec<3>(3, 0, 0)).norm() == 0.0);
     CHECK((Contact{ContactType::slip, 0.0}.apply<3>(Vec<3>(1, 2, 5), n) - Vec<3>(1, 2, 0)).norm() == 0.0);
   }
+  SUBCASE("a material point may leave a slip obstacle; sticky still holds it") {
+    const Contact slip{ContactType::slip, 0.0};
+    const Vec<3> leaving(1, 2, 5);
+    CHECK((slip.apply<3>(leaving, n, ContactPoint::material) - leaving).norm() == 0.0);
+    CHECK((slip.apply<3>(approaching, n, ContactPoint::material) - Vec<3>(3, 0, 0)).norm() == 0.0);
+    CHECK(Contact{ContactType::sticky, 0.0}.apply<3>(leaving, n, ContactPoint::material).norm() == 0.0);
+  }
   SUBCASE("separate leaves separating velocities alone") {
     const Vec<3> leaving(3, 1, 2);
     CHECK((Contact{ContactType::separate, 0.5}.apply<3>(leaving, n) - leaving).norm() == 0.0);
