@@ -168,7 +168,7 @@ CASES = [
 ] + [
     # Particle domains (explicit, PIC/FLIP through the corners) and their dynamic enrichment.
     # The enriched block passes but keeps part of its deformation locked in the enriched
-    # region (user guide 4.5a, known weakness): it is not asked to recover.
+    # region (no self-contact there: user guide 4.5a, known weakness): it is not asked to recover.
     case(f"{name}_funnel_squeeze", f"the funnel squeeze, solver: explicit, {what}, 1.5 s", "solid_scene",
          "data/scenes/stability/funnel.yaml",
          ["solver=explicit", "transfer.scheme=flip", "particle_domains=true", "time.end=1.5"] + sets,
