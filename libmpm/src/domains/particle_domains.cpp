@@ -121,11 +121,6 @@ void index_sharing(ParticleDomains<dim>& d) {
       d.sharing[next[d.corner_of[p][alpha]]++] = static_cast<std::uint32_t>(p * K + alpha);
 }
 
-// Zhu et al. eq. 10 with Frobenius norms, scaled by dim so that the range is the paper's
-// (0, 1] (unscaled, a rotation would give 1/dim and every particle would be enriched at
-// epsilon = 0.6): K = dim / (|F|_F |F^-1|_F) = dim |det F| / (|F|_F |cof F|_F), with
-// F^-1 = cof(F)^T / det F, so a flat or singular F gives 0 without dividing by zero. K = 1
-// exactly for a rotation times a uniform scaling.
 namespace {
 //! cof F = det(F) F^-T, defined for a singular F too.
 template <int dim>
@@ -162,8 +157,9 @@ std::pair<double, int> thinnest(const ParticleDomains<dim>& d, std::size_t p, co
 // K(F) = sigma_min / sigma_max, the reciprocal of F's condition number in the 2-norm, which is
 // what Zhu et al. sec. 5.1 describe ("reciprocal of the condition number", "in the range of 0 to
 // 1"); their eq. 10 prints Frobenius norms, with which a rotation would give 1/dim and every
-// particle be enriched at epsilon = 0.6. From the eigenvalues of C = F^T F (sigma^2), in closed form: a quarter of the cost of
-// the SVD (87 against 350 ns in 3D, docs/performance.md), which every particle needs every step.
+// particle be enriched at epsilon = 0.6. From the eigenvalues of C = F^T F (sigma^2), in
+// closed form: a quarter of the cost of the SVD (88 against 350 ns in 3D, docs/performance.md),
+// which every particle needs every step.
 // The largest eigenvalue comes from the trigonometric formula for symmetric 3x3 matrices; the
 // smallest from det C = det(F)^2 over the two larger ones, so a thin domain keeps its relative
 // accuracy. Where two eigenvalues coincide the arccosine costs digits: K to about 1e-8.

@@ -130,8 +130,9 @@ void mark_enrichment(ParticleDomains<dim>& domains, const std::vector<Mat<dim>>&
 
 //! Sorts the corners into buckets of `grid` (allocating the blocks their stencils touch) and
 //! scatters m_alpha, p_alpha, f_alpha (in domains.mass, momentum, force) of the corners not
-//! enriched into grid.mass, grid.velocity (momentum) and grid.force, each zeroed first. NumericalError naming `stage`
-//! when a corner is not finite or its stencil leaves the grid.
+//! enriched into grid.mass, grid.velocity (momentum) and grid.force, each zeroed first.
+//! NumericalError naming `stage` when a corner (enriched or not) is not finite or its stencil
+//! leaves the grid.
 template <int dim>
 void corners_to_grid(ParticleDomains<dim>& domains, const Kernel& kernel, SparseGrid<dim>& grid,
                      const std::string& stage);

@@ -1,7 +1,7 @@
 // The two-step transfers through particle domains and their dynamic enrichment (Zhu et al.
-// sec. 4-5, eq. 5-11; equations in mpm/domains/particle_domains.h). The corner sums run over the corners (each reads the
-// particles that share it), so no two threads write one corner and the sums do not depend on
-// the thread count.
+// sec. 4-5, eq. 5-11; equations in mpm/domains/particle_domains.h). The corner sums run over
+// the corners (each reads the particles that share it), so no two threads write one corner and
+// the sums do not depend on the thread count.
 #include <mpm/core/error.h>
 #include <mpm/core/finite_guard.h>
 #include <mpm/solid/solid_channels.h>
