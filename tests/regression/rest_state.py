@@ -9,13 +9,16 @@
 3. With --versus-domains (for an enriched method): some particle was enriched (the
    diagnostics column enriched_particles), and the error is below that of the particle
    domains without enrichment, so the enrichment is what the bound measures.
+--common KEY=VALUE applies to every run (e.g. solver=implicit: the implicit step against the
+implicit standard MPM).
 
 Scenes and measured figures (docs/verification.md section 7):
   flatten_recover.yaml (bound 5.4e-3, the flattened Gorilla): domains 4.1e-5, standard 0.051
   twist_release.yaml with domain_enrichment=0.6 (bound 2.4e-4, the twisted Buddha)
+  flatten_recover.yaml, implicit, domain_enrichment=0.6, time.end=2: 1.7e-4, standard 0.043
 
     rest_state.py --app BUILD/apps/solid_scene --scene SCENE --bound B [--set KEY=VALUE ...]
-                  [--versus-domains] --work DIR
+                  [--common KEY=VALUE ...] [--versus-domains] --work DIR
 """
 import argparse
 import pathlib
@@ -28,15 +31,16 @@ ap.add_argument("--app", required=True)
 ap.add_argument("--scene", required=True)
 ap.add_argument("--bound", type=float, required=True)
 ap.add_argument("--set", action="append", default=[], dest="overrides")
+ap.add_argument("--common", action="append", default=[])
 ap.add_argument("--versus-domains", action="store_true")
 ap.add_argument("--work", required=True)
 args = ap.parse_args()
 work = pathlib.Path(args.work)
 work.mkdir(parents=True, exist_ok=True)
 
-method = run_app(args.app, args.scene, work / "method", args.overrides)["rest_state_error"]
-standard = run_app(args.app, args.scene, work / "standard", ["particle_domains=false"])["rest_state_error"]
-name = "particle domains" + ("".join(" " + o for o in args.overrides))
+method = run_app(args.app, args.scene, work / "method", args.common + args.overrides)["rest_state_error"]
+standard = run_app(args.app, args.scene, work / "standard", args.common + ["particle_domains=false"])["rest_state_error"]
+name = "particle domains" + ("".join(" " + o for o in args.common + args.overrides))
 print(f"rest_state_error: {name} {method:.3e}, standard MPM {standard:.3e}")
 failures = []
 if not method <= args.bound:
@@ -45,7 +49,7 @@ if not standard >= 10.0 * method:
     failures.append(f"standard MPM {standard:.3e} is not 10x the method's {method:.3e}")
 if args.versus_domains:
     enriched = max(float(r["enriched_particles"]) for r in read_csv(work / "method" / "diagnostics.csv"))
-    domains = run_app(args.app, args.scene, work / "domains")["rest_state_error"]
+    domains = run_app(args.app, args.scene, work / "domains", args.common)["rest_state_error"]
     print(f"particle domains without enrichment {domains:.3e}; largest enriched share {enriched:.3f}")
     if not enriched > 0.0:
         failures.append("no particle was ever enriched")

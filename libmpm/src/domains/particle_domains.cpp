@@ -316,6 +316,115 @@ void grid_to_corners(ParticleDomains<dim>& d, const Kernel& kernel, const Sparse
 }
 
 template <int dim>
+void corner_forces(const ParticleDomains<dim>& d, const std::vector<Mat<dim>>& weighted_stress,
+                   std::vector<Vec<dim>>& out) {
+  constexpr int K = ParticleDomains<dim>::corners;
+  out.resize(d.corner_count());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, d.corner_count(), 4096), [&](const auto& r) {
+    for (std::size_t c = r.begin(); c != r.end(); ++c) {
+      Vec<dim> f = Vec<dim>::Zero();
+      for (std::uint32_t k = d.sharing_begin[c]; k != d.sharing_begin[c + 1]; ++k) {
+        const std::size_t p = d.sharing[k] / K;
+        f.noalias() -= weighted_stress[p] * d.weight_gradient(p, static_cast<int>(d.sharing[k] % K));
+      }
+      out[c] = f;
+    }
+  });
+}
+
+template <int dim>
+void corners_from_nodes(const ParticleDomains<dim>& d, const Kernel& kernel, const SparseGrid<dim>& grid,
+                        const std::vector<Vec<dim>>& u, std::vector<Vec<dim>>& out) {
+  out.resize(d.corner_count(), Vec<dim>::Zero());
+  std::array<ChannelView, dim> channels;
+  for (int a = 0; a < dim; ++a) channels[a] = detail::component_view<dim>(u, a);
+  std::visit(
+      [&](const auto& k) {
+        using K = std::decay_t<decltype(k)>;
+        detail::gather<dim, dim>(grid, d.buckets, channels,
+                                 [&](std::uint32_t c, const PatchFrame<dim>& f, const double* patch) {
+                                   if (!d.enriched.empty() && d.enriched[c]) return;
+                                   Stencil<dim, K::support> st;
+                                   st.template compute<false>(k, f.cells(d.x[c]), f.origin);
+                                   Vec<dim> v = Vec<dim>::Zero();
+                                   st.for_each_node([&](int node, double w, const Vec<dim>&, const Vec<dim>&) {
+                                     v.noalias() += w * Eigen::Map<const Vec<dim>>(patch + node * dim);
+                                   });
+                                   out[c] = v;
+                                 });
+      },
+      kernel);
+}
+
+template <int dim>
+void nodes_from_corners(const ParticleDomains<dim>& d, const Kernel& kernel, const SparseGrid<dim>& grid,
+                        const std::vector<Vec<dim>>& f, std::vector<Vec<dim>>& out) {
+  out.assign(grid.node_storage(), Vec<dim>::Zero());
+  std::array<ChannelView, dim> channels;
+  for (int a = 0; a < dim; ++a) channels[a] = detail::component_view<dim>(out, a);
+  using Node = Vec<dim>;
+  std::visit(
+      [&](const auto& k) {
+        using K = std::decay_t<decltype(k)>;
+        detail::scatter<dim, dim>(grid, d.buckets, channels,
+                                  [&](std::uint32_t c, const PatchFrame<dim>& frame, double* patch) {
+                                    if (!d.enriched.empty() && d.enriched[c]) return;
+                                    Stencil<dim, K::support> st;
+                                    st.template compute<false>(k, frame.cells(d.x[c]), frame.origin);
+                                    Node values[dim + 1];
+                                    for (Node& v : values) v.setZero();
+                                    values[0] = f[c];
+                                    detail::spread<false>(st, values, patch);
+                                  });
+      },
+      kernel);
+}
+
+namespace {
+//! body(node, w) for the nodes of the kernel's stencil at x, by storage index (-1 where the
+//! block is not allocated).
+template <int dim, class K, class Body>
+void for_each_stencil_node(const K& kernel, const SparseGrid<dim>& grid, const Vec<dim>& x, Body&& body) {
+  std::array<int, dim> base;
+  double w[dim][K::support], dw[dim][K::support];
+  for (int a = 0; a < dim; ++a) kernel((x[a] - grid.origin()[a]) / grid.dx(), base[a], w[a], dw[a]);
+  for (int flat = 0; flat < ipow(K::support, dim); ++flat) {
+    IVec<dim> node;
+    double weight = 1.0;
+    for (int a = 0, rest = flat; a < dim; ++a, rest /= K::support) {
+      node[a] = base[a] + rest % K::support;
+      weight *= w[a][rest % K::support];
+    }
+    body(grid.node_index(node), weight);
+  }
+}
+}  // namespace
+
+template <int dim>
+void for_each_two_step_gradient(const ParticleDomains<dim>& d, const Kernel& kernel, const SparseGrid<dim>& grid,
+                                const std::function<void(std::size_t, Index, const Vec<dim>&)>& body) {
+  std::vector<std::pair<Index, Vec<dim>>> q;  // the nodes of one particle's corners
+  std::visit(
+      [&](const auto& k) {
+        for (std::size_t p = 0; p < d.particle_count(); ++p) {
+          q.clear();
+          for (int alpha = 0; alpha < ParticleDomains<dim>::corners; ++alpha) {
+            const std::uint32_t c = d.corner_of[p][alpha];
+            if (!d.enriched.empty() && d.enriched[c]) continue;
+            const Vec<dim> g = d.weight_gradient(p, alpha);
+            for_each_stencil_node(k, grid, d.x[c], [&](Index node, double w) {
+              auto it = std::find_if(q.begin(), q.end(), [&](const auto& e) { return e.first == node; });
+              if (it == q.end()) it = q.insert(q.end(), {node, Vec<dim>::Zero()});
+              it->second += w * g;
+            });
+          }
+          for (const auto& [node, gradient] : q) body(p, node, gradient);
+        }
+      },
+      kernel);
+}
+
+template <int dim>
 void integrate_enriched(ParticleDomains<dim>& d, double dt, const Vec<dim>& gravity,
                         const std::function<void(const Vec<dim>&, Vec<dim>&)>& constrain) {
   if (d.enriched.empty()) return;
@@ -371,6 +480,13 @@ void restore(ParticleDomains<dim>& d, const CarriedData& data) {
   template void grid_to_corners(ParticleDomains<dim>&, const Kernel&, const SparseGrid<dim>&, bool);                 \
   template void integrate_enriched(ParticleDomains<dim>&, double, const Vec<dim>&,                                   \
                                    const std::function<void(const Vec<dim>&, Vec<dim>&)>&);                          \
+  template void corner_forces(const ParticleDomains<dim>&, const std::vector<Mat<dim>>&, std::vector<Vec<dim>>&);    \
+  template void corners_from_nodes(const ParticleDomains<dim>&, const Kernel&, const SparseGrid<dim>&,               \
+                                   const std::vector<Vec<dim>>&, std::vector<Vec<dim>>&);                            \
+  template void nodes_from_corners(const ParticleDomains<dim>&, const Kernel&, const SparseGrid<dim>&,               \
+                                   const std::vector<Vec<dim>>&, std::vector<Vec<dim>>&);                            \
+  template void for_each_two_step_gradient(const ParticleDomains<dim>&, const Kernel&, const SparseGrid<dim>&,       \
+                                           const std::function<void(std::size_t, Index, const Vec<dim>&)>&);         \
   template void advance_corners(ParticleDomains<dim>&, double);                                                      \
   template CarriedData carried(const ParticleDomains<dim>&);                                                         \
   template void restore(ParticleDomains<dim>&, const CarriedData&);

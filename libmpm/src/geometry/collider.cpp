@@ -72,22 +72,24 @@ namespace {
 //! Appends the directions `contact` fixes for a relative velocity v_rel at a surface of unit
 //! outward normal n.
 template <int dim>
-void contact_directions(const Contact& contact, const Vec<dim>& v_rel, const Vec<dim>& n,
+void contact_directions(const Contact& contact, const Vec<dim>& v_rel, const Vec<dim>& n, ContactPoint point,
                         std::vector<Vec<dim>>& fixed) {
+  // A material point takes slip contact as separating contact (Contact::apply).
+  const bool slip = contact.type == ContactType::slip && point == ContactPoint::node;
   if (contact.type == ContactType::sticky) {
     for (int a = 0; a < dim; ++a) fixed.push_back(Vec<dim>::Unit(a));
-  } else if (contact.type == ContactType::slip || v_rel.dot(n) < 0.0) {
+  } else if (slip || v_rel.dot(n) < 0.0) {
     fixed.push_back(n);
   }
 }
 }  // namespace
 
 template <int dim>
-void Collider<dim>::fixed_directions(const Vec<dim>& x, double t, const Vec<dim>& v,
-                                     std::vector<Vec<dim>>& fixed) const {
+void Collider<dim>::fixed_directions(const Vec<dim>& x, double t, const Vec<dim>& v, std::vector<Vec<dim>>& fixed,
+                                     ContactPoint point) const {
   if (phi(x, t) > 0.0) return;
   const Vec<dim> n = contact_.type == ContactType::sticky ? Vec<dim>::Zero() : normal(x, t);
-  contact_directions(contact_, Vec<dim>(v - velocity_at(x)), n, fixed);
+  contact_directions(contact_, Vec<dim>(v - velocity_at(x)), n, point, fixed);
 }
 
 template <int dim>
@@ -121,22 +123,23 @@ void DomainWalls<dim>::project(const Vec<dim>& x, Vec<dim>& v, ContactPoint poin
 }
 
 template <int dim>
-void DomainWalls<dim>::fixed_directions(const Vec<dim>& x, const Vec<dim>& v, std::vector<Vec<dim>>& fixed) const {
+void DomainWalls<dim>::fixed_directions(const Vec<dim>& x, const Vec<dim>& v, std::vector<Vec<dim>>& fixed,
+                                        ContactPoint point) const {
   const double layer = thickness_ * (1.0 + 1e-9);  // as in project
   for (int axis = 0; axis < dim; ++axis) {
     const std::optional<Contact>& lower = walls_[index(axis, Side::lower)];
     const std::optional<Contact>& upper = walls_[index(axis, Side::upper)];
-    if (lower && x[axis] - lo_[axis] <= layer) contact_directions<dim>(*lower, v, Vec<dim>::Unit(axis), fixed);
+    if (lower && x[axis] - lo_[axis] <= layer) contact_directions<dim>(*lower, v, Vec<dim>::Unit(axis), point, fixed);
     if (upper && hi_[axis] - x[axis] <= layer)
-      contact_directions<dim>(*upper, v, Vec<dim>(-Vec<dim>::Unit(axis)), fixed);
+      contact_directions<dim>(*upper, v, Vec<dim>(-Vec<dim>::Unit(axis)), point, fixed);
   }
 }
 
 template <int dim>
-Mat<dim> ColliderSet<dim>::free_directions(const Vec<dim>& x, double t, const Vec<dim>& v) const {
+Mat<dim> ColliderSet<dim>::free_directions(const Vec<dim>& x, double t, const Vec<dim>& v, ContactPoint point) const {
   std::vector<Vec<dim>> fixed;
-  for (const Collider<dim>& collider : colliders_) collider.fixed_directions(x, t, v, fixed);
-  if (walls_) walls_->fixed_directions(x, v, fixed);
+  for (const Collider<dim>& collider : colliders_) collider.fixed_directions(x, t, v, fixed, point);
+  if (walls_) walls_->fixed_directions(x, v, fixed, point);
   // Gram-Schmidt: an orthonormal basis Q of the fixed directions, then I - Q Q^T.
   Mat<dim> free = Mat<dim>::Identity();
   for (Vec<dim> d : fixed) {

@@ -166,13 +166,13 @@ void seed_bodies(SolidScene<dim>& solid, const Config& scene) {
 }
 
 namespace {
-//! The scenes particle domains support (particle_domains.h): explicit elastic solids on a
-//! uniform, non-periodic grid with the PIC/FLIP transfer of Zhu et al.
+//! The scenes particle domains support (particle_domains.h): elastic solids, explicit or
+//! implicit, on a uniform, non-periodic grid with the PIC/FLIP transfer of Zhu et al.
 template <int dim>
 void check_particle_domains(const SolidScene<dim>& s, const Config& scene) {
   const std::string why = "particle_domains: true needs ";
-  if (s.solver->name() != "explicit")
-    scene.fail("particle_domains", why + "solver: explicit (solver is '" + s.solver->name() + "')");
+  if (s.solver->name() != "explicit" && s.solver->name() != "implicit")
+    scene.fail("particle_domains", why + "solver: explicit or implicit (solver is '" + s.solver->name() + "')");
   if (s.state.adaptive) scene.fail("particle_domains", why + "a uniform grid (remove the key 'adaptive')");
   for (int a = 0; a < dim; ++a)
     if (s.settings.periodic[a]) scene.fail("particle_domains", why + "walls on every axis (no periodic axis)");
@@ -228,16 +228,24 @@ Pipeline<MpmState<dim>> make_solid_pipeline(const SolidScene<dim>& scene) {
   // A solver stable at any step (implicit, grains) still resolves free fall: a particle at
   // rest falls at most wave_cfl^2 dx / 2 in its first step, dt <= wave_cfl sqrt(dx / |g|).
   double wave_speed = scene.solver->wave_speed();
-  if (wave_speed == 0.0) wave_speed = std::sqrt(scene.settings.gravity.norm() * scene.settings.dx);
-  p.add(std::make_unique<stages::TimeStepControl<dim>>(stages::time_step_settings(scene.settings, wave_speed)));
+  auto dt_settings = stages::time_step_settings(scene.settings, wave_speed);
+  if (wave_speed == 0.0) {
+    dt_settings.wave_speed = std::sqrt(scene.settings.gravity.norm() * scene.settings.dx);
+    dt_settings.bound_enriched = false;  // an implicit step solves the enriched corners too
+  }
+  p.add(std::make_unique<stages::TimeStepControl<dim>>(dt_settings));
   if (scene.refinement && scene.refinement->follow_particles)
     p.add(std::make_unique<stages::RefineGrid<dim>>(
         adaptive::build_tree(*scene.refinement, scene.settings, scene.colliders)));
-  // Particle domains (explicit elastic only) replace sort, p2g, the stress forces, the
+  // Particle domains (elastic only) replace sort, p2g, the explicit stress forces, the
   // deformation update and g2p by the two transfers through the corners (domain_transfer.h).
+  const bool implicit = scene.solver->name() == "implicit";
   if (scene.state.domains) {
     p.add(std::make_unique<stages::DomainsToGrid<dim>>(scene.materials));
-    p.add(std::make_unique<stages::GridVelocityUpdate<dim>>(true));
+    if (implicit)
+      for (auto& stage : scene.solver->grid_update()) p.add(std::move(stage));
+    else
+      p.add(std::make_unique<stages::GridVelocityUpdate<dim>>(true));
   } else {
     p.add(std::make_unique<stages::SortParticles<dim>>());
     p.add(std::make_unique<stages::ParticlesToGrid<dim>>());
@@ -246,7 +254,7 @@ Pipeline<MpmState<dim>> make_solid_pipeline(const SolidScene<dim>& scene) {
   p.add(std::make_unique<stages::GridBoundary<dim>>(scene.colliders));
   if (scene.state.adaptive) p.add(std::make_unique<stages::GhostVelocities<dim>>());
   if (scene.state.domains) {
-    p.add(std::make_unique<stages::DomainsFromGrid<dim>>(scene.colliders));
+    p.add(std::make_unique<stages::DomainsFromGrid<dim>>(scene.colliders, implicit));
   } else {
     for (auto& stage : scene.solver->particle_update()) p.add(std::move(stage));
     p.add(std::make_unique<stages::GridToParticles<dim>>());

@@ -87,13 +87,16 @@ struct ParticleDomains {
     for (int a = 0; a < dim; ++a) g[a] = ((alpha >> a) & 1 ? 1.0 : -1.0) * inverse_side[p][a] / (corners / 2);
     return g;
   }
-  //! F_p = sum_alpha x_alpha grad_X w_alpha_p^T from the current corners.
-  Mat<dim> deformation(std::size_t p) const {
-    Mat<dim> F = Mat<dim>::Zero();
+  //! sum_alpha u_alpha grad_X w_alpha_p^T: the reference gradient over particle p's domain of a
+  //! field u given at the corners.
+  Mat<dim> gradient(std::size_t p, const std::vector<Vec<dim>>& u) const {
+    Mat<dim> G = Mat<dim>::Zero();
     for (int alpha = 0; alpha < corners; ++alpha)
-      F.noalias() += x[corner_of[p][alpha]] * weight_gradient(p, alpha).transpose();
-    return F;
+      G.noalias() += u[corner_of[p][alpha]] * weight_gradient(p, alpha).transpose();
+    return G;
   }
+  //! F_p = sum_alpha x_alpha grad_X w_alpha_p^T from the current corners.
+  Mat<dim> deformation(std::size_t p) const { return gradient(p, x); }
   //! x_p = sum_alpha w_alpha_p x_alpha.
   Vec<dim> centre(std::size_t p) const {
     Vec<dim> c = Vec<dim>::Zero();
@@ -149,6 +152,32 @@ void grid_to_corners(ParticleDomains<dim>& domains, const Kernel& kernel, const 
 template <int dim>
 void integrate_enriched(ParticleDomains<dim>& domains, double dt, const Vec<dim>& gravity,
                         const std::function<void(const Vec<dim>&, Vec<dim>&)>& constrain);
+
+//! f_alpha = - sum_p S_p grad_X w_alpha_p on every corner (eq. 8), S_p = V_p^0 P_p the
+//! particle's first Piola-Kirchhoff stress weighted by its reference volume [N m].
+template <int dim>
+void corner_forces(const ParticleDomains<dim>& domains, const std::vector<Mat<dim>>& weighted_stress,
+                   std::vector<Vec<dim>>& out);
+
+//! out_alpha = sum_i w_i(x_alpha) u_i for the corners not enriched, any node field u (sized at
+//! least to the node storage; the grid_to_corners interpolation); enriched entries untouched.
+//! Preconditions: the corners sorted against `grid` (corners_to_grid).
+template <int dim>
+void corners_from_nodes(const ParticleDomains<dim>& domains, const Kernel& kernel, const SparseGrid<dim>& grid,
+                        const std::vector<Vec<dim>>& u, std::vector<Vec<dim>>& out);
+
+//! out_i = sum_alpha w_i(x_alpha) f_alpha over the corners not enriched (out sized to the node
+//! storage, zeroed first): the transpose of corners_from_nodes.
+template <int dim>
+void nodes_from_corners(const ParticleDomains<dim>& domains, const Kernel& kernel, const SparseGrid<dim>& grid,
+                        const std::vector<Vec<dim>>& f, std::vector<Vec<dim>>& out);
+
+//! body(p, node, q) for every particle p and every grid node its corners not enriched reach, with
+//! q = sum_alpha w_node(x_alpha) grad_X w_alpha_p the reference gradient of the two-step weight
+//! (eq. 5) [1/m]; serially, in particle order. For the diagonal of an implicit step's operator.
+template <int dim>
+void for_each_two_step_gradient(const ParticleDomains<dim>& domains, const Kernel& kernel, const SparseGrid<dim>& grid,
+                                const std::function<void(std::size_t, Index, const Vec<dim>&)>& body);
 
 //! x_alpha += dt v_alpha for every corner (v_alpha in domains.momentum).
 template <int dim>

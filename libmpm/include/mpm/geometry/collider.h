@@ -62,7 +62,8 @@ public:
   //! in which the obstacle prescribes the velocity v of a node at x (every axis for sticky
   //! contact, the normal for slip contact and for separating contact that v approaches; none
   //! outside the obstacle). Friction is left to project.
-  void fixed_directions(const Vec<dim>& x, double t, const Vec<dim>& v, std::vector<Vec<dim>>& fixed) const;
+  void fixed_directions(const Vec<dim>& x, double t, const Vec<dim>& v, std::vector<Vec<dim>>& fixed,
+                        ContactPoint point = ContactPoint::node) const;
 
   const Shape<dim>& shape() const { return shape_; }
   const Contact& contact() const { return contact_; }
@@ -101,7 +102,8 @@ public:
 
   void project(const Vec<dim>& x, Vec<dim>& v, ContactPoint point = ContactPoint::node) const;
   //! As Collider::fixed_directions, for the closed walls whose layer holds x.
-  void fixed_directions(const Vec<dim>& x, const Vec<dim>& v, std::vector<Vec<dim>>& fixed) const;
+  void fixed_directions(const Vec<dim>& x, const Vec<dim>& v, std::vector<Vec<dim>>& fixed,
+                        ContactPoint point = ContactPoint::node) const;
 
   const Vec<dim>& lo() const { return lo_; }
   const Vec<dim>& hi() const { return hi_; }
@@ -127,7 +129,8 @@ public:
   //! The orthogonal projector onto the velocity directions that no obstacle prescribes at x for
   //! a node moving at v (identity in free space, zero for a sticky node): the degrees of
   //! freedom an implicit solve leaves to the node (Collider::fixed_directions).
-  Mat<dim> free_directions(const Vec<dim>& x, double t, const Vec<dim>& v) const;
+  Mat<dim> free_directions(const Vec<dim>& x, double t, const Vec<dim>& v,
+                           ContactPoint point = ContactPoint::node) const;
   bool uses_level_sets() const;
   bool empty() const { return colliders_.empty() && !walls_; }
 

@@ -29,7 +29,8 @@ double TimeStepControl<dim>::stable_dt(const MpmState<dim>& s) const {
   if (settings_.wave_speed > 0.0) {
     dt = std::min(dt, settings_.wave_cfl * dx / settings_.wave_speed);
     // Enriched particle domains are a Lagrangian mesh: their own Courant bound.
-    if (s.domains) dt = std::min(dt, settings_.wave_cfl * s.domains->enriched_length / settings_.wave_speed);
+    if (s.domains && settings_.bound_enriched)
+      dt = std::min(dt, settings_.wave_cfl * s.domains->enriched_length / settings_.wave_speed);
   }
   return dt;
 }

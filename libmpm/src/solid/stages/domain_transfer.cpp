@@ -51,23 +51,20 @@ void DomainsToGrid<dim>::run(MpmState<dim>& s) {
   constexpr int K = domains::ParticleDomains<dim>::corners;
   d.mass.resize(d.corner_count());
   d.momentum.resize(d.corner_count());
-  d.force.resize(d.corner_count());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, d.corner_count(), 4096), [&](const auto& r) {
     for (std::size_t c = r.begin(); c != r.end(); ++c) {
       double m = 0.0;
-      Vec<dim> momentum = Vec<dim>::Zero(), force = Vec<dim>::Zero();
+      Vec<dim> momentum = Vec<dim>::Zero();
       for (std::uint32_t k = d.sharing_begin[c]; k != d.sharing_begin[c + 1]; ++k) {
         const std::size_t p = d.sharing[k] / K;
-        const int alpha = static_cast<int>(d.sharing[k] % K);
         m += P.mass[p];
         momentum += P.mass[p] * P.v[p];
-        force.noalias() -= weighted_stress_[p] * d.weight_gradient(p, alpha);
       }
       d.mass[c] = m / K;  // w_alpha_p = 1 / 2^dim
       d.momentum[c] = momentum / K;
-      d.force[c] = force;
     }
   });
+  domains::corner_forces(d, weighted_stress_, d.force);
   domains::corners_to_grid(d, s.kernel, s.grid, name());
 }
 
@@ -80,11 +77,13 @@ void DomainsFromGrid<dim>::run(MpmState<dim>& s) {
   const bool flip = s.transfer.uses_old_velocity();
   const double a = flip ? s.transfer.flip_ratio : 0.0;
   domains::grid_to_corners(d, s.kernel, s.grid, flip);
-  // The enriched corners' own update, with the colliders the boundary stage applies to nodes.
+  // The enriched corners' own update, with the colliders the boundary stage applies to nodes
+  // (an implicit step has solved for them already).
   const double t = s.time + s.dt;
-  domains::integrate_enriched<dim>(d, s.dt, s.gravity, [&](const Vec<dim>& x, Vec<dim>& v) {
-    colliders_.project(x, t, v, geometry::ContactPoint::material);
-  });
+  if (!enriched_stepped_)
+    domains::integrate_enriched<dim>(d, s.dt, s.gravity, [&](const Vec<dim>& x, Vec<dim>& v) {
+      colliders_.project(x, t, v, geometry::ContactPoint::material);
+    });
   domains::advance_corners(d, s.dt);
   constexpr int K = domains::ParticleDomains<dim>::corners;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.size(), 4096), [&](const auto& r) {

@@ -1,18 +1,25 @@
 // Backward Euler on the grid (Stomakhin et al. 2013 sec. 9; Zhu et al. sec. 6, eq. 12-19).
 //
 // Unknown: the node velocities v at t + dt. With the nodes moved to x_i + dt v_i, particle
-// p deforms to F_p(v) = (I + dt sum_i v_i grad w_ip^T) F_p^n and the step minimises the
-// incremental potential
+// p deforms to F_p(v) = F_p^n + dt G_p(v), G_p = sum_i v_i grad w_ip^T F_p^n, and the step
+// minimises the incremental potential
 //   E(v) = sum_i m_i |v_i - v_i^*|^2 / 2 + sum_p V_p^0 psi(F_p(v)),   v^* = v^n + dt g,
 // whose stationarity g(v) = M (v - v^*) - dt f(v) = 0 is the implicit momentum balance
 // (f the stress forces of the explicit step, evaluated at t + dt). Newton's method:
 //   (M + dt^2 K) dv = -g,   K dv = -df[dv] = sum_p V_p^0 dP_p(dF_p) F_p^nT grad w_ip,
-//   dF_p = dt sum_j dv_j grad w_jp^T F_p^n                             (eq. 14-15)
+//   dF_p = dt G_p(dv)                                                  (eq. 14-15)
 // solved by CG with the exact dP, or, where CG meets negative curvature (compression and
 // inversion soften a body), with dP made positive semi-definite in principal space (eq. 16,
 // Teran et al. 2005), which makes the system SPD; Jacobi preconditioner, the
 // diagonal formed in closed form (eq. 17-19). Each system is solved to linear_tolerance (an
 // inexact Newton step); a backtracking line search halves the step until E decreases.
+//
+// Particle domains (Zhu et al. sec. 4-6): a particle deforms with its corners,
+// G_p = sum_alpha v_alpha grad_X w_alpha_p^T, where a corner moves with the grid,
+// v_alpha = sum_i w_i(x_alpha) v_i, or, enriched, at a velocity of its own that is an unknown
+// with its mass m_alpha and predicted velocity p_alpha / m_alpha + dt g (eq. 11); the forces are
+// f_alpha = - sum_p V_p^0 P_p grad_X w_alpha_p, carried to the nodes by the same weights. The
+// operator is the same sum with the differentials, so the solve and its checks are unchanged.
 //
 // Plastic materials: the return map acts inside the step, the stress at v is that of the
 // returned state, tau(Z(F_p(v))) F_p(v)^-T (returned_stress below), so a stiff sediment
@@ -68,22 +75,73 @@ void for_each_particle(std::size_t n, const auto& body) {
 }
 
 template <int dim>
-double kinetic(const SparseGrid<dim>& g, const std::vector<Vec<dim>>& v, const std::vector<Vec<dim>>& predicted) {
+double kinetic(const std::vector<double>& mass, const std::vector<Vec<dim>>& v,
+               const std::vector<Vec<dim>>& predicted) {
   double e = 0.0;
-  for (std::size_t k = 0; k < g.node_storage(); ++k)
-    if (g.mass[k] > 0.0) e += 0.5 * g.mass[k] * (v[k] - predicted[k]).squaredNorm();
+  for (std::size_t k = 0; k < mass.size(); ++k)
+    if (mass[k] > 0.0) e += 0.5 * mass[k] * (v[k] - predicted[k]).squaredNorm();
   return e;
 }
 }  // namespace
 
 template <int dim>
+const std::vector<double>& ImplicitUpdate<dim>::unknown_mass(const MpmState<dim>& s) {
+  mass_ = s.grid.mass;
+  if (!s.domains) return mass_;
+  const domains::ParticleDomains<dim>& d = *s.domains;
+  const std::size_t nodes = s.grid.node_storage();
+  mass_.resize(nodes + d.corner_count(), 0.0);
+  for (std::size_t c = 0; c < d.enriched.size(); ++c)
+    if (d.enriched[c]) mass_[nodes + c] = d.mass[c];
+  return mass_;
+}
+
+template <int dim>
+void ImplicitUpdate<dim>::material_rate(const MpmState<dim>& s, const std::vector<Vec<dim>>& v,
+                                        std::vector<Mat<dim>>& G) {
+  const Particles<dim>& P = s.particles;
+  if (!s.domains) {
+    const std::vector<Mat<dim>>& F = solid::elastic_F(P);
+    node_field_gradient(P, s.buckets, s.kernel, s.grid, v, G);
+    for_each_particle<dim>(P.size(), [&](std::size_t p) { G[p] = (G[p] * F[p]).eval(); });
+    return;
+  }
+  const domains::ParticleDomains<dim>& d = *s.domains;
+  domains::corners_from_nodes(d, s.kernel, s.grid, v, corner_velocity_);
+  const std::size_t nodes = s.grid.node_storage();
+  for (std::size_t c = 0; c < d.enriched.size(); ++c)
+    if (d.enriched[c]) corner_velocity_[c] = v[nodes + c];
+  G.resize(P.size());
+  for_each_particle<dim>(P.size(), [&](std::size_t p) { G[p] = d.gradient(p, corner_velocity_); });
+}
+
+template <int dim>
+void ImplicitUpdate<dim>::internal_forces(const MpmState<dim>& s, const std::vector<Mat<dim>>& S,
+                                          std::vector<Vec<dim>>& out) {
+  const Particles<dim>& P = s.particles;
+  if (!s.domains) {
+    const std::vector<Mat<dim>>& F = solid::elastic_F(P);
+    kirchhoff_.resize(P.size());
+    for_each_particle<dim>(P.size(), [&](std::size_t p) { kirchhoff_[p] = S[p] * F[p].transpose(); });
+    stress_to_nodes(kirchhoff_, P, s.buckets, s.kernel, s.grid, out);
+    return;
+  }
+  const domains::ParticleDomains<dim>& d = *s.domains;
+  domains::corner_forces(d, S, corner_force_);
+  domains::nodes_from_corners(d, s.kernel, s.grid, corner_force_, out);
+  const std::size_t nodes = s.grid.node_storage();
+  out.resize(nodes + d.corner_count(), Vec<dim>::Zero());
+  for (std::size_t c = 0; c < d.enriched.size(); ++c)
+    if (d.enriched[c]) out[nodes + c] = corner_force_[c];
+}
+
+template <int dim>
 double ImplicitUpdate<dim>::deform(const MpmState<dim>& s, const std::vector<Vec<dim>>& v, bool energy) {
   const Particles<dim>& P = s.particles;
   const std::vector<Mat<dim>>& F = solid::elastic_F(P);
-  node_field_gradient(P, s.buckets, s.kernel, s.grid, v, grad_);
+  material_rate(s, v, grad_);
   trial_F_.resize(P.size());
-  for_each_particle<dim>(P.size(),
-                         [&](std::size_t p) { trial_F_[p] = (Mat<dim>::Identity() + s.dt * grad_[p]) * F[p]; });
+  for_each_particle<dim>(P.size(), [&](std::size_t p) { trial_F_[p] = F[p] + s.dt * grad_[p]; });
   if (!energy) return 0.0;
   energy_.assign(P.size(), 0.0);
   const std::vector<double>& plastic = solid::plastic_state(P);
@@ -149,7 +207,6 @@ constitutive::StressDerivative<dim> returned_stress(const Elastic& elastic, cons
 template <int dim>
 void ImplicitUpdate<dim>::linearise(const MpmState<dim>& s, bool derivatives, bool definite) {
   const Particles<dim>& P = s.particles;
-  const std::vector<Mat<dim>>& F = solid::elastic_F(P);
   const std::vector<double>& plastic_state = solid::plastic_state(P);
   weighted_stress_.assign(P.size(), Mat<dim>::Zero());
   has_stress_.assign(P.size(), 0);
@@ -179,7 +236,7 @@ void ImplicitUpdate<dim>::linearise(const MpmState<dim>& s, bool derivatives, bo
             } else {
               stress = model.first_piola(trial_F_[p]);
             }
-            weighted_stress_[p] = P.volume0[p] * stress * F[p].transpose();
+            weighted_stress_[p] = P.volume0[p] * stress;
           });
         },
         materials_[m].elastic, materials_[m].plasticity);
@@ -189,8 +246,36 @@ template <int dim>
 void ImplicitUpdate<dim>::jacobi_diagonal(const MpmState<dim>& s, std::vector<Vec<dim>>& diagonal) const {
   const Particles<dim>& P = s.particles;
   const SparseGrid<dim>& g = s.grid;
+  diagonal.assign(mass_.size(), Vec<dim>::Zero());
+  // c sum_a e_a . dP(e_a q^T) q per component: q the reference gradient of the unknown's weight.
+  const auto add = [&](std::size_t p, const Vec<dim>& q, Vec<dim>& out) {
+    const double c = s.dt * s.dt * P.volume0[p];
+    for (int a = 0; a < dim; ++a) out[a] += c * derivative_[p].quadratic(Vec<dim>::Unit(a), q);
+  };
+  if (s.domains) {
+    const domains::ParticleDomains<dim>& d = *s.domains;
+    domains::for_each_two_step_gradient<dim>(d, s.kernel, g, [&](std::size_t p, Index node, const Vec<dim>& q) {
+      if (node >= 0 && has_stress_[p]) add(p, q, diagonal[node]);
+    });
+    constexpr int K = domains::ParticleDomains<dim>::corners;
+    for (std::size_t c = 0; c < d.enriched.size(); ++c)
+      for (std::uint32_t k = d.sharing_begin[c]; d.enriched[c] && k != d.sharing_begin[c + 1]; ++k) {
+        const std::size_t p = d.sharing[k] / K;
+        if (has_stress_[p])
+          add(p, d.weight_gradient(p, static_cast<int>(d.sharing[k] % K)), diagonal[g.node_storage() + c]);
+      }
+  } else {
+    jacobi_nodes(s, diagonal);
+  }
+  // A non-symmetric (plastic) system may have entries of K below zero: the mass alone there.
+  for (std::size_t n = 0; n < mass_.size(); ++n) diagonal[n] = Vec<dim>::Constant(mass_[n]) + diagonal[n].cwiseMax(0.0);
+}
+
+template <int dim>
+void ImplicitUpdate<dim>::jacobi_nodes(const MpmState<dim>& s, std::vector<Vec<dim>>& diagonal) const {
+  const Particles<dim>& P = s.particles;
+  const SparseGrid<dim>& g = s.grid;
   const std::vector<Mat<dim>>& F = solid::elastic_F(P);
-  diagonal.assign(g.node_storage(), Vec<dim>::Zero());
   std::array<detail::ChannelView, dim> channels;
   for (int a = 0; a < dim; ++a) channels[a] = detail::component_view<dim>(diagonal, a);
   const double inv_dx = 1.0 / g.dx();
@@ -212,30 +297,36 @@ void ImplicitUpdate<dim>::jacobi_diagonal(const MpmState<dim>& s, std::vector<Ve
             });
       },
       s.kernel);
-  // A non-symmetric (plastic) system may have entries of K below zero: the mass alone there.
-  for (std::size_t n = 0; n < g.node_storage(); ++n)
-    diagonal[n] = Vec<dim>::Constant(g.mass[n]) + diagonal[n].cwiseMax(0.0);
 }
 
 template <int dim>
 double ImplicitUpdate<dim>::potential(const MpmState<dim>& s, const std::vector<Vec<dim>>& v,
                                       const std::vector<Vec<dim>>& predicted) {
-  return deform(s, v, true) + kinetic(s.grid, v, predicted);
+  unknown_mass(s);
+  return energy(s, v, predicted);
+}
+
+template <int dim>
+double ImplicitUpdate<dim>::energy(const MpmState<dim>& s, const std::vector<Vec<dim>>& v,
+                                   const std::vector<Vec<dim>>& predicted) {
+  return deform(s, v, true) + kinetic(mass_, v, predicted);
 }
 
 template <int dim>
 void ImplicitUpdate<dim>::gradient(const MpmState<dim>& s, const std::vector<Vec<dim>>& v,
                                    const std::vector<Vec<dim>>& predicted, std::vector<Vec<dim>>& out) {
+  unknown_mass(s);
   deform(s, v, false);
   linearise(s, false, false);
-  stress_to_nodes(weighted_stress_, s.particles, s.buckets, s.kernel, s.grid, out);
+  internal_forces(s, weighted_stress_, out);
   for (std::size_t k = 0; k < out.size(); ++k)
-    out[k] = s.grid.mass[k] > 0.0 ? Vec<dim>(s.grid.mass[k] * (v[k] - predicted[k]) - s.dt * out[k]) : Vec<dim>::Zero();
+    out[k] = mass_[k] > 0.0 ? Vec<dim>(mass_[k] * (v[k] - predicted[k]) - s.dt * out[k]) : Vec<dim>::Zero();
 }
 
 template <int dim>
 void ImplicitUpdate<dim>::hessian_product(const MpmState<dim>& s, const std::vector<Vec<dim>>& v,
                                           const std::vector<Vec<dim>>& dv, std::vector<Vec<dim>>& out, bool definite) {
+  unknown_mass(s);
   deform(s, v, false);
   linearise(s, true, definite);
   apply_hessian(s, dv, out);
@@ -245,17 +336,15 @@ template <int dim>
 void ImplicitUpdate<dim>::apply_hessian(const MpmState<dim>& s, const std::vector<Vec<dim>>& dv,
                                         std::vector<Vec<dim>>& out) {
   const Particles<dim>& P = s.particles;
-  const std::vector<Mat<dim>>& F = solid::elastic_F(P);
-  node_field_gradient(P, s.buckets, s.kernel, s.grid, dv, grad_);
+  material_rate(s, dv, grad_);
   differential_stress_.resize(P.size());
   for_each_particle<dim>(P.size(), [&](std::size_t p) {
     differential_stress_[p] =
-        has_stress_[p] ? Mat<dim>(P.volume0[p] * derivative_[p].apply(s.dt * grad_[p] * F[p]) * F[p].transpose())
-                       : Mat<dim>::Zero();
+        has_stress_[p] ? Mat<dim>(P.volume0[p] * derivative_[p].apply(s.dt * grad_[p])) : Mat<dim>::Zero();
   });
-  stress_to_nodes(differential_stress_, P, s.buckets, s.kernel, s.grid, out);
+  internal_forces(s, differential_stress_, out);
   for (std::size_t k = 0; k < out.size(); ++k)
-    out[k] = s.grid.mass[k] > 0.0 ? Vec<dim>(s.grid.mass[k] * dv[k] - s.dt * out[k]) : Vec<dim>::Zero();
+    out[k] = mass_[k] > 0.0 ? Vec<dim>(mass_[k] * dv[k] - s.dt * out[k]) : Vec<dim>::Zero();
 }
 
 template <int dim>
@@ -263,39 +352,53 @@ void ImplicitUpdate<dim>::run(MpmState<dim>& s) {
   MPM_VERIFY(!s.adaptive, InputError, "solver 'implicit' runs on a uniform grid only (the scene is adaptive)");
   SparseGrid<dim>& g = s.grid;
   momentum_to_velocity(g, s.transfer);
-  const std::size_t n = g.node_storage();
+  const std::vector<double>& mass = unknown_mass(s);
+  const std::size_t n = mass.size(), nodes = g.node_storage();
   const double t = s.time + s.dt;
+  // Unknown k: a node, or (k >= nodes) an enriched domain corner, a material point.
+  domains::ParticleDomains<dim>* d = s.domains ? &*s.domains : nullptr;
+  const auto position = [&](std::size_t k) { return k < nodes ? g.node_position(k) : d->x[k - nodes]; };
+  const auto point = [&](std::size_t k) {
+    return k < nodes ? geometry::ContactPoint::node : geometry::ContactPoint::material;
+  };
+  const auto start = [&](std::size_t k) {
+    return k < nodes ? g.velocity[k] : Vec<dim>(d->momentum[k - nodes] / d->mass[k - nodes]);
+  };
 
-  // The predicted velocity, the free directions of every node and the initial iterate.
+  // The predicted velocity, the free directions of every unknown and the initial iterate.
   std::vector<Vec<dim>> predicted(n, Vec<dim>::Zero()), v(n, Vec<dim>::Zero());
   std::vector<Mat<dim>> free(n, Mat<dim>::Zero());
   double total_mass = 0.0;
   for (std::size_t k = 0; k < n; ++k) {
-    if (g.mass[k] <= 0.0) continue;
-    total_mass += g.mass[k];
-    predicted[k] = g.velocity[k] + s.dt * s.gravity;
-    free[k] = colliders_.free_directions(g.node_position(k), t, predicted[k]);
+    if (mass[k] <= 0.0) continue;
+    total_mass += mass[k];
+    predicted[k] = start(k) + s.dt * s.gravity;
+    free[k] = colliders_.free_directions(position(k), t, predicted[k], point(k));
     // Free directions from v^n (near the answer for material at rest under gravity), the fixed
     // ones at the obstacle's values for v^*, which Newton then keeps.
     Vec<dim> fixed = predicted[k];
-    colliders_.project(g.node_position(k), t, fixed);
-    v[k] = free[k] * g.velocity[k] + (Mat<dim>::Identity() - free[k]) * fixed;
+    colliders_.project(position(k), t, fixed, point(k));
+    v[k] = free[k] * start(k) + (Mat<dim>::Identity() - free[k]) * fixed;
   }
   last_ = {};
   history_.clear();
   if (total_mass <= 0.0) return;
   // The mass-weighted rms of the velocity residual M^-1 g relative to that of the step's
-  // velocities: rms(v^*) + |g| dt (a body at rest under gravity: its balance to that
-  // accuracy), with a floor for a state without motion or gravity. Relative, so that small
-  // steps do not drop their gravity increment as an error below an absolute tolerance.
-  double predicted_square = 0.0;
-  for (std::size_t k = 0; k < n; ++k) predicted_square += g.mass[k] * predicted[k].squaredNorm();
-  const double scale =
-      std::sqrt(predicted_square / std::max(total_mass, 1e-300)) + s.gravity.norm() * s.dt + 1e-12 * g.dx() / s.dt;
-  const auto residual = [&](const std::vector<Vec<dim>>& r) {
+  // velocities: max(rms(v^*), rms(v)) + |g| dt (a body at rest under gravity: its balance to
+  // that accuracy; a stressed body released from rest: its new velocities v), with a floor for
+  // a state without motion or gravity. Relative, so that small steps do not drop their gravity
+  // increment as an error below an absolute tolerance.
+  const auto rms = [&](const std::vector<Vec<dim>>& x) {
+    double square = 0.0;
+    for (std::size_t k = 0; k < n; ++k) square += mass[k] * x[k].squaredNorm();
+    return std::sqrt(square / total_mass);
+  };
+  const double predicted_rms = rms(predicted);
+  const auto residual = [&](const std::vector<Vec<dim>>& r, const std::vector<Vec<dim>>& x) {
     double sum = 0.0;
     for (std::size_t k = 0; k < n; ++k)
-      if (g.mass[k] > 0.0) sum += r[k].squaredNorm() / g.mass[k];
+      if (mass[k] > 0.0) sum += r[k].squaredNorm() / mass[k];
+    const double scale = std::max(predicted_rms, rms(x)) + s.gravity.norm() * s.dt + 1e-12 * g.dx() / s.dt;
     return std::sqrt(sum / total_mass) / scale;
   };
 
@@ -307,24 +410,24 @@ void ImplicitUpdate<dim>::run(MpmState<dim>& s) {
   std::vector<Vec<dim>> grad(n), dv(n), trial(n), diagonal;
   // The projected residual g at x from the stresses of the last linearise() at x.
   const auto residual_at = [&](const std::vector<Vec<dim>>& x, std::vector<Vec<dim>>& r) {
-    stress_to_nodes(weighted_stress_, s.particles, s.buckets, s.kernel, g, r);
+    internal_forces(s, weighted_stress_, r);
     for (std::size_t k = 0; k < n; ++k)
-      r[k] = g.mass[k] > 0.0 ? Vec<dim>(free[k] * (g.mass[k] * (x[k] - predicted[k]) - s.dt * r[k])) : Vec<dim>::Zero();
+      r[k] = mass[k] > 0.0 ? Vec<dim>(free[k] * (mass[k] * (x[k] - predicted[k]) - s.dt * r[k])) : Vec<dim>::Zero();
   };
   const auto weighted_square = [&](const std::vector<Vec<dim>>& r) {
     double sum = 0.0;
     for (std::size_t k = 0; k < n; ++k)
-      if (g.mass[k] > 0.0) sum += r[k].squaredNorm() / g.mass[k];
+      if (mass[k] > 0.0) sum += r[k].squaredNorm() / mass[k];
     return 0.5 * sum;
   };
   const auto merit = [&](const std::vector<Vec<dim>>& x) {
-    if (!plastic) return potential(s, x, predicted);
+    if (!plastic) return energy(s, x, predicted);
     deform(s, x, false);
     linearise(s, false, false);
     residual_at(x, merit_residual_);
     return weighted_square(merit_residual_);
   };
-  const double initial = plastic ? 0.0 : potential(s, v, predicted);
+  const double initial = plastic ? 0.0 : energy(s, v, predicted);
   if (plastic) deform(s, v, false);
   linearise(s, true, false);
   const solve::SolveControl control{settings_.linear_tolerance, 0.0, settings_.max_linear_iterations};
@@ -335,7 +438,7 @@ void ImplicitUpdate<dim>::run(MpmState<dim>& s) {
   const auto S = [&](const std::vector<Vec<dim>>& x, std::vector<Vec<dim>>& y) {
     y.resize(n);
     for (std::size_t k = 0; k < n; ++k)
-      y[k] = g.mass[k] > 0.0 ? Vec<dim>(free[k] * x[k] / std::sqrt(g.mass[k])) : Vec<dim>::Zero();
+      y[k] = mass[k] > 0.0 ? Vec<dim>(free[k] * x[k] / std::sqrt(mass[k])) : Vec<dim>::Zero();
   };
   const auto SAS = [&](const std::vector<Vec<dim>>& x, std::vector<Vec<dim>>& y) {
     S(x, trial);
@@ -345,8 +448,8 @@ void ImplicitUpdate<dim>::run(MpmState<dim>& s) {
   const auto jacobi = [&](const std::vector<Vec<dim>>& r, std::vector<Vec<dim>>& z) {
     z.resize(n);
     for (std::size_t k = 0; k < n; ++k)
-      z[k] = g.mass[k] > 0.0 ? Vec<dim>(free[k] * (free[k] * r[k]).cwiseQuotient(diagonal[k] / g.mass[k]))
-                             : Vec<dim>::Zero();
+      z[k] =
+          mass[k] > 0.0 ? Vec<dim>(free[k] * (free[k] * r[k]).cwiseQuotient(diagonal[k] / mass[k])) : Vec<dim>::Zero();
   };
   // dv from the differentials of the last linearise(); false when CG met negative curvature.
   const auto newton_step = [&] {
@@ -387,7 +490,7 @@ void ImplicitUpdate<dim>::run(MpmState<dim>& s) {
   };
   while (true) {
     residual_at(v, grad);
-    last_.residual = residual(grad);
+    last_.residual = residual(grad, v);
     if (!std::isfinite(last_.residual)) {
       stalled = "the residual is not finite";
       break;
@@ -432,10 +535,17 @@ void ImplicitUpdate<dim>::run(MpmState<dim>& s) {
     std::cerr << "warning: " << why.str() << "\n";
   }
   // Fixed components back to their approach velocity, then the obstacles' projection once more.
+  // An enriched corner's velocity and FLIP increment go where DomainsFromGrid reads them.
   for (std::size_t k = 0; k < n; ++k) {
-    if (g.mass[k] <= 0.0) continue;
-    g.velocity[k] = v[k] + (Mat<dim>::Identity() - free[k]) * (predicted[k] - v[k]);
-    colliders_.project(g.node_position(k), t, g.velocity[k]);
+    if (mass[k] <= 0.0) continue;
+    Vec<dim> out = v[k] + (Mat<dim>::Identity() - free[k]) * (predicted[k] - v[k]);
+    colliders_.project(position(k), t, out, point(k));
+    if (k < nodes) {
+      g.velocity[k] = out;
+    } else {
+      d->force[k - nodes] = out - start(k);
+      d->momentum[k - nodes] = out;
+    }
   }
 }
 

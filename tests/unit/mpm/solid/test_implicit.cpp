@@ -1,7 +1,8 @@
 // The implicit solid step (stage implicit_update): its gradient and Hessian-vector product
 // against finite differences of the incremental potential for every elastic model, also with
-// flat and inverted particles; Newton's decrease of the potential; momentum conservation to
-// the solver tolerance; walls inside the solve; bad input.
+// flat and inverted particles and with particle domains (enriched corners among the unknowns);
+// Newton's decrease of the potential; momentum conservation to the solver tolerance; walls
+// inside the solve; bad input.
 #include <doctest/doctest.h>
 
 #include <mpm/constitutive/elastic_model.h>
@@ -12,6 +13,7 @@
 #include <mpm/core/transfer.h>
 #include <mpm/solid/solid_channels.h>
 #include <mpm/solid/solid_scene.h>
+#include <mpm/solid/stages/domain_transfer.h>
 #include <mpm/solid/stages/implicit_update.h>
 
 #include <cmath>
@@ -60,11 +62,46 @@ solid::SolidScene<dim> deformed_scene(const std::string& model, bool extreme, st
   return scene;
 }
 
+// A scene with particle domains whose corners are moved at random (F from the corners), with
+// the corners of the particles with K(F) <= 0.9 enriched, transferred to the grid: transitional
+// particles, enriched and grid-only corners side by side.
 template <int dim>
-std::vector<Vec<dim>> random_nodes(const SparseGrid<dim>& g, std::mt19937& rng, double scale) {
-  std::vector<Vec<dim>> v(g.node_storage(), Vec<dim>::Zero());
+solid::SolidScene<dim> domain_scene(const std::string& model, std::mt19937& rng, bool walls = true,
+                                    bool velocities = true) {
+  solid::SolidScene<dim> scene = solid::load_solid_scene<dim>(
+      Config::parse(scene_yaml<dim>(model, 1e5, walls), "<string>",
+                    {"particle_domains=true", "domain_enrichment=0.9", "transfer.scheme=flip", "grid.dx=0.15"}));
+  MpmState<dim>& s = scene.state;
+  domains::ParticleDomains<dim>& d = *s.domains;
+  for (Vec<dim>& x : d.x) x += 0.3 * s.grid.dx() * Vec<dim>::NullaryExpr([&] { return uniform(rng, -0.2, 0.2); });
+  std::vector<Mat<dim>>& F = solid::elastic_F(s.particles);
+  for (std::size_t p = 0; p < F.size(); ++p) {
+    F[p] = d.deformation(p);
+    s.particles.v[p] = Vec<dim>::NullaryExpr([&] { return uniform(rng, -0.5, 0.5); });
+  }
+  s.dt = 2e-3;
+  domains::mark_enrichment(d, F);
+  stages::DomainsToGrid<dim>(scene.materials).run(s);
+  if (velocities) momentum_to_velocity(s.grid, s.transfer);
+  return scene;
+}
+
+//! v^n of every unknown: the grid's velocities, then the enriched corners' p_alpha / m_alpha.
+template <int dim>
+std::vector<Vec<dim>> start_velocities(const MpmState<dim>& s, const std::vector<double>& mass) {
+  std::vector<Vec<dim>> v(mass.size(), Vec<dim>::Zero());
+  for (std::size_t k = 0; k < mass.size(); ++k)
+    if (mass[k] > 0.0)
+      v[k] = k < s.grid.node_storage() ? s.grid.velocity[k]
+                                       : Vec<dim>(s.domains->momentum[k - s.grid.node_storage()] / mass[k]);
+  return v;
+}
+
+template <int dim>
+std::vector<Vec<dim>> random_unknowns(const std::vector<double>& mass, std::mt19937& rng, double scale) {
+  std::vector<Vec<dim>> v(mass.size(), Vec<dim>::Zero());
   for (std::size_t k = 0; k < v.size(); ++k)
-    if (g.mass[k] > 0.0) v[k] = scale * Vec<dim>::NullaryExpr([&] { return uniform(rng, -1.0, 1.0); });
+    if (mass[k] > 0.0) v[k] = scale * Vec<dim>::NullaryExpr([&] { return uniform(rng, -1.0, 1.0); });
   return v;
 }
 
@@ -83,9 +120,9 @@ double distance(const std::vector<Vec<dim>>& a, const std::vector<Vec<dim>>& b) 
 }
 
 template <int dim>
-Vec<dim> momentum(const SparseGrid<dim>& g, const std::vector<Vec<dim>>& v) {
+Vec<dim> momentum(const std::vector<double>& mass, const std::vector<Vec<dim>>& v) {
   Vec<dim> p = Vec<dim>::Zero();
-  for (std::size_t k = 0; k < v.size(); ++k) p += g.mass[k] * v[k];
+  for (std::size_t k = 0; k < v.size(); ++k) p += mass[k] * v[k];
   return p;
 }
 
@@ -93,6 +130,55 @@ template <int dim>
 stages::ImplicitUpdate<dim> implicit_stage(const solid::SolidScene<dim>& scene,
                                            stages::ImplicitSettings settings = {}) {
   return stages::ImplicitUpdate<dim>(scene.materials, scene.colliders, settings);
+}
+
+// The gradient against central differences of E, the Hessian-vector product against
+// differences of the gradient, the definite product symmetric and positive on its stiffness
+// part (and, with `indefinite`, different from the exact one).
+template <int dim>
+void check_derivatives(const solid::SolidScene<dim>& scene, std::mt19937& rng, bool indefinite) {
+  const MpmState<dim>& s = scene.state;
+  stages::ImplicitUpdate<dim> stage = implicit_stage(scene);
+  const std::vector<double> mass = stage.unknown_mass(s);
+  const std::vector<Vec<dim>> predicted = start_velocities(s, mass);
+  const std::vector<Vec<dim>> v = axpy(predicted, 1.0, random_unknowns<dim>(mass, rng, 0.3));
+  const std::vector<Vec<dim>> dv = random_unknowns<dim>(mass, rng, 1.0);
+  const double h = 1e-6;
+
+  // dE/dv . dv by central differences.
+  std::vector<Vec<dim>> g;
+  stage.gradient(s, v, predicted, g);
+  const double dE =
+      (stage.potential(s, axpy(v, h, dv), predicted) - stage.potential(s, axpy(v, -h, dv), predicted)) / (2 * h);
+  CHECK(solve::dot(g, dv) == doctest::Approx(dE).epsilon(1e-6));
+
+  // (M + dt^2 K) dv against differences of the gradient, compared on the stiffness part
+  // dt^2 K dv alone (M dv is exact on both sides and would hide an error in K).
+  std::vector<Vec<dim>> g_plus, g_minus, Hdv;
+  stage.gradient(s, axpy(v, h, dv), predicted, g_plus);
+  stage.gradient(s, axpy(v, -h, dv), predicted, g_minus);
+  std::vector<Vec<dim>> fd(g.size()), Mdv(g.size());
+  for (std::size_t k = 0; k < g.size(); ++k) {
+    Mdv[k] = mass[k] * dv[k];
+    fd[k] = (g_plus[k] - g_minus[k]) / (2 * h) - Mdv[k];
+  }
+  stage.hessian_product(s, v, dv, Hdv, false);
+  const std::vector<Vec<dim>> Kdv = axpy(Hdv, -1.0, Mdv);
+  REQUIRE(solve::dot(fd, fd) > 0.0);
+  CHECK(distance(Kdv, fd) <= 1e-5 * std::sqrt(solve::dot(fd, fd)));
+
+  // The definite product is symmetric and its stiffness part positive semi-definite:
+  // w . H dv = dv . H w and dv . (H - M) dv >= 0. With flat and inverted particles the
+  // exact stiffness is indefinite, and the fix changes the product.
+  const std::vector<Vec<dim>> w = random_unknowns<dim>(mass, rng, 1.0);
+  std::vector<Vec<dim>> Hw, definite;
+  stage.hessian_product(s, v, dv, definite, true);
+  stage.hessian_product(s, v, w, Hw, true);
+  CHECK(solve::dot(w, definite) == doctest::Approx(solve::dot(dv, Hw)).epsilon(1e-10));
+  const std::vector<Vec<dim>> Kdv_definite = axpy(definite, -1.0, Mdv);
+  CHECK(solve::dot(dv, Kdv_definite) >=
+        -1e-10 * std::sqrt(solve::dot(Kdv_definite, Kdv_definite) * solve::dot(dv, dv)));
+  if (indefinite) CHECK(distance(Kdv_definite, Kdv) > 1e-3 * std::sqrt(solve::dot(Kdv, Kdv)));
 }
 
 }  // namespace
@@ -104,49 +190,23 @@ TEST_CASE_TEMPLATE("implicit step: gradient and Hessian-vector product against f
     for (const bool extreme : {false, true}) {
       INFO(model, " in ", dim, "D", extreme ? ", flat and inverted particles" : "");
       std::mt19937 rng(14);
-      solid::SolidScene<dim> scene = deformed_scene<dim>(model, extreme, rng);
-      const MpmState<dim>& s = scene.state;
-      stages::ImplicitUpdate<dim> stage = implicit_stage(scene);
-      const std::vector<Vec<dim>> predicted = s.grid.velocity;
-      const std::vector<Vec<dim>> v = axpy(predicted, 1.0, random_nodes(s.grid, rng, 0.3));
-      const std::vector<Vec<dim>> dv = random_nodes(s.grid, rng, 1.0);
-      const double h = 1e-6;
-
-      // dE/dv . dv by central differences.
-      std::vector<Vec<dim>> g;
-      stage.gradient(s, v, predicted, g);
-      const double dE =
-          (stage.potential(s, axpy(v, h, dv), predicted) - stage.potential(s, axpy(v, -h, dv), predicted)) / (2 * h);
-      CHECK(solve::dot(g, dv) == doctest::Approx(dE).epsilon(1e-6));
-
-      // (M + dt^2 K) dv against differences of the gradient, compared on the stiffness part
-      // dt^2 K dv alone (M dv is exact on both sides and would hide an error in K).
-      std::vector<Vec<dim>> g_plus, g_minus, Hdv;
-      stage.gradient(s, axpy(v, h, dv), predicted, g_plus);
-      stage.gradient(s, axpy(v, -h, dv), predicted, g_minus);
-      std::vector<Vec<dim>> fd(g.size()), Mdv(g.size());
-      for (std::size_t k = 0; k < g.size(); ++k) {
-        Mdv[k] = s.grid.mass[k] * dv[k];
-        fd[k] = (g_plus[k] - g_minus[k]) / (2 * h) - Mdv[k];
-      }
-      stage.hessian_product(s, v, dv, Hdv, false);
-      const std::vector<Vec<dim>> Kdv = axpy(Hdv, -1.0, Mdv);
-      REQUIRE(solve::dot(fd, fd) > 0.0);
-      CHECK(distance(Kdv, fd) <= 1e-5 * std::sqrt(solve::dot(fd, fd)));
-
-      // The definite product is symmetric and its stiffness part positive semi-definite:
-      // w . H dv = dv . H w and dv . (H - M) dv >= 0. With flat and inverted particles the
-      // exact stiffness is indefinite, and the fix changes the product.
-      const std::vector<Vec<dim>> w = random_nodes(s.grid, rng, 1.0);
-      std::vector<Vec<dim>> Hw, definite;
-      stage.hessian_product(s, v, dv, definite, true);
-      stage.hessian_product(s, v, w, Hw, true);
-      CHECK(solve::dot(w, definite) == doctest::Approx(solve::dot(dv, Hw)).epsilon(1e-10));
-      const std::vector<Vec<dim>> Kdv_definite = axpy(definite, -1.0, Mdv);
-      CHECK(solve::dot(dv, Kdv_definite) >=
-            -1e-10 * std::sqrt(solve::dot(Kdv_definite, Kdv_definite) * solve::dot(dv, dv)));
-      if (extreme) CHECK(distance(Kdv_definite, Kdv) > 1e-3 * std::sqrt(solve::dot(Kdv, Kdv)));
+      check_derivatives(deformed_scene<dim>(model, extreme, rng), rng, extreme);
     }
+  }
+}
+
+TEST_CASE_TEMPLATE("implicit step with particle domains: derivatives through corners and enriched corners", Dim,
+                   std::integral_constant<int, 2>, std::integral_constant<int, 3>) {
+  constexpr int dim = Dim::value;
+  for (const std::string& model : constitutive::elastic_model_names()) {
+    INFO(model, " in ", dim, "D");
+    std::mt19937 rng(5);
+    const solid::SolidScene<dim> scene = domain_scene<dim>(model, rng);
+    const domains::ParticleDomains<dim>& d = *scene.state.domains;
+    // Some corners enriched, some not: both kinds of unknowns and transitional particles.
+    REQUIRE(d.enriched_particles > 0);
+    REQUIRE(d.enriched_particles < d.particle_count());
+    check_derivatives(scene, rng, false);
   }
 }
 
@@ -178,7 +238,7 @@ TEST_CASE_TEMPLATE("implicit step: Newton lowers the potential every iteration a
     CHECK(E.back() < E.front());
     const auto d = stage.diagnostics();
     CHECK(d[2].value <= 1e-10);  // newton_residual within tolerance
-    const Vec<dim> after = momentum(s.grid, s.grid.velocity);
+    const Vec<dim> after = momentum(s.grid.mass, s.grid.velocity);
     // |sum_i g_i| <= sqrt(M) |g|_{M^-1} <= M tolerance rms(v^*): the converged residual bounds
     // the momentum error (v^* = v^n without gravity).
     double mass = 0.0, square = 0.0;
@@ -189,6 +249,50 @@ TEST_CASE_TEMPLATE("implicit step: Newton lowers the potential every iteration a
     for (std::size_t k = 0; k < s.grid.mass.size(); ++k)
       if (s.grid.mass[k] > 0.0) square += (predicted_momentum[k] / s.grid.mass[k]).squaredNorm() * s.grid.mass[k];
     CHECK((after - before).norm() <= 2e-10 * mass * std::sqrt(square / mass));
+  }
+}
+
+TEST_CASE_TEMPLATE("implicit step with particle domains: Newton conserves the momentum of nodes and enriched corners",
+                   Dim, std::integral_constant<int, 2>, std::integral_constant<int, 3>) {
+  constexpr int dim = Dim::value;
+  for (const std::string& model : constitutive::elastic_model_names()) {
+    INFO(model, " in ", dim, "D");
+    std::mt19937 rng(2019);
+    solid::SolidScene<dim> scene = domain_scene<dim>(model, rng, false, false);  // no walls
+    MpmState<dim>& s = scene.state;
+    domains::ParticleDomains<dim>& d = *s.domains;
+    REQUIRE(d.enriched_particles > 0);
+    s.gravity.setZero();
+    s.dt = 0.02;
+    // Momentum and mass-weighted square speed of the unknowns before the step (the grid holds
+    // m v after the transfer).
+    Vec<dim> before = Vec<dim>::Zero();
+    double mass = 0.0, square = 0.0;
+    const auto add = [&](double m, const Vec<dim>& p) {
+      if (m <= 0.0) return;
+      before += p;
+      mass += m;
+      square += p.squaredNorm() / m;
+    };
+    for (std::size_t k = 0; k < s.grid.node_storage(); ++k) add(s.grid.mass[k], s.grid.velocity[k]);
+    for (std::size_t c = 0; c < d.corner_count(); ++c)
+      if (d.enriched[c]) add(d.mass[c], d.momentum[c]);
+    stages::ImplicitSettings settings;
+    settings.tolerance = 1e-10;
+    settings.linear_tolerance = 1e-6;
+    stages::ImplicitUpdate<dim> stage = implicit_stage(scene, settings);
+    stage.run(s);
+    const std::vector<double>& E = stage.merit_history();
+    REQUIRE(E.size() >= 2);
+    for (std::size_t n = 1; n < E.size(); ++n) CHECK(E[n] <= E[n - 1] + 1e-9 * std::abs(E[n - 1]));
+    CHECK(stage.diagnostics()[2].value <= 1e-10);
+    // The enriched corners now hold their new velocities.
+    Vec<dim> after = momentum(s.grid.mass, s.grid.velocity);
+    for (std::size_t c = 0; c < d.corner_count(); ++c)
+      if (d.enriched[c]) after += d.mass[c] * d.momentum[c];
+    CHECK((after - before).norm() <= 2e-10 * mass * std::sqrt(square / mass));
+    // Without the corners' share the balance fails: they carry momentum of their own.
+    CHECK((after - momentum(s.grid.mass, s.grid.velocity)).norm() > 1e-3 * before.norm());
   }
 }
 

@@ -15,6 +15,9 @@ public:
     double wave_speed = 0.0;  //!< fastest elastic wave speed of the scene [m/s] (0: none)
     double wave_cfl = 0.5;    //!< dt <= wave_cfl dx / wave_speed
     double max_dt = 1e300;    //!< user upper bound [s]
+    //! Enriched particle domains stepped explicitly: dt <= wave_cfl h / wave_speed too, h the
+    //! thinnest enriched domain (an implicit step has no such bound).
+    bool bound_enriched = true;
   };
   explicit TimeStepControl(Settings settings) : settings_(settings) {}
   std::string name() const override { return "time_step"; }

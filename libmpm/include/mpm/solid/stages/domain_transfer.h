@@ -1,7 +1,9 @@
 #pragma once
 //! The transfers of a scene with particle domains (mpm/domains/particle_domains.h): they take the
 //! place of sort -> p2g -> stress_forces and of deformation -> g2p in the explicit step,
-//!   [enrichment ->] time_step -> domains_to_grid -> grid_update -> boundary -> domains_from_grid.
+//!   [enrichment ->] time_step -> domains_to_grid -> grid_update -> boundary -> domains_from_grid,
+//! and of sort -> p2g and deformation -> g2p around the implicit update (which solves for the
+//! grid and the enriched corners together, implicit_update.h).
 //! Elastic materials only (a return map would need F^E apart from the corners' F).
 #include <mpm/core/stage.h>
 #include <mpm/core/state.h>
@@ -53,7 +55,10 @@ private:
 template <int dim>
 class DomainsFromGrid final : public Stage<MpmState<dim>> {
 public:
-  explicit DomainsFromGrid(geometry::ColliderSet<dim> colliders) : colliders_(std::move(colliders)) {}
+  //! `enriched_stepped`: the grid update (an implicit step) has left the enriched corners' new
+  //! velocities in domains.momentum and their increments in domains.force.
+  DomainsFromGrid(geometry::ColliderSet<dim> colliders, bool enriched_stepped)
+      : colliders_(std::move(colliders)), enriched_stepped_(enriched_stepped) {}
   std::string name() const override { return "domains_from_grid"; }
   std::vector<std::string> reads() const override { return {"grid.velocity", "particle.v"}; }
   std::vector<std::string> writes() const override { return {"particle.x", "particle.v", "particle.F"}; }
@@ -61,6 +66,7 @@ public:
 
 private:
   geometry::ColliderSet<dim> colliders_;  // act on the enriched corners as the boundary stage on nodes
+  bool enriched_stepped_;
 };
 
 }  // namespace mpm::stages

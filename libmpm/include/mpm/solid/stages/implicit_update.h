@@ -15,7 +15,7 @@ namespace mpm::stages {
 //! The keys of an implicit solid step (scene key `implicit`, docs/user_guide.md).
 struct ImplicitSettings {
   //! Newton stops when the mass-weighted rms velocity residual |g|_{M^-1} / sqrt(M) is at most
-  //! tolerance * (rms(v^*) + |g| dt): a relative accuracy of the step's velocities.
+  //! tolerance * (max(rms(v^*), rms(v)) + |g| dt): a relative accuracy of the step's velocities.
   double tolerance = 1e-5;
   int max_newton_iterations = 50;
   double linear_tolerance = 1e-3;  //!< relative residual of each Newton system (an inexact Newton step)
@@ -27,16 +27,24 @@ struct ImplicitSettings {
 //! Zhu et al. sec. 6): Newton's method with a line search on the incremental potential, the
 //! systems solved matrix-free by Jacobi-preconditioned CG, walls and colliders enforced in the
 //! solve. Replaces stress_forces + grid_update of the explicit step; the same deformation
-//! update and return map follow it. Equations in the source file.
+//! update and return map follow it. With particle domains (s.domains, elastic materials) the
+//! particles deform with their domain corners, and the enriched corners are unknowns beside
+//! the nodes (Zhu et al. sec. 5-6). Equations in the source file.
+//!
+//! The unknowns, in every vector below: the grid's node storage, then with particle domains one
+//! slot per domain corner; only the enriched corners' slots have mass (unknown_mass).
+
 template <int dim>
 class ImplicitUpdate final : public Stage<MpmState<dim>> {
 public:
   //! Particles of no listed material (stress-free grains) add no stress.
   ImplicitUpdate(std::vector<Material<dim>> materials, geometry::ColliderSet<dim> colliders, ImplicitSettings settings);
   std::string name() const override { return "implicit_update"; }
+  //! grid.blocks stands for the particles' buckets too: sort writes both; with domains,
+  //! domains_to_grid writes it with the corners' buckets, which the stage then uses.
   std::vector<std::string> reads() const override {
-    return {"particle.order",   "grid.blocks",       "grid.mass",  "grid.momentum",   "particle.x",
-            "particle.volume0", "particle.material", "particle.F", "particle.plastic"};
+    return {"grid.blocks",      "grid.mass",         "grid.momentum", "particle.x",
+            "particle.volume0", "particle.material", "particle.F",    "particle.plastic"};
   }
   std::vector<std::string> writes() const override { return {"grid.velocity"}; }
   void run(MpmState<dim>& s) override;
@@ -54,9 +62,12 @@ public:
   //! the incremental potential, or |g|^2_{M^-1} / 2 when a material is plastic.
   const std::vector<double>& merit_history() const { return history_; }
 
+  //! The mass of each unknown [kg]: the grid's nodes, then with domains each corner (0 unless
+  //! enriched).
+  const std::vector<double>& unknown_mass(const MpmState<dim>& s);
   //! The incremental potential E(v) = sum_i m_i |v_i - v_i^*|^2 / 2 + sum_p V_p^0 psi(F_p(v)),
-  //! F_p(v) = (I + dt grad v_p) F_p^n, for the node velocities v of s.grid (sized to the node
-  //! storage) and predicted velocities v^*. Public for tests.
+  //! F_p(v) = F_p^n + dt G_p(v) (source file), for the unknown velocities v and predicted
+  //! velocities v^*. Public for tests.
   double potential(const MpmState<dim>& s, const std::vector<Vec<dim>>& v, const std::vector<Vec<dim>>& predicted);
   //! Its gradient g = M (v - v^*) - dt f(v) at v, unconstrained.
   void gradient(const MpmState<dim>& s, const std::vector<Vec<dim>>& v, const std::vector<Vec<dim>>& predicted,
@@ -73,14 +84,22 @@ private:
     double residual = 0.0;  //!< relative, as `tolerance`
     bool converged = false;
   };
+  //! G_p(v) = dF_p / dt for unknown velocities v.
+  void material_rate(const MpmState<dim>& s, const std::vector<Vec<dim>>& v, std::vector<Mat<dim>>& G);
+  //! The forces - sum_p S_p grad_X w (S_p = V_p^0 P_p, or a differential) on every unknown.
+  void internal_forces(const MpmState<dim>& s, const std::vector<Mat<dim>>& S, std::vector<Vec<dim>>& out);
+  //! E(v) with the masses of the last unknown_mass().
+  double energy(const MpmState<dim>& s, const std::vector<Vec<dim>>& v, const std::vector<Vec<dim>>& predicted);
   //! F_p(v) into trial_F_, and the per-particle energies when `energy` (returns their sum).
   double deform(const MpmState<dim>& s, const std::vector<Vec<dim>>& v, bool energy);
   //! Stress (weighted_stress_) and, when `derivatives`, the differentials at trial_F_.
   void linearise(const MpmState<dim>& s, bool derivatives, bool definite);
   //! (M + dt^2 K) dv with the differentials of the last linearise().
   void apply_hessian(const MpmState<dim>& s, const std::vector<Vec<dim>>& dv, std::vector<Vec<dim>>& out);
-  //! The Jacobi diagonal of M + dt^2 K, per node and component (Zhu et al. eq. 17, 19).
+  //! The Jacobi diagonal of M + dt^2 K, per unknown and component (Zhu et al. eq. 17, 19).
   void jacobi_diagonal(const MpmState<dim>& s, std::vector<Vec<dim>>& diagonal) const;
+  //! Its stiffness part on the nodes of a scene without domains, added to `diagonal`.
+  void jacobi_nodes(const MpmState<dim>& s, std::vector<Vec<dim>>& diagonal) const;
 
   std::vector<Material<dim>> materials_;
   geometry::ColliderSet<dim> colliders_;
@@ -88,8 +107,10 @@ private:
   Outcome last_;
   std::int64_t unconverged_ = 0;
   std::vector<double> history_;
-  // Per-particle work arrays, kept between steps to avoid reallocation.
-  std::vector<Mat<dim>> grad_, trial_F_, weighted_stress_, differential_stress_;
+  std::vector<double> mass_;  // per unknown
+  // Per-particle and per-corner work arrays, kept between steps to avoid reallocation.
+  std::vector<Mat<dim>> grad_, trial_F_, weighted_stress_, differential_stress_, kirchhoff_;
+  std::vector<Vec<dim>> corner_velocity_, corner_force_;
   std::vector<Vec<dim>> merit_residual_;
   std::vector<double> energy_;
   std::vector<constitutive::StressDerivative<dim>> derivative_;
