@@ -380,45 +380,68 @@ void nodes_from_corners(const ParticleDomains<dim>& d, const Kernel& kernel, con
       kernel);
 }
 
-namespace {
-//! body(node, w) for the nodes of the kernel's stencil at x, by storage index (-1 where the
-//! block is not allocated).
-template <int dim, class K, class Body>
-void for_each_stencil_node(const K& kernel, const SparseGrid<dim>& grid, const Vec<dim>& x, Body&& body) {
-  std::array<int, dim> base;
-  double w[dim][K::support], dw[dim][K::support];
-  for (int a = 0; a < dim; ++a) kernel((x[a] - grid.origin()[a]) / grid.dx(), base[a], w[a], dw[a]);
-  for (int flat = 0; flat < ipow(K::support, dim); ++flat) {
-    IVec<dim> node;
-    double weight = 1.0;
-    for (int a = 0, rest = flat; a < dim; ++a, rest /= K::support) {
-      node[a] = base[a] + rest % K::support;
-      weight *= w[a][rest % K::support];
-    }
-    body(grid.node_index(node), weight);
-  }
-}
-}  // namespace
-
 template <int dim>
 void for_each_two_step_gradient(const ParticleDomains<dim>& d, const Kernel& kernel, const SparseGrid<dim>& grid,
                                 const std::function<void(std::size_t, Index, const Vec<dim>&)>& body) {
-  std::vector<std::pair<Index, Vec<dim>>> q;  // the nodes of one particle's corners
+  constexpr int K = ParticleDomains<dim>::corners;
+  // Per particle, q on the box of nodes its corners' stencils span (dense, so no search).
+  std::vector<Vec<dim>> q;
+  std::vector<std::uint8_t> touched;
   std::visit(
       [&](const auto& k) {
+        using Kern = std::decay_t<decltype(k)>;
+        constexpr int S = Kern::support;
+        std::array<std::array<int, dim>, K> base;
+        std::array<std::array<std::array<double, S>, dim>, K> w;
         for (std::size_t p = 0; p < d.particle_count(); ++p) {
-          q.clear();
-          for (int alpha = 0; alpha < ParticleDomains<dim>::corners; ++alpha) {
+          IVec<dim> lo = IVec<dim>::Constant(std::numeric_limits<int>::max()), hi = -lo;
+          bool any = false;
+          for (int alpha = 0; alpha < K; ++alpha) {
+            const std::uint32_t c = d.corner_of[p][alpha];
+            if (!d.enriched.empty() && d.enriched[c]) continue;
+            any = true;
+            double dw[S];
+            for (int a = 0; a < dim; ++a) {
+              k((d.x[c][a] - grid.origin()[a]) / grid.dx(), base[alpha][a], w[alpha][a].data(), dw);
+              lo[a] = std::min(lo[a], base[alpha][a]);
+              hi[a] = std::max(hi[a], base[alpha][a] + S - 1);
+            }
+          }
+          if (!any) continue;
+          const IVec<dim> extent = hi - lo + IVec<dim>::Ones();
+          const auto flat = [&](const IVec<dim>& node) {
+            std::size_t i = 0;
+            for (int a = dim - 1; a >= 0; --a) i = i * extent[a] + (node[a] - lo[a]);
+            return i;
+          };
+          q.assign(static_cast<std::size_t>(extent.prod()), Vec<dim>::Zero());
+          touched.assign(q.size(), 0);
+          for (int alpha = 0; alpha < K; ++alpha) {
             const std::uint32_t c = d.corner_of[p][alpha];
             if (!d.enriched.empty() && d.enriched[c]) continue;
             const Vec<dim> g = d.weight_gradient(p, alpha);
-            for_each_stencil_node(k, grid, d.x[c], [&](Index node, double w) {
-              auto it = std::find_if(q.begin(), q.end(), [&](const auto& e) { return e.first == node; });
-              if (it == q.end()) it = q.insert(q.end(), {node, Vec<dim>::Zero()});
-              it->second += w * g;
-            });
+            for (int t = 0; t < ipow(S, dim); ++t) {
+              IVec<dim> node;
+              double weight = 1.0;
+              for (int a = 0, rest = t; a < dim; ++a, rest /= S) {
+                node[a] = base[alpha][a] + rest % S;
+                weight *= w[alpha][a][rest % S];
+              }
+              const std::size_t i = flat(node);
+              q[i] += weight * g;
+              touched[i] = 1;
+            }
           }
-          for (const auto& [node, gradient] : q) body(p, node, gradient);
+          for (std::size_t i = 0; i < q.size(); ++i) {
+            if (!touched[i]) continue;
+            IVec<dim> node;
+            std::size_t rest = i;
+            for (int a = 0; a < dim; ++a) {
+              node[a] = lo[a] + static_cast<int>(rest % extent[a]);
+              rest /= extent[a];
+            }
+            body(p, grid.node_index(node), q[i]);
+          }
         }
       },
       kernel);

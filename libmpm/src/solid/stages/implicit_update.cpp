@@ -254,8 +254,20 @@ void ImplicitUpdate<dim>::jacobi_diagonal(const MpmState<dim>& s, std::vector<Ve
   };
   if (s.domains) {
     const domains::ParticleDomains<dim>& d = *s.domains;
+    // e_a . dP(e_a q^T) q = q^T B_a q with (B_a)_jk = dP(e_a e_k^T)_aj: dim^2 differentials per
+    // particle instead of dim per node (a particle's corners reach up to 4^dim nodes).
+    std::size_t current = d.particle_count();
+    std::array<Mat<dim>, dim> B;
     domains::for_each_two_step_gradient<dim>(d, s.kernel, g, [&](std::size_t p, Index node, const Vec<dim>& q) {
-      if (node >= 0 && has_stress_[p]) add(p, q, diagonal[node]);
+      if (node < 0 || !has_stress_[p]) return;
+      if (p != current) {
+        current = p;
+        for (int a = 0; a < dim; ++a)
+          for (int k = 0; k < dim; ++k)
+            B[a].col(k) = derivative_[p].apply(Vec<dim>::Unit(a) * Vec<dim>::Unit(k).transpose()).row(a).transpose();
+      }
+      const double c = s.dt * s.dt * P.volume0[p];
+      for (int a = 0; a < dim; ++a) diagonal[node][a] += c * q.dot(B[a] * q);
     });
     constexpr int K = domains::ParticleDomains<dim>::corners;
     for (std::size_t c = 0; c < d.enriched.size(); ++c)
@@ -330,6 +342,15 @@ void ImplicitUpdate<dim>::hessian_product(const MpmState<dim>& s, const std::vec
   deform(s, v, false);
   linearise(s, true, definite);
   apply_hessian(s, dv, out);
+}
+
+template <int dim>
+void ImplicitUpdate<dim>::preconditioner_diagonal(const MpmState<dim>& s, const std::vector<Vec<dim>>& v,
+                                                  std::vector<Vec<dim>>& out, bool definite) {
+  unknown_mass(s);
+  deform(s, v, false);
+  linearise(s, true, definite);
+  jacobi_diagonal(s, out);
 }
 
 template <int dim>

@@ -179,6 +179,24 @@ void check_derivatives(const solid::SolidScene<dim>& scene, std::mt19937& rng, b
   CHECK(solve::dot(dv, Kdv_definite) >=
         -1e-10 * std::sqrt(solve::dot(Kdv_definite, Kdv_definite) * solve::dot(dv, dv)));
   if (indefinite) CHECK(distance(Kdv_definite, Kdv) > 1e-3 * std::sqrt(solve::dot(Kdv, Kdv)));
+
+  // The Jacobi diagonal is that of the definite operator: e . H e for unit vectors e (every
+  // 5th unknown with mass, each component; its stiffness part is >= 0, so no clamp acts).
+  std::vector<Vec<dim>> diagonal, e(mass.size(), Vec<dim>::Zero()), He;
+  stage.preconditioner_diagonal(s, v, diagonal, true);
+  REQUIRE(diagonal.size() == mass.size());
+  int checked = 0;
+  for (std::size_t k = 0; k < mass.size(); k += 5) {
+    if (mass[k] <= 0.0) continue;
+    for (int a = 0; a < dim; ++a) {
+      e[k] = Vec<dim>::Unit(a);
+      stage.hessian_product(s, v, e, He, true);
+      CHECK(diagonal[k][a] == doctest::Approx(He[k][a]).epsilon(1e-10));
+      e[k].setZero();
+      ++checked;
+    }
+  }
+  CHECK(checked > 0);
 }
 
 }  // namespace

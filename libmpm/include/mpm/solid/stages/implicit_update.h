@@ -77,6 +77,11 @@ public:
   void hessian_product(const MpmState<dim>& s, const std::vector<Vec<dim>>& v, const std::vector<Vec<dim>>& dv,
                        std::vector<Vec<dim>>& out, bool definite);
 
+  //! The Jacobi preconditioner's diagonal of (M + dt^2 K) at v, per unknown and component, with
+  //! the stress differential made definite as `definite` asks.
+  void preconditioner_diagonal(const MpmState<dim>& s, const std::vector<Vec<dim>>& v, std::vector<Vec<dim>>& out,
+                               bool definite);
+
 private:
   struct Outcome {
     int newton_iterations = 0;
