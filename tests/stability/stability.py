@@ -177,6 +177,12 @@ CASES = [
         ("domains", "particle domains", [], passed_funnel),
         ("enriched", "enriched particle domains (eps = 0.6)", ["domain_enrichment=0.6"], passed_outlet))
 ] + [
+    # The implicit step with the enriched corners among Newton's unknowns.
+    case("implicit_enriched_funnel_squeeze", "the funnel squeeze, solver: implicit, enriched particle domains "
+         "(eps = 0.6), 1.5 s", "solid_scene", "data/scenes/stability/funnel.yaml",
+         ["transfer.scheme=flip", "particle_domains=true", "domain_enrichment=0.6", "time.end=1.5"],
+         "completes", check=True, extra=passed_outlet)
+] + [
     case(f"enriched_flatten_{model}", f"block crushed to 5 % of its height and released, {model}, "
          "enriched particle domains (eps = 0.6)", "solid_scene", BASE,
          ["transfer.scheme=flip", "particle_domains=true", "domain_enrichment=0.6", f"{BLOCK}.stretch=[1, 0.05]",
