@@ -199,6 +199,22 @@ void check_derivatives(const solid::SolidScene<dim>& scene, std::mt19937& rng, b
   CHECK(checked > 0);
 }
 
+// One implicit step solved to 1e-10: the merit decreases every Newton iteration, up to the
+// round-off of E that the line search tolerates when the residual falls (1e-9 |E|).
+template <int dim>
+void converged_step(solid::SolidScene<dim>& scene) {
+  stages::ImplicitSettings settings;
+  settings.tolerance = 1e-10;
+  settings.linear_tolerance = 1e-6;
+  stages::ImplicitUpdate<dim> stage = implicit_stage(scene, settings);
+  stage.run(scene.state);
+  const std::vector<double>& E = stage.merit_history();
+  REQUIRE(E.size() >= 2);
+  for (std::size_t n = 1; n < E.size(); ++n) CHECK(E[n] <= E[n - 1] + 1e-9 * std::abs(E[n - 1]));
+  CHECK(E.back() < E.front());
+  CHECK(stage.diagnostics()[2].value <= 1e-10);  // newton_residual within tolerance
+}
+
 }  // namespace
 
 TEST_CASE_TEMPLATE("implicit step: gradient and Hessian-vector product against finite differences", Dim,
@@ -243,19 +259,7 @@ TEST_CASE_TEMPLATE("implicit step: Newton lowers the potential every iteration a
     Vec<dim> before = Vec<dim>::Zero();  // grid.velocity holds the momentum m v after p2g
     for (const Vec<dim>& mv : s.grid.velocity) before += mv;
     const std::vector<Vec<dim>> predicted_momentum = s.grid.velocity;
-    stages::ImplicitSettings settings;
-    settings.tolerance = 1e-10;
-    settings.linear_tolerance = 1e-6;
-    stages::ImplicitUpdate<dim> stage = implicit_stage(scene, settings);
-    stage.run(s);
-    const std::vector<double>& E = stage.merit_history();
-    REQUIRE(E.size() >= 2);
-    // Decreasing, up to the round-off of E that the line search tolerates when the residual
-    // falls (1e-9 |E|).
-    for (std::size_t n = 1; n < E.size(); ++n) CHECK(E[n] <= E[n - 1] + 1e-9 * std::abs(E[n - 1]));
-    CHECK(E.back() < E.front());
-    const auto d = stage.diagnostics();
-    CHECK(d[2].value <= 1e-10);  // newton_residual within tolerance
+    converged_step(scene);
     const Vec<dim> after = momentum(s.grid.mass, s.grid.velocity);
     // |sum_i g_i| <= sqrt(M) |g|_{M^-1} <= M tolerance rms(v^*): the converged residual bounds
     // the momentum error (v^* = v^n without gravity).
@@ -295,15 +299,7 @@ TEST_CASE_TEMPLATE("implicit step with particle domains: Newton conserves the mo
     for (std::size_t k = 0; k < s.grid.node_storage(); ++k) add(s.grid.mass[k], s.grid.velocity[k]);
     for (std::size_t c = 0; c < d.corner_count(); ++c)
       if (d.enriched[c]) add(d.mass[c], d.momentum[c]);
-    stages::ImplicitSettings settings;
-    settings.tolerance = 1e-10;
-    settings.linear_tolerance = 1e-6;
-    stages::ImplicitUpdate<dim> stage = implicit_stage(scene, settings);
-    stage.run(s);
-    const std::vector<double>& E = stage.merit_history();
-    REQUIRE(E.size() >= 2);
-    for (std::size_t n = 1; n < E.size(); ++n) CHECK(E[n] <= E[n - 1] + 1e-9 * std::abs(E[n - 1]));
-    CHECK(stage.diagnostics()[2].value <= 1e-10);
+    converged_step(scene);
     // The enriched corners now hold their new velocities.
     Vec<dim> after = momentum(s.grid.mass, s.grid.velocity);
     for (std::size_t c = 0; c < d.corner_count(); ++c)
