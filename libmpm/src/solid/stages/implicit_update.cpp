@@ -90,7 +90,7 @@ const std::vector<double>& ImplicitUpdate<dim>::unknown_mass(const MpmState<dim>
   if (!s.domains) return mass_;
   const domains::ParticleDomains<dim>& d = *s.domains;
   const std::size_t nodes = s.grid.node_storage();
-  mass_.resize(nodes + d.corner_count(), 0.0);
+  mass_.resize(nodes + d.enriched.size(), 0.0);  // a slot per corner when any may be enriched
   for (std::size_t c = 0; c < d.enriched.size(); ++c)
     if (d.enriched[c]) mass_[nodes + c] = d.mass[c];
   return mass_;
@@ -130,7 +130,7 @@ void ImplicitUpdate<dim>::internal_forces(const MpmState<dim>& s, const std::vec
   domains::corner_forces(d, S, corner_force_);
   domains::nodes_from_corners(d, s.kernel, s.grid, corner_force_, out);
   const std::size_t nodes = s.grid.node_storage();
-  out.resize(nodes + d.corner_count(), Vec<dim>::Zero());
+  out.resize(nodes + d.enriched.size(), Vec<dim>::Zero());
   for (std::size_t c = 0; c < d.enriched.size(); ++c)
     if (d.enriched[c]) out[nodes + c] = corner_force_[c];
 }

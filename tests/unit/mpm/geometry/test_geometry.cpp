@@ -261,6 +261,17 @@ TEST_CASE("domain walls and collider sets") {
   v = Vec<2>(5.0, 5.0);
   set.project(Vec<2>(0.5, 0.55), 0.0, v);
   CHECK((v - Vec<2>(0.0, 0.3)).norm() == 0.0);
+
+  // The directions an implicit solve fixes: a slip floor fixes the normal of a node whatever
+  // its motion, but of a material point only while it approaches (contact.h, ContactPoint).
+  ColliderSet<2> floor;
+  floor.add(Collider<2>(HalfSpace<2>(Vec<2>(0, 0.2), Vec<2>(0, 1)), Contact{ContactType::slip, 0.0}));
+  const Mat<2> normal_fixed = Vec<2>(1, 0) * Vec<2>(1, 0).transpose();
+  const Vec<2> x(0.5, 0.1), leaving(1.0, 2.0), approaching(1.0, -2.0);
+  CHECK((floor.free_directions(x, 0.0, leaving) - normal_fixed).norm() < 1e-15);
+  CHECK((floor.free_directions(x, 0.0, leaving, ContactPoint::material) - Mat<2>::Identity()).norm() < 1e-15);
+  CHECK((floor.free_directions(x, 0.0, approaching, ContactPoint::material) - normal_fixed).norm() < 1e-15);
+  CHECK((floor.free_directions(Vec<2>(0.5, 0.3), 0.0, approaching) - Mat<2>::Identity()).norm() < 1e-15);
 }
 
 TEST_CASE("parse colliders and walls from a scene") {

@@ -181,13 +181,16 @@ void check_derivatives(const solid::SolidScene<dim>& scene, std::mt19937& rng, b
   if (indefinite) CHECK(distance(Kdv_definite, Kdv) > 1e-3 * std::sqrt(solve::dot(Kdv, Kdv)));
 
   // The Jacobi diagonal is that of the definite operator: e . H e for unit vectors e (every
-  // 5th unknown with mass, each component; its stiffness part is >= 0, so no clamp acts).
+  // 5th node with mass and every enriched corner, each component; its stiffness part is >= 0,
+  // so no clamp acts).
   std::vector<Vec<dim>> diagonal, e(mass.size(), Vec<dim>::Zero()), He;
   stage.preconditioner_diagonal(s, v, diagonal, true);
   REQUIRE(diagonal.size() == mass.size());
-  int checked = 0;
-  for (std::size_t k = 0; k < mass.size(); k += 5) {
-    if (mass[k] <= 0.0) continue;
+  int checked = 0, corners = 0;
+  for (std::size_t k = 0; k < mass.size(); ++k) {
+    const bool corner = k >= s.grid.node_storage();
+    if (mass[k] <= 0.0 || (!corner && k % 5 != 0)) continue;
+    corners += corner;
     for (int a = 0; a < dim; ++a) {
       e[k] = Vec<dim>::Unit(a);
       stage.hessian_product(s, v, e, He, true);
@@ -197,6 +200,7 @@ void check_derivatives(const solid::SolidScene<dim>& scene, std::mt19937& rng, b
     }
   }
   CHECK(checked > 0);
+  if (s.domains) CHECK(corners > 0);
 }
 
 // One implicit step solved to 1e-10: the merit decreases every Newton iteration, up to the

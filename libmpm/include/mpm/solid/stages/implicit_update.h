@@ -31,8 +31,9 @@ struct ImplicitSettings {
 //! particles deform with their domain corners, and the enriched corners are unknowns beside
 //! the nodes (Zhu et al. sec. 5-6). Equations in the source file.
 //!
-//! The unknowns, in every vector below: the grid's node storage, then with particle domains one
-//! slot per domain corner; only the enriched corners' slots have mass (unknown_mass).
+//! The unknowns, in every vector below: the grid's node storage, then with enriched particle
+//! domains one slot per domain corner; only the enriched corners' slots have mass
+//! (unknown_mass).
 
 template <int dim>
 class ImplicitUpdate final : public Stage<MpmState<dim>> {
@@ -62,7 +63,7 @@ public:
   //! the incremental potential, or |g|^2_{M^-1} / 2 when a material is plastic.
   const std::vector<double>& merit_history() const { return history_; }
 
-  //! The mass of each unknown [kg]: the grid's nodes, then with domains each corner (0 unless
+  //! The mass of each unknown [kg]: the grid's nodes, then with enrichment each corner (0 unless
   //! enriched).
   const std::vector<double>& unknown_mass(const MpmState<dim>& s);
   //! The incremental potential E(v) = sum_i m_i |v_i - v_i^*|^2 / 2 + sum_p V_p^0 psi(F_p(v)),
