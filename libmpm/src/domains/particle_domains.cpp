@@ -187,7 +187,7 @@ double enrichment_metric(const Mat<dim>& F) {
 }
 
 template <int dim>
-void mark_enrichment(ParticleDomains<dim>& d, const std::vector<Mat<dim>>& F) {
+void mark_enrichment(ParticleDomains<dim>& d, const std::vector<Mat<dim>>& F, bool explicit_step) {
   MPM_VERIFY(F.size() == d.particle_count(), Error, "particle domains: enrichment needs F of every particle");
   d.enriched_particles = 0;
   d.enriched_length = std::numeric_limits<double>::infinity();
@@ -213,7 +213,7 @@ void mark_enrichment(ParticleDomains<dim>& d, const std::vector<Mat<dim>>& F) {
     }
   });
   for (const std::uint8_t e : particle_enriched) d.enriched_particles += e;
-  if (d.enriched_particles == 0) return;
+  if (d.enriched_particles == 0 || !explicit_step) return;
   const auto touches_enriched = [&](std::size_t p) {
     for (const std::uint32_t c : d.corner_of[p])
       if (d.enriched[c]) return true;
@@ -499,7 +499,7 @@ void restore(ParticleDomains<dim>& d, const CarriedData& data) {
   template void index_sharing(ParticleDomains<dim>&);                                                                \
   template void corners_to_grid(ParticleDomains<dim>&, const Kernel&, SparseGrid<dim>&, const std::string&);         \
   template double enrichment_metric<dim>(const Mat<dim>&);                                                           \
-  template void mark_enrichment(ParticleDomains<dim>&, const std::vector<Mat<dim>>&);                                \
+  template void mark_enrichment(ParticleDomains<dim>&, const std::vector<Mat<dim>>&, bool);                                \
   template void grid_to_corners(ParticleDomains<dim>&, const Kernel&, const SparseGrid<dim>&, bool);                 \
   template void integrate_enriched(ParticleDomains<dim>&, double, const Vec<dim>&,                                   \
                                    const std::function<void(const Vec<dim>&, Vec<dim>&)>&);                          \

@@ -224,7 +224,7 @@ Pipeline<MpmState<dim>> make_solid_pipeline(const SolidScene<dim>& scene) {
   }
   // Enrichment first: the time step needs the thinnest enriched domain.
   if (scene.state.domains && scene.state.domains->enrichment_threshold > 0.0)
-    p.add(std::make_unique<stages::DomainEnrichment<dim>>());
+    p.add(std::make_unique<stages::DomainEnrichment<dim>>(scene.solver->name() != "implicit"));
   // A solver stable at any step (implicit, grains) still resolves free fall: a particle at
   // rest falls at most wave_cfl^2 dx / 2 in its first step, dt <= wave_cfl sqrt(dx / |g|).
   double wave_speed = scene.solver->wave_speed();

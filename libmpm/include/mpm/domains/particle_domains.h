@@ -127,9 +127,12 @@ template <int dim>
 double enrichment_metric(const Mat<dim>& F);
 
 //! Marks the corners of every particle with K(F_p) <= domains.enrichment_threshold and sets
-//! enriched_particles and enriched_length; clears the marks when the threshold is 0.
+//! enriched_particles; clears the marks when the threshold is 0. With `explicit_step` (the
+//! enriched corners are stepped explicitly) also enriched_length, and a NumericalError naming
+//! the first enriched domain thinner than 1e-6 of its rest size (no explicit step is stable
+//! through it); an implicit step needs neither.
 template <int dim>
-void mark_enrichment(ParticleDomains<dim>& domains, const std::vector<Mat<dim>>& F);
+void mark_enrichment(ParticleDomains<dim>& domains, const std::vector<Mat<dim>>& F, bool explicit_step = true);
 
 //! Sorts the corners into buckets of `grid` (allocating the blocks their stencils touch) and
 //! scatters m_alpha, p_alpha, f_alpha (in domains.mass, momentum, force) of the corners not

@@ -26,7 +26,7 @@ template <int dim>
 void DomainEnrichment<dim>::run(MpmState<dim>& s) {
   domains::ParticleDomains<dim>& d = *s.domains;
   check_pairing(d, std::as_const(s.particles), name());
-  domains::mark_enrichment(d, solid::elastic_F(s.particles));
+  domains::mark_enrichment(d, solid::elastic_F(s.particles), explicit_step_);
   share_ = d.particle_count() ? static_cast<double>(d.enriched_particles) / d.particle_count() : 0.0;
 }
 

@@ -339,6 +339,28 @@ TEST_CASE_TEMPLATE("particle domains: enriched corners are degrees of freedom of
   }
 }
 
+TEST_CASE_TEMPLATE("particle domains: a flat enriched domain stops an explicit step, not an implicit one", Dim,
+                   std::integral_constant<int, 2>, std::integral_constant<int, 3>) {
+  constexpr int dim = Dim::value;
+  solid::SolidScene<dim> scene =
+      solid::load_solid_scene<dim>(Config::parse(scene_yaml<dim>(), "<string>", {"domain_enrichment=0.6"}));
+  domains::ParticleDomains<dim>& d = *scene.state.domains;
+  std::vector<Mat<dim>> F(d.particle_count(), Mat<dim>::Identity());
+  F[7](1, 1) = 1e-8;  // particle 7 crushed to 1e-8 of its height
+  try {
+    domains::mark_enrichment(d, F);
+    FAIL("no error for a flat enriched domain");
+  } catch (const NumericalError& e) {
+    CHECK(std::string(e.what()).find("particle 7 is flat") != std::string::npos);
+  }
+  domains::mark_enrichment(d, F, false);  // an implicit step: no Courant bound, no error
+  CHECK(d.enriched_particles == 1);
+  CHECK(std::isinf(d.enriched_length));
+  F[7](1, 1) = 1e-3;  // thin but not flat: the explicit bound is its thickness
+  domains::mark_enrichment(d, F);
+  CHECK(d.enriched_length == doctest::Approx(1e-3 / d.inverse_side[7][1]).epsilon(1e-9));
+}
+
 TEST_CASE("particle domains: enriched corners obey the walls") {
   // A stretched block thrown at the floor, enriched wherever it deforms: the enriched corners
   // that reach the floor stop at its wall layer (the colliders act on them as on nodes).

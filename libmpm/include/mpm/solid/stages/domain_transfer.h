@@ -18,6 +18,9 @@ namespace mpm::stages {
 template <int dim>
 class DomainEnrichment final : public Stage<MpmState<dim>> {
 public:
+  //! `explicit_step`: the enriched corners are stepped explicitly (domains_from_grid), which
+  //! bounds the time step by the thinnest enriched domain (mark_enrichment).
+  explicit DomainEnrichment(bool explicit_step) : explicit_step_(explicit_step) {}
   std::string name() const override { return "enrichment"; }
   std::vector<std::string> reads() const override { return {"particle.F"}; }
   std::vector<std::string> writes() const override { return {"domains.enriched"}; }
@@ -26,6 +29,7 @@ public:
   std::vector<Diagnostic> diagnostics() const override { return {{"enriched_particles", share_}}; }
 
 private:
+  bool explicit_step_;
   double share_ = 0.0;
 };
 
