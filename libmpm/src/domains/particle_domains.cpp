@@ -499,7 +499,7 @@ void restore(ParticleDomains<dim>& d, const CarriedData& data) {
   template void index_sharing(ParticleDomains<dim>&);                                                                \
   template void corners_to_grid(ParticleDomains<dim>&, const Kernel&, SparseGrid<dim>&, const std::string&);         \
   template double enrichment_metric<dim>(const Mat<dim>&);                                                           \
-  template void mark_enrichment(ParticleDomains<dim>&, const std::vector<Mat<dim>>&, bool);                                \
+  template void mark_enrichment(ParticleDomains<dim>&, const std::vector<Mat<dim>>&, bool);                          \
   template void grid_to_corners(ParticleDomains<dim>&, const Kernel&, const SparseGrid<dim>&, bool);                 \
   template void integrate_enriched(ParticleDomains<dim>&, double, const Vec<dim>&,                                   \
                                    const std::function<void(const Vec<dim>&, Vec<dim>&)>&);                          \
