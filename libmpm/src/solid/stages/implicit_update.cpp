@@ -243,38 +243,43 @@ void ImplicitUpdate<dim>::linearise(const MpmState<dim>& s, bool derivatives, bo
 }
 
 template <int dim>
-void ImplicitUpdate<dim>::jacobi_diagonal(const MpmState<dim>& s, std::vector<Vec<dim>>& diagonal) const {
+void ImplicitUpdate<dim>::collect_two_step_gradients(const MpmState<dim>& s) {
+  two_step_.clear();
+  if (!s.domains) return;
+  domains::for_each_two_step_gradient<dim>(*s.domains, s.kernel, s.grid,
+                                           [&](std::size_t p, Index node, const Vec<dim>& q) {
+                                             if (node >= 0) two_step_.push_back({p, node, q});
+                                           });
+}
+
+template <int dim>
+void ImplicitUpdate<dim>::jacobi_diagonal(const MpmState<dim>& s, std::vector<Vec<dim>>& diagonal) {
   const Particles<dim>& P = s.particles;
-  const SparseGrid<dim>& g = s.grid;
   diagonal.assign(mass_.size(), Vec<dim>::Zero());
-  // c sum_a e_a . dP(e_a q^T) q per component: q the reference gradient of the unknown's weight.
-  const auto add = [&](std::size_t p, const Vec<dim>& q, Vec<dim>& out) {
-    const double c = s.dt * s.dt * P.volume0[p];
-    for (int a = 0; a < dim; ++a) out[a] += c * derivative_[p].quadratic(Vec<dim>::Unit(a), q);
-  };
   if (s.domains) {
     const domains::ParticleDomains<dim>& d = *s.domains;
-    // e_a . dP(e_a q^T) q = q^T B_a q with (B_a)_jk = dP(e_a e_k^T)_aj: dim^2 differentials per
-    // particle instead of dim per node (a particle's corners reach up to 4^dim nodes).
-    std::size_t current = d.particle_count();
-    std::array<Mat<dim>, dim> B;
-    domains::for_each_two_step_gradient<dim>(d, s.kernel, g, [&](std::size_t p, Index node, const Vec<dim>& q) {
-      if (node < 0 || !has_stress_[p]) return;
-      if (p != current) {
-        current = p;
-        for (int a = 0; a < dim; ++a)
-          for (int k = 0; k < dim; ++k)
-            B[a].col(k) = derivative_[p].apply(Vec<dim>::Unit(a) * Vec<dim>::Unit(k).transpose()).row(a).transpose();
-      }
-      const double c = s.dt * s.dt * P.volume0[p];
-      for (int a = 0; a < dim; ++a) diagonal[node][a] += c * q.dot(B[a] * q);
+    // c e_a . dP(e_a q^T) q per component, q the reference gradient of the unknown's weight,
+    // = c q^T B_a q with (B_a)_jk = dP(e_a e_k^T)_aj: dim^2 differentials per particle (in
+    // parallel) instead of dim per node (a particle's corners reach up to 4^dim nodes).
+    diagonal_form_.resize(P.size());
+    for_each_particle<dim>(P.size(), [&](std::size_t p) {
+      if (!has_stress_[p]) return;
+      for (int a = 0; a < dim; ++a)
+        for (int k = 0; k < dim; ++k)
+          diagonal_form_[p][a].col(k) =
+              derivative_[p].apply(Vec<dim>::Unit(a) * Vec<dim>::Unit(k).transpose()).row(a).transpose();
     });
+    const auto add = [&](std::size_t p, const Vec<dim>& q, Vec<dim>& out) {
+      if (!has_stress_[p]) return;
+      const double c = s.dt * s.dt * P.volume0[p];
+      for (int a = 0; a < dim; ++a) out[a] += c * q.dot(diagonal_form_[p][a] * q);
+    };
+    for (const TwoStepGradient& e : two_step_) add(e.particle, e.q, diagonal[e.node]);
     constexpr int K = domains::ParticleDomains<dim>::corners;
     for (std::size_t c = 0; c < d.enriched.size(); ++c)
       for (std::uint32_t k = d.sharing_begin[c]; d.enriched[c] && k != d.sharing_begin[c + 1]; ++k) {
         const std::size_t p = d.sharing[k] / K;
-        if (has_stress_[p])
-          add(p, d.weight_gradient(p, static_cast<int>(d.sharing[k] % K)), diagonal[g.node_storage() + c]);
+        add(p, d.weight_gradient(p, static_cast<int>(d.sharing[k] % K)), diagonal[s.grid.node_storage() + c]);
       }
   } else {
     jacobi_nodes(s, diagonal);
@@ -348,6 +353,7 @@ template <int dim>
 void ImplicitUpdate<dim>::preconditioner_diagonal(const MpmState<dim>& s, const std::vector<Vec<dim>>& v,
                                                   std::vector<Vec<dim>>& out, bool definite) {
   unknown_mass(s);
+  collect_two_step_gradients(s);
   deform(s, v, false);
   linearise(s, true, definite);
   jacobi_diagonal(s, out);
@@ -374,6 +380,7 @@ void ImplicitUpdate<dim>::run(MpmState<dim>& s) {
   SparseGrid<dim>& g = s.grid;
   momentum_to_velocity(g, s.transfer);
   const std::vector<double>& mass = unknown_mass(s);
+  collect_two_step_gradients(s);  // the corners stay put through the solve
   const std::size_t n = mass.size(), nodes = g.node_storage();
   const double t = s.time + s.dt;
   // Unknown k: a node, or (k >= nodes) an enriched domain corner, a material point.

@@ -6,6 +6,7 @@
 #include <mpm/geometry/collider.h>
 #include <mpm/solid/material.h>
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -102,8 +103,11 @@ private:
   void linearise(const MpmState<dim>& s, bool derivatives, bool definite);
   //! (M + dt^2 K) dv with the differentials of the last linearise().
   void apply_hessian(const MpmState<dim>& s, const std::vector<Vec<dim>>& dv, std::vector<Vec<dim>>& out);
+  //! With domains, each particle's two-step weight gradients q on the nodes its corners reach
+  //! (domains::for_each_two_step_gradient), for the diagonal: once per solve.
+  void collect_two_step_gradients(const MpmState<dim>& s);
   //! The Jacobi diagonal of M + dt^2 K, per unknown and component (Zhu et al. eq. 17, 19).
-  void jacobi_diagonal(const MpmState<dim>& s, std::vector<Vec<dim>>& diagonal) const;
+  void jacobi_diagonal(const MpmState<dim>& s, std::vector<Vec<dim>>& diagonal);
   //! Its stiffness part on the nodes of a scene without domains, added to `diagonal`.
   void jacobi_nodes(const MpmState<dim>& s, std::vector<Vec<dim>>& diagonal) const;
 
@@ -117,6 +121,13 @@ private:
   // Per-particle and per-corner work arrays, kept between steps to avoid reallocation.
   std::vector<Mat<dim>> grad_, trial_F_, weighted_stress_, differential_stress_, kirchhoff_;
   std::vector<Vec<dim>> corner_velocity_, corner_force_;
+  struct TwoStepGradient {
+    std::size_t particle;
+    Index node;
+    Vec<dim> q;
+  };
+  std::vector<TwoStepGradient> two_step_;
+  std::vector<std::array<Mat<dim>, dim>> diagonal_form_;  // B_a per particle
   std::vector<Vec<dim>> merit_residual_;
   std::vector<double> energy_;
   std::vector<constitutive::StressDerivative<dim>> derivative_;
