@@ -222,24 +222,23 @@ Pipeline<MpmState<dim>> make_solid_pipeline(const SolidScene<dim>& scene) {
     if (scene.state.particles.has_channel(kElasticF)) deformation.push_back(kElasticF);
     p.add(std::make_unique<stages::ResampleParticles<dim>>(*scene.refinement->resample, deformation));
   }
-  // Enrichment first: the time step needs the thinnest enriched domain.
+  // Enrichment first: the time step needs the thinnest enriched domain (explicit steps only: an
+  // implicit step solves the enriched corners too).
+  const bool implicit = scene.solver->name() == "implicit";
   if (scene.state.domains && scene.state.domains->enrichment_threshold > 0.0)
-    p.add(std::make_unique<stages::DomainEnrichment<dim>>(scene.solver->name() != "implicit"));
+    p.add(std::make_unique<stages::DomainEnrichment<dim>>(!implicit));
   // A solver stable at any step (implicit, grains) still resolves free fall: a particle at
   // rest falls at most wave_cfl^2 dx / 2 in its first step, dt <= wave_cfl sqrt(dx / |g|).
   double wave_speed = scene.solver->wave_speed();
+  if (wave_speed == 0.0) wave_speed = std::sqrt(scene.settings.gravity.norm() * scene.settings.dx);
   auto dt_settings = stages::time_step_settings(scene.settings, wave_speed);
-  if (wave_speed == 0.0) {
-    dt_settings.wave_speed = std::sqrt(scene.settings.gravity.norm() * scene.settings.dx);
-    dt_settings.bound_enriched = false;  // an implicit step solves the enriched corners too
-  }
+  dt_settings.bound_enriched = !implicit;
   p.add(std::make_unique<stages::TimeStepControl<dim>>(dt_settings));
   if (scene.refinement && scene.refinement->follow_particles)
     p.add(std::make_unique<stages::RefineGrid<dim>>(
         adaptive::build_tree(*scene.refinement, scene.settings, scene.colliders)));
   // Particle domains (elastic only) replace sort, p2g, the explicit stress forces, the
   // deformation update and g2p by the two transfers through the corners (domain_transfer.h).
-  const bool implicit = scene.solver->name() == "implicit";
   if (scene.state.domains) {
     p.add(std::make_unique<stages::DomainsToGrid<dim>>(scene.materials));
     if (implicit)

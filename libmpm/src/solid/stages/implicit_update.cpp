@@ -256,19 +256,19 @@ template <int dim>
 void ImplicitUpdate<dim>::jacobi_diagonal(const MpmState<dim>& s, std::vector<Vec<dim>>& diagonal) {
   const Particles<dim>& P = s.particles;
   diagonal.assign(mass_.size(), Vec<dim>::Zero());
+  // c e_a . dP(e_a q^T) q per component, q the reference gradient of the unknown's weight,
+  // = c q^T B_a q with (B_a)_jk = dP(e_a e_k^T)_aj: dim^2 differentials per particle (in
+  // parallel) instead of dim per node (a particle reaches 3^dim to 4^dim nodes).
+  diagonal_form_.resize(P.size());
+  for_each_particle<dim>(P.size(), [&](std::size_t p) {
+    if (!has_stress_[p]) return;
+    for (int a = 0; a < dim; ++a)
+      for (int k = 0; k < dim; ++k)
+        diagonal_form_[p][a].col(k) =
+            derivative_[p].apply(Vec<dim>::Unit(a) * Vec<dim>::Unit(k).transpose()).row(a).transpose();
+  });
   if (s.domains) {
     const domains::ParticleDomains<dim>& d = *s.domains;
-    // c e_a . dP(e_a q^T) q per component, q the reference gradient of the unknown's weight,
-    // = c q^T B_a q with (B_a)_jk = dP(e_a e_k^T)_aj: dim^2 differentials per particle (in
-    // parallel) instead of dim per node (a particle's corners reach up to 4^dim nodes).
-    diagonal_form_.resize(P.size());
-    for_each_particle<dim>(P.size(), [&](std::size_t p) {
-      if (!has_stress_[p]) return;
-      for (int a = 0; a < dim; ++a)
-        for (int k = 0; k < dim; ++k)
-          diagonal_form_[p][a].col(k) =
-              derivative_[p].apply(Vec<dim>::Unit(a) * Vec<dim>::Unit(k).transpose()).row(a).transpose();
-    });
     const auto add = [&](std::size_t p, const Vec<dim>& q, Vec<dim>& out) {
       if (!has_stress_[p]) return;
       const double c = s.dt * s.dt * P.volume0[p];
@@ -308,8 +308,7 @@ void ImplicitUpdate<dim>::jacobi_nodes(const MpmState<dim>& s, std::vector<Vec<d
               const double c = s.dt * s.dt * P.volume0[p];
               st.for_each_node([&](int node, double, const Vec<dim>& grad, const Vec<dim>&) {
                 const Vec<dim> q = FT * grad;  // grad_X w_ip, the reference-configuration gradient
-                for (int a = 0; a < dim; ++a)
-                  patch[node * dim + a] += c * derivative_[p].quadratic(Vec<dim>::Unit(a), q);
+                for (int a = 0; a < dim; ++a) patch[node * dim + a] += c * q.dot(diagonal_form_[p][a] * q);
               });
             });
       },
@@ -422,13 +421,6 @@ void ImplicitUpdate<dim>::run(MpmState<dim>& s) {
     return std::sqrt(square / total_mass);
   };
   const double predicted_rms = rms(predicted);
-  const auto residual = [&](const std::vector<Vec<dim>>& r, const std::vector<Vec<dim>>& x) {
-    double sum = 0.0;
-    for (std::size_t k = 0; k < n; ++k)
-      if (mass[k] > 0.0) sum += r[k].squaredNorm() / mass[k];
-    const double scale = std::max(predicted_rms, rms(x)) + s.gravity.norm() * s.dt + 1e-12 * g.dx() / s.dt;
-    return std::sqrt(sum / total_mass) / scale;
-  };
 
   // Elastic materials: CG and a line search on E. With a return map
   // inside the step the stress has no potential and the Jacobian is not symmetric: GMRES
@@ -447,6 +439,10 @@ void ImplicitUpdate<dim>::run(MpmState<dim>& s) {
     for (std::size_t k = 0; k < n; ++k)
       if (mass[k] > 0.0) sum += r[k].squaredNorm() / mass[k];
     return 0.5 * sum;
+  };
+  const auto residual = [&](const std::vector<Vec<dim>>& r, const std::vector<Vec<dim>>& x) {
+    const double scale = std::max(predicted_rms, rms(x)) + s.gravity.norm() * s.dt + 1e-12 * g.dx() / s.dt;
+    return std::sqrt(2.0 * weighted_square(r) / total_mass) / scale;
   };
   const auto merit = [&](const std::vector<Vec<dim>>& x) {
     if (!plastic) return energy(s, x, predicted);

@@ -130,20 +130,6 @@ struct StressDerivative {
   detail::PrincipalDifferential<dim> d;
   //! dP = (d^2 psi / dF dF) : dF [Pa].
   Mat<dim> apply(const Mat<dim>& dF) const { return detail::principal_differential(f, d, dF); }
-  //! a . (dP(a q^T) q) without forming dF = a q^T: the diagonal entries of an implicit
-  //! system's Hessian (Zhu et al. eq. 18-19). With u = U^T a, w = V^T q, M = u w^T.
-  double quadratic(const Vec<dim>& a, const Vec<dim>& q) const {
-    const Vec<dim> u = f.U.transpose() * a, w = f.V.transpose() * q;
-    const Vec<dim> uw = u.cwiseProduct(w);
-    double r = uw.dot(d.dp_dsigma * uw);
-    for (int i = 0; i < dim; ++i)
-      for (int j = 0; j < dim; ++j)
-        if (i != j) {
-          const double mij = u(i) * w(j), mji = u(j) * w(i);
-          r += mij * (0.5 * d.sym(i, j) * (mij + mji) + 0.5 * d.skew(i, j) * (mij - mji));
-        }
-    return r;
-  }
 };
 
 //! The energy, stress and differential of a model that supplies principal_energy,
