@@ -124,17 +124,18 @@ struct AxisAligned {
 
 bool in_square(const Vec<2>& X) { return X[0] > 0.0 && X[0] < 1.0 && X[1] > 0.0 && X[1] < 1.0; }
 
-//! Reference positions X_p, index-aligned with the particle storage (the sort orders an index
-//! and leaves the storage in place; PeriodicImages rebuilds both together).
-struct ReferencePositions {
-  std::vector<Vec<2>> X;
-};
+//! Reference positions X_p: a particle channel, so that they follow the particles when the
+//! sort stores them anew (adaptive_grid.h).
+std::vector<Vec<2>>& reference_positions(Particles<2>& P) {
+  return P.add_channel<Vec<2>>("reference_x", Vec<2>::Zero(), ChannelUse{});
+}
+const std::vector<Vec<2>>& reference_positions(const Particles<2>& P) { return P.channel<Vec<2>>("reference_x"); }
 
 //! Replaces the periodic images of the previous step by fresh copies of the particles of the
 //! unit square, within `band` [m] of it.
 class PeriodicImages final : public Stage<MpmState<2>> {
 public:
-  PeriodicImages(ReferencePositions& ref, double band) : ref_(ref), band_(band) {}
+  explicit PeriodicImages(double band) : band_(band) {}
   std::string name() const override { return "periodic_images"; }
   std::vector<std::string> reads() const override { return channels(); }
   std::vector<std::string> writes() const override { return channels(); }
@@ -144,7 +145,7 @@ public:
     // On an adaptive grid every image keeps its particle's type: the refinement is periodic.
     if (s.adaptive) adaptive::add_level_channel(next, s.adaptive->tree());
     std::vector<Mat<2>>& next_F = solid::elastic_F(next);
-    std::vector<Vec<2>> X;
+    std::vector<Vec<2>>& X = reference_positions(next);
     auto append = [&](const Particles<2>& from, const std::vector<Mat<2>>& F_from, const std::vector<Vec<2>>& X_from,
                       std::size_t p, const Vec<2>& shift) {
       next.push_back(from.x[p] + shift, from.v[p], from.mass[p], from.volume0[p], from.material[p]);
@@ -153,15 +154,16 @@ public:
       if (s.adaptive)
         next.channel<std::uint16_t>(adaptive::kParticleLevel).back() =
             from.channel<std::uint16_t>(adaptive::kParticleLevel)[p];
-      X.push_back(X_from[p] + shift);
+      X.back() = X_from[p] + shift;
     };
     const std::vector<Mat<2>>& F_now = solid::elastic_F(s.particles);
+    const std::vector<Vec<2>>& X_now = reference_positions(std::as_const(s.particles));
     for (std::size_t p = 0; p < s.particles.size(); ++p)
-      if (in_square(ref_.X[p])) append(s.particles, F_now, ref_.X, p, Vec<2>::Zero());
+      if (in_square(X_now[p])) append(s.particles, F_now, X_now, p, Vec<2>::Zero());
     // A snapshot of the square, since `next` grows while its images are appended.
     const Particles<2> square = next;
     const std::vector<Mat<2>>& F_square = solid::elastic_F(square);
-    const std::vector<Vec<2>> X_square = X;
+    const std::vector<Vec<2>>& X_square = reference_positions(square);
     for (int sy = -1; sy <= 1; ++sy)
       for (int sx = -1; sx <= 1; ++sx) {
         if (sx == 0 && sy == 0) continue;
@@ -172,7 +174,6 @@ public:
         }
       }
     s.particles = std::move(next);
-    ref_.X = std::move(X);
   }
 
 private:
@@ -180,25 +181,25 @@ private:
     return {"particle.x",       "particle.v",        "particle.C", "particle.mass",
             "particle.volume0", "particle.material", "particle.F"};
   }
-  ReferencePositions& ref_;
   double band_;
 };
 
 //! f_i += sum_p m_p b(X_p, t^n) w_ip on the grid force.
 class ManufacturedBodyForce final : public Stage<MpmState<2>> {
 public:
-  ManufacturedBodyForce(const ReferencePositions& ref, const AxisAligned& field) : ref_(ref), field_(field) {}
+  explicit ManufacturedBodyForce(const AxisAligned& field) : field_(field) {}
   std::string name() const override { return "body_force"; }
   std::vector<std::string> reads() const override { return {"grid.force", "particle.x", "particle.mass"}; }
   std::vector<std::string> writes() const override { return {"grid.force"}; }
   void run(MpmState<2>& s) override {
     const Particles<2>& P = s.particles;
+    const std::vector<Vec<2>>& X = reference_positions(P);
     if (s.adaptive) {  // on each particle's transfer level, ghosts pushed to their real nodes
       adaptive::AdaptiveGrid<2>& grid = *s.adaptive;
       std::vector<std::vector<Vec<2>>*> force;
       for (int n = 0; n < grid.levels(); ++n) force.push_back(&grid.level(n).force);
       for (std::size_t p = 0; p < P.size(); ++p) {
-        const Vec<2> f = P.mass[p] * field_.body_force(ref_.X[p], s.time);
+        const Vec<2> f = P.mass[p] * field_.body_force(X[p], s.time);
         const int n = grid.transfer_level(p);
         grid.for_each_weight(n, grid.half_cells(p), P.x[p], [&](Index k, double w, const Vec<2>&, const Vec<2>&) {
           (*force[static_cast<std::size_t>(n)])[static_cast<std::size_t>(k)] += w * f;
@@ -212,7 +213,7 @@ public:
         [&](const auto& kernel) {
           constexpr int S = std::decay_t<decltype(kernel)>::support;
           for (std::size_t p = 0; p < P.size(); ++p) {
-            const Vec<2> f = P.mass[p] * field_.body_force(ref_.X[p], s.time);
+            const Vec<2> f = P.mass[p] * field_.body_force(X[p], s.time);
             const Vec<2> xi = map(P.x[p]);
             int base[2];
             double w[2][S], dw[2][S];
@@ -228,7 +229,6 @@ public:
   }
 
 private:
-  const ReferencePositions& ref_;
   const AxisAligned& field_;
 };
 
@@ -255,16 +255,17 @@ bool in_stripe(const Vec<2>& X) {
   return f > 0.25 && f < 0.75;
 }
 
-double max_error(const MpmState<2>& state, const ReferencePositions& ref, const AxisAligned& field,
-                 double* rms = nullptr, double* stripe_max = nullptr) {
+double max_error(const MpmState<2>& state, const AxisAligned& field, double* rms = nullptr,
+                 double* stripe_max = nullptr) {
   double e_max = 0.0, e_sq = 0.0, e_stripe = 0.0;
   std::size_t count = 0;
   const Particles<2>& P = state.particles;
+  const std::vector<Vec<2>>& X = reference_positions(P);
   for (std::size_t p = 0; p < P.size(); ++p) {
-    if (!in_square(ref.X[p])) continue;
-    const double e = (P.x[p] - ref.X[p] - field.displacement(ref.X[p], state.time)).norm() / field.amplitude;
+    if (!in_square(X[p])) continue;
+    const double e = (P.x[p] - X[p] - field.displacement(X[p], state.time)).norm() / field.amplitude;
     e_max = std::max(e_max, e);
-    if (in_stripe(ref.X[p])) e_stripe = std::max(e_stripe, e);
+    if (in_stripe(X[p])) e_stripe = std::max(e_stripe, e);
     e_sq += e * e;
     ++count;
   }
@@ -297,15 +298,15 @@ MmsErrors run_mms(int cells, const Kernel& kernel, const MmsSettings& in, int le
   const double margin = band + 4.0 * dx0;
   state.grid = SparseGrid<2>(Vec<2>::Constant(-margin), Vec<2>::Constant(1.0 + margin), dx);
   state.kernel = kernel;
-  ReferencePositions ref;
   const int ppc = 4;
   const double volume = geometry::particle_volume<2>(dx, ppc);
   solid::add_solid_channels(state.particles);
+  std::vector<Vec<2>>& reference = reference_positions(state.particles);
   const std::vector<Vec<2>> seeds = geometry::seed_box<2>(Vec<2>::Zero(), Vec<2>::Ones(), dx, ppc, 0.0, 1);
   auto add = [&](const Vec<2>& X, double v) {
     state.particles.push_back(X, field.velocity(X, 0.0), in.density * v, v, 0);
     state.particles.C.back() = field.velocity_gradient(X, 0.0);
-    ref.X.push_back(X);
+    reference.back() = X;
   };
   if (levels == 1) {
     for (const Vec<2>& X : seeds) add(X, volume);
@@ -340,11 +341,11 @@ MmsErrors run_mms(int cells, const Kernel& kernel, const MmsSettings& in, int le
   dt.max_dt = in.end_time / steps;  // equal steps, the last one ends at T
   Pipeline<MpmState<2>> pipeline(particle_fields(state.particles));
   pipeline.add(std::make_unique<stages::TimeStepControl<2>>(dt));
-  pipeline.add(std::make_unique<PeriodicImages>(ref, band));
+  pipeline.add(std::make_unique<PeriodicImages>(band));
   pipeline.add(std::make_unique<stages::SortParticles<2>>());
   pipeline.add(std::make_unique<stages::ParticlesToGrid<2>>());
   pipeline.add(std::make_unique<stages::StressForces<2>>(std::vector<Material<2>>{material}));
-  pipeline.add(std::make_unique<ManufacturedBodyForce>(ref, field));
+  pipeline.add(std::make_unique<ManufacturedBodyForce>(field));
   pipeline.add(std::make_unique<stages::GridVelocityUpdate<2>>(true));
   if (levels > 1) pipeline.add(std::make_unique<stages::GhostVelocities<2>>());
   pipeline.add(std::make_unique<stages::DeformationUpdate<2>>());
@@ -353,10 +354,10 @@ MmsErrors run_mms(int cells, const Kernel& kernel, const MmsSettings& in, int le
   double space_time = 0.0, stripe = 0.0;
   for (int n = 0; n < steps; ++n) {
     mpm::step_towards(state, pipeline, in.end_time);
-    space_time = std::max(space_time, max_error(state, ref, field, nullptr, &stripe));
+    space_time = std::max(space_time, max_error(state, field, nullptr, &stripe));
   }
   double rms = 0.0;
-  const double final_max = max_error(state, ref, field, &rms);
+  const double final_max = max_error(state, field, &rms);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return {{cells, dx, final_max, seconds},
           {cells, dx, rms, seconds},

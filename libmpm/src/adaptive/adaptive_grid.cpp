@@ -50,11 +50,12 @@ AdaptiveGrid<dim>::AdaptiveGrid(CellTree<dim> tree, int points_per_axis)
   for (int n = 0; n < tree_.levels(); ++n) levels_.emplace_back(tree_.origin(), hi, tree_.dx(n));
   ghosts_.resize(tree_.levels());
   regular_.resize(tree_.levels());
+  near_embedded_.resize(tree_.levels());
 }
 
 template <int dim>
-void AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vector<std::uint16_t>& type,
-                                const std::string& stage) {
+bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vector<std::uint16_t>& type,
+                                const std::string& stage, const MoveParticles& move) {
   MPM_VERIFY(x.size() == type.size(), InputError, "adaptive grid: one particle type per particle");
   const int L = levels();
   constexpr int B = SparseGrid<dim>::block_size;
@@ -152,38 +153,31 @@ void AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
     std::vector<BlockKey>& own = own_blocks[n];
     std::sort(own.begin(), own.end());
     own.erase(std::unique(own.begin(), own.end()), own.end());
-    const SparseGrid<dim>& g = levels_[n];
     LevelStatus& status = status_[n];
-    const int s = tree_.scale(n);
-    for (BlockKey key : own) {
-      if (status.index.find(key) >= 0) continue;
-      status.index.insert(key, static_cast<int>(status.blocks.size()));
-      BlockStatus block{static_cast<std::uint32_t>(status.ghosts.size()), 0, 0, 0, 0};
-      const std::size_t first_block_link = status.links.size();
-      const IVec<dim> origin = g.block_coord(key) * B;
-      for (int local = 0; local < SparseGrid<dim>::nodes_per_block; ++local) {
-        IVec<dim> node;
-        for (int a = 0; a < dim; ++a) node[a] = origin[a] + ((local >> (a * SparseGrid<dim>::block_bits)) & (B - 1));
-        if ((node.array() >= g.node_counts().array()).any()) continue;  // padding beyond the domain
-        const IVec<dim> point = node * s;
-        if (home_level(tree_, point) == n) continue;  // a real node of this level
-        const std::size_t first_link = status.links.size();
-        embed(tree_, point, 1.0, status.links);
-        status.ghosts.push_back({node, first_link, status.links.size()});
-        if (status.links.size() - first_link > 1 || status.links[first_link].point != point)
-          block.embedded |= std::uint64_t{1} << SparseGrid<dim>::local_index(node);
+    // The new blocks' statuses in parallel (the embedding walks are the cost), appended in
+    // block order.
+    std::vector<BlockKey> fresh;
+    for (BlockKey key : own)
+      if (status.index.find(key) < 0) fresh.push_back(key);
+    std::vector<FreshStatus> computed(fresh.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, fresh.size(), 4), [&](const auto& range) {
+      for (std::size_t i = range.begin(); i != range.end(); ++i) computed[i] = block_status(n, fresh[i]);
+    });
+    for (std::size_t i = 0; i < fresh.size(); ++i) {
+      FreshStatus& c = computed[i];
+      const std::size_t link_offset = status.links.size();
+      BlockStatus block{static_cast<std::uint32_t>(status.ghosts.size()), 0, c.embedded,
+                        static_cast<std::uint32_t>(status.reached.size()), 0};
+      for (PendingGhost& ghost : c.ghosts) {
+        ghost.first_link += link_offset;
+        ghost.end_link += link_offset;
       }
+      status.ghosts.insert(status.ghosts.end(), c.ghosts.begin(), c.ghosts.end());
+      status.links.insert(status.links.end(), c.links.begin(), c.links.end());
+      status.reached.insert(status.reached.end(), c.reached.begin(), c.reached.end());
       block.end_ghost = static_cast<std::uint32_t>(status.ghosts.size());
-      // The blocks of the real nodes its ghosts reach, once each.
-      block.first_reached = static_cast<std::uint32_t>(status.reached.size());
-      for (std::size_t l = first_block_link; l < status.links.size(); ++l) {
-        const NodeWeight<dim>& link = status.links[l];
-        status.reached.push_back({link.level, levels_[link.level].block_id(link.point / tree_.scale(link.level))});
-      }
-      std::sort(status.reached.begin() + block.first_reached, status.reached.end());
-      status.reached.erase(std::unique(status.reached.begin() + block.first_reached, status.reached.end()),
-                           status.reached.end());
       block.end_reached = static_cast<std::uint32_t>(status.reached.size());
+      status.index.insert(fresh[i], static_cast<int>(status.blocks.size()));
       status.blocks.push_back(block);
     }
     blocks[n].insert(blocks[n].end(), own.begin(), own.end());
@@ -196,7 +190,6 @@ void AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
 
   // Every bucketed particle stays in the buckets. Those whose stencil holds an embedded ghost
   // are also listed: APIC adds the ghosts' affine terms for them (adaptive_transfer.cpp).
-  near_embedded_.clear();
   for (int n = 0; n < L; ++n) {
     const SparseGrid<dim>& g = levels_[n];
     const LevelStatus& status = status_[n];
@@ -204,38 +197,43 @@ void AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
       const int m = status.index.find(g.block_id(block_coord * B));
       return m >= 0 ? status.blocks[static_cast<std::size_t>(m)].embedded : 0;
     };
-    ParticleBuckets<dim>& b = regular_[n];
-    b = ParticleBuckets<dim>{};
-    BlockKey checked = ~BlockKey{0};
-    std::uint64_t patch_mask[1 << dim] = {};  // embedded masks of the patch's blocks
-    bool check_nodes = false;
-    for (const auto& [block, p] : bucketed[n]) {
-      if (block != checked) {
-        checked = block;
-        check_nodes = false;
-        const IVec<dim> c = g.block_coord(block);
-        for (int corner = 0; corner < (1 << dim); ++corner) {
-          IVec<dim> nb = c;
-          for (int a = 0; a < dim; ++a) nb[a] += (corner >> a) & 1;
-          patch_mask[corner] = embedded_mask(nb);
-          check_nodes = check_nodes || patch_mask[corner] != 0;
+    // Whether each bucketed particle's 3^dim stencil holds an embedded ghost, in parallel
+    // (chunks of particles, one patch of block masks per block).
+    const auto& pairs = bucketed[n];
+    std::vector<std::uint8_t> near(pairs.size(), 0);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pairs.size(), 2048), [&](const auto& range) {
+      BlockKey checked = ~BlockKey{0};
+      std::uint64_t patch_mask[1 << dim] = {};  // embedded masks of the patch's blocks
+      bool check_nodes = false;
+      for (std::size_t i = range.begin(); i != range.end(); ++i) {
+        const auto& [block, p] = pairs[i];
+        if (block != checked) {
+          checked = block;
+          check_nodes = false;
+          const IVec<dim> c = g.block_coord(block);
+          for (int corner = 0; corner < (1 << dim); ++corner) {
+            IVec<dim> nb = c;
+            for (int a = 0; a < dim; ++a) nb[a] += (corner >> a) & 1;
+            patch_mask[corner] = embedded_mask(nb);
+            check_nodes = check_nodes || patch_mask[corner] != 0;
+          }
         }
-      }
-      if (check_nodes) {  // the 3^dim stencil nodes lie in the patch: test their bits
+        if (!check_nodes) continue;
+        // The 3^dim stencil nodes lie in the patch: test their bits.
         const IVec<dim> base = uniform_base(n, x[p]);
         const IVec<dim> first = g.block_coord(block) * B;
-        bool near = false;
-        for (int i = 0; i < ipow(3, dim) && !near; ++i) {
+        for (int j = 0; j < ipow(3, dim) && !near[i]; ++j) {
           int corner = 0, local = 0;
-          for (int a = 0, r = i; a < dim; ++a, r /= 3) {
+          for (int a = 0, r = j; a < dim; ++a, r /= 3) {
             const int offset = base[a] + r % 3 - first[a];  // in [0, 2B)
             corner |= (offset >= B) << a;
             local |= (offset & (B - 1)) << (a * SparseGrid<dim>::block_bits);
           }
-          near = (patch_mask[corner] >> local) & 1;
+          near[i] = (patch_mask[corner] >> local) & 1;
         }
-        if (near) near_embedded_.push_back(p);
       }
+    });
+    auto append = [&](ParticleBuckets<dim>& b, BlockKey block, std::uint32_t p) {
       if (b.block.empty() || b.block.back() != block) {
         const IVec<dim> c = g.block_coord(block);
         int color = 0;
@@ -245,10 +243,18 @@ void AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
         b.begin.push_back(static_cast<std::uint32_t>(b.particle.size()));
       }
       b.particle.push_back(p);
+    };
+    regular_[n] = ParticleBuckets<dim>{};
+    near_embedded_[n] = ParticleBuckets<dim>{};
+    for (std::size_t i = 0; i < pairs.size(); ++i) {
+      append(regular_[n], pairs[i].first, pairs[i].second);
+      if (near[i]) append(near_embedded_[n], pairs[i].first, pairs[i].second);
     }
-    b.begin.push_back(static_cast<std::uint32_t>(b.particle.size()));
+    regular_[n].begin.push_back(static_cast<std::uint32_t>(regular_[n].particle.size()));
+    near_embedded_[n].begin.push_back(static_cast<std::uint32_t>(near_embedded_[n].particle.size()));
   }
   std::sort(irregular_.begin(), irregular_.end());
+  const bool moved = move && store_in_transfer_order(move);
 
   // The grids and ghost tables follow from the tree and the blocks alone: while neither changes
   // (most steps: particles seldom cross into new blocks), the previous ones stand.
@@ -258,37 +264,109 @@ void AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
     blocks[n].erase(std::unique(blocks[n].begin(), blocks[n].end()), blocks[n].end());
     same_blocks = same_blocks && blocks[n] == levels_[n].active_blocks();
   }
-  if (same_blocks) return;
+  if (same_blocks) return moved;
   own_blocks_ = own_blocks;
   for (int n = 0; n < L; ++n) levels_[n].activate(blocks[n]);
 
-  // Ghost tables in storage indices.
+  // Ghost tables in storage indices, each block's ghosts filled in parallel at offsets counted
+  // first (their order: the blocks', then the statuses').
   for (int n = 0; n < L; ++n) {
     Ghosts& g = ghosts_[n];
     g = Ghosts{};
     g.of_node.assign(levels_[n].node_storage(), -1);
     const LevelStatus& status = status_[n];
-    for (BlockKey key : own_blocks[n]) {
-      const BlockStatus& block = status.blocks[static_cast<std::size_t>(status.index.find(key))];
-      for (std::uint32_t j = block.first_ghost; j < block.end_ghost; ++j) {
-        const PendingGhost& ghost = status.ghosts[j];
-        const Index k = levels_[n].node_index(ghost.node);
-        const Vec<dim> xk = tree_.position(ghost.node * tree_.scale(n));
-        Mat<dim> spread = Mat<dim>::Zero();
-        for (std::size_t l = ghost.first_link; l < ghost.end_link; ++l) {
-          const NodeWeight<dim>& link = status.links[l];
-          const Vec<dim> r = tree_.position(link.point) - xk;
-          g.link.push_back(
-              {link.level, levels_[link.level].node_index(link.point / tree_.scale(link.level)), link.weight, r});
-          spread.noalias() += link.weight * r * r.transpose();
-        }
-        g.of_node[static_cast<std::size_t>(k)] = static_cast<int>(g.node.size());
-        g.node.push_back(k);
-        g.begin.push_back(static_cast<std::uint32_t>(g.link.size()));
-        g.spread.push_back(spread);
-      }
+    const std::vector<BlockKey>& own = own_blocks[n];
+    std::vector<const BlockStatus*> block(own.size());
+    std::vector<std::uint32_t> first_ghost(own.size() + 1, 0);
+    for (std::size_t b = 0; b < own.size(); ++b) {
+      block[b] = &status.blocks[static_cast<std::size_t>(status.index.find(own[b]))];
+      first_ghost[b + 1] = first_ghost[b] + block[b]->end_ghost - block[b]->first_ghost;
     }
+    const std::size_t ghosts = first_ghost.back();
+    g.node.resize(ghosts);
+    g.spread.resize(ghosts);
+    g.begin.resize(ghosts + 1);
+    for (std::size_t b = 0; b < own.size(); ++b)
+      for (std::uint32_t j = block[b]->first_ghost, out = first_ghost[b]; j < block[b]->end_ghost; ++j, ++out)
+        g.begin[out + 1] =
+            g.begin[out] + static_cast<std::uint32_t>(status.ghosts[j].end_link - status.ghosts[j].first_link);
+    g.link.resize(g.begin.back());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, own.size(), 8), [&](const auto& range) {
+      for (std::size_t b = range.begin(); b != range.end(); ++b) {
+        for (std::uint32_t j = block[b]->first_ghost, out = first_ghost[b]; j < block[b]->end_ghost; ++j, ++out) {
+          const PendingGhost& ghost = status.ghosts[j];
+          const Index k = levels_[n].node_index(ghost.node);
+          const Vec<dim> xk = tree_.position(ghost.node * tree_.scale(n));
+          Mat<dim> spread = Mat<dim>::Zero();
+          std::uint32_t l_out = g.begin[out];
+          for (std::size_t l = ghost.first_link; l < ghost.end_link; ++l, ++l_out) {
+            const NodeWeight<dim>& link = status.links[l];
+            const Vec<dim> r = tree_.position(link.point) - xk;
+            g.link[l_out] = {link.level, levels_[link.level].node_index(link.point / tree_.scale(link.level)),
+                             link.weight, r};
+            spread.noalias() += link.weight * r * r.transpose();
+          }
+          g.of_node[static_cast<std::size_t>(k)] = static_cast<int>(out);
+          g.node[out] = k;
+          g.spread[out] = spread;
+        }
+      }
+    });
   }
+  return moved;
+}
+
+template <int dim>
+bool AdaptiveGrid<dim>::store_in_transfer_order(const MoveParticles& move) {
+  std::vector<std::uint32_t> order;
+  order.reserve(transfer_level_.size());
+  for (const ParticleBuckets<dim>& b : regular_) order.insert(order.end(), b.particle.begin(), b.particle.end());
+  order.insert(order.end(), irregular_.begin(), irregular_.end());
+  MPM_ASSERT(order.size() == transfer_level_.size());
+  if (!scattered(order)) return false;
+  move(order);
+  std::vector<std::uint32_t> renamed(order.size());  // old index -> new
+  for (std::size_t i = 0; i < order.size(); ++i) renamed[order[i]] = static_cast<std::uint32_t>(i);
+  auto reorder = [&](auto& values) {
+    auto old = values;
+    for (std::size_t i = 0; i < order.size(); ++i) values[i] = old[order[i]];
+  };
+  reorder(transfer_level_);
+  reorder(half_cells_);
+  std::uint32_t next = 0;
+  for (ParticleBuckets<dim>& b : regular_)
+    for (std::uint32_t& p : b.particle) p = next++;
+  for (std::uint32_t& p : irregular_) p = next++;
+  for (ParticleBuckets<dim>& b : near_embedded_)
+    for (std::uint32_t& p : b.particle) p = renamed[p];
+  return true;
+}
+
+template <int dim>
+typename AdaptiveGrid<dim>::FreshStatus AdaptiveGrid<dim>::block_status(int n, BlockKey key) const {
+  constexpr int B = SparseGrid<dim>::block_size;
+  const SparseGrid<dim>& g = levels_[n];
+  const int s = tree_.scale(n);
+  FreshStatus out;
+  const IVec<dim> origin = g.block_coord(key) * B;
+  for (int local = 0; local < SparseGrid<dim>::nodes_per_block; ++local) {
+    IVec<dim> node;
+    for (int a = 0; a < dim; ++a) node[a] = origin[a] + ((local >> (a * SparseGrid<dim>::block_bits)) & (B - 1));
+    if ((node.array() >= g.node_counts().array()).any()) continue;  // padding beyond the domain
+    const IVec<dim> point = node * s;
+    if (home_level(tree_, point) == n) continue;  // a real node of this level
+    const std::size_t first_link = out.links.size();
+    embed(tree_, point, 1.0, out.links);
+    out.ghosts.push_back({node, first_link, out.links.size()});
+    if (out.links.size() - first_link > 1 || out.links[first_link].point != point)
+      out.embedded |= std::uint64_t{1} << SparseGrid<dim>::local_index(node);
+  }
+  // The blocks of the real nodes its ghosts reach, once each.
+  for (const NodeWeight<dim>& link : out.links)
+    out.reached.push_back({link.level, levels_[link.level].block_id(link.point / tree_.scale(link.level))});
+  std::sort(out.reached.begin(), out.reached.end());
+  out.reached.erase(std::unique(out.reached.begin(), out.reached.end()), out.reached.end());
+  return out;
 }
 
 template <int dim>
@@ -317,15 +395,21 @@ void AdaptiveGrid<dim>::forget_changed_statuses() {
     LevelStatus& kept = status_[n] = LevelStatus{};
     if (static_cast<int>(own_blocks_.size()) != L) continue;
     const int s = tree_.scale(n);
-    for (BlockKey key : own_blocks_[n]) {
+    const std::vector<BlockKey>& last_blocks = own_blocks_[n];
+    std::vector<std::uint8_t> near(last_blocks.size(), 0);  // near a change: in parallel
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, last_blocks.size(), 64), [&](const auto& range) {
+      for (std::size_t b = range.begin(); b != range.end(); ++b) {
+        const IVec<dim> first = levels_[n].block_coord(last_blocks[b]) * (B * s);  // lattice span of its nodes
+        const IVec<dim> last = first + IVec<dim>::Constant((B - 1) * s);
+        for (std::size_t i = 0; i < changed.size() && !near[b]; ++i)
+          near[b] =
+              (first.array() <= changed[i].second.array()).all() && (last.array() >= changed[i].first.array()).all();
+      }
+    });
+    for (std::size_t b = 0; b < last_blocks.size(); ++b) {
+      const BlockKey key = last_blocks[b];
       const int m = old.index.find(key);
-      if (m < 0) continue;
-      const IVec<dim> first = levels_[n].block_coord(key) * (B * s);  // lattice span of its nodes
-      const IVec<dim> last = first + IVec<dim>::Constant((B - 1) * s);
-      bool near = false;
-      for (std::size_t i = 0; i < changed.size() && !near; ++i)
-        near = (first.array() <= changed[i].second.array()).all() && (last.array() >= changed[i].first.array()).all();
-      if (near) continue;
+      if (m < 0 || near[b]) continue;
       BlockStatus block = old.blocks[static_cast<std::size_t>(m)];
       const std::uint32_t first_ghost = static_cast<std::uint32_t>(kept.ghosts.size());
       for (std::uint32_t j = block.first_ghost; j < block.end_ghost; ++j) {
@@ -401,13 +485,13 @@ std::size_t AdaptiveGrid<dim>::memory_bytes() const {
 template <int dim>
 std::size_t AdaptiveGrid<dim>::index_bytes() const {
   std::size_t bytes = tree_.memory_bytes() + transfer_level_.capacity() * sizeof(int);
-  bytes += half_cells_.capacity() * sizeof(double) +
-           (irregular_.capacity() + near_embedded_.capacity()) * sizeof(std::uint32_t);
+  bytes += half_cells_.capacity() * sizeof(double) + irregular_.capacity() * sizeof(std::uint32_t);
   for (const Ghosts& g : ghosts_)
     bytes += g.node.capacity() * sizeof(Index) + g.begin.capacity() * sizeof(std::uint32_t) +
              g.link.capacity() * sizeof(GhostLink<dim>) + g.spread.capacity() * sizeof(Mat<dim>) +
              g.of_node.capacity() * sizeof(int) + g.velocity_moment.capacity() * sizeof(Mat<dim>);
   for (const ParticleBuckets<dim>& b : regular_) bytes += b.memory_bytes();
+  for (const ParticleBuckets<dim>& b : near_embedded_) bytes += b.memory_bytes();
   for (const LevelStatus& s : status_)
     bytes += s.index.bytes() + s.blocks.capacity() * sizeof(BlockStatus) + s.ghosts.capacity() * sizeof(PendingGhost) +
              s.links.capacity() * sizeof(NodeWeight<dim>) + s.reached.capacity() * sizeof(s.reached[0]);

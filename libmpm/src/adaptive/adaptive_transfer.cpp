@@ -25,6 +25,20 @@ void scatter_each(const std::vector<std::uint32_t>& list, const Particles<dim>& 
   }
 }
 
+// fn(p) for every particle of `buckets`, one colour after the other, the buckets of a colour in
+// parallel: their 3^dim stencils never share a node (particle_buckets.h).
+template <int dim, class Fn>
+void scatter_colored(const ParticleBuckets<dim>& buckets, Fn&& fn) {
+  const bool serial = buckets.particle.size() < detail::serial_below_particles;
+  for (const std::vector<int>& same_color : buckets.by_color)
+    detail::for_each_range(same_color.size(), std::size_t{4}, serial, [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t i = r.begin(); i != r.end(); ++i) {
+        const int b = same_color[i];
+        for (std::uint32_t k = buckets.begin[b]; k < buckets.begin[b + 1]; ++k) fn(buckets.particle[k]);
+      }
+    });
+}
+
 // fn(i, p, n) for every particle p = list[i] (transfer level n), in parallel (G2P-like gathers).
 template <int dim, class Fn>
 void gather_each(const std::vector<std::uint32_t>& list, const AdaptiveGrid<dim>& grid, Fn&& fn) {
@@ -56,6 +70,42 @@ void apic_moments(const AdaptiveGrid<dim>& grid, int n, double h, const Vec<dim>
       D += w * ghosts.spread[j];
     }
   });
+}
+
+// What the uniform G2P leaves out for a regular particle whose stencil holds embedded ghosts:
+// the ghosts' terms of B_p and D_p (sum_ghost w_kp Q_k and w_kp R_k), with D_p^u, the uniform
+// loops' own (diagonal: the tensor weights reproduce linear fields). Then, from the uniform
+// C^u = B^u (D^u)^-1, C_p = (C^u D^u + dB) (D^u + dD)^-1.
+template <int dim>
+struct GhostTerms {
+  Mat<dim> dB;
+  Vec<dim> D_uniform;  // diagonal [m^2]
+  Mat<dim> D_inverse;  // (D^u + dD)^-1 [1/m^2]
+};
+
+template <int dim>
+GhostTerms<dim> ghost_terms(const AdaptiveGrid<dim>& grid, int n, double h, const Vec<dim>& xp) {
+  const SparseGrid<dim>& g = grid.level(n);
+  const auto& ghosts = grid.ghosts(n);
+  GhostTerms<dim> t;
+  GimpAxis axis[dim];
+  grid.axis_weights(n, h, xp, axis);
+  for (int a = 0; a < dim; ++a) {
+    const double xi = (xp[a] - g.origin()[a]) / g.dx();
+    double D = 0;
+    for (int k = 0; k < axis[a].count; ++k) D += axis[a].w[k] * (axis[a].base + k - xi) * (axis[a].base + k - xi);
+    t.D_uniform[a] = D * g.dx() * g.dx();
+  }
+  t.dB.setZero();
+  Mat<dim> D = t.D_uniform.asDiagonal();
+  grid.for_each_weight(n, h, xp, [&](Index k, double w, const Vec<dim>&, const Vec<dim>&) {
+    if (const int j = ghosts.of_node[k]; j >= 0) {
+      t.dB += w * ghosts.velocity_moment[j];
+      D += w * ghosts.spread[j];
+    }
+  });
+  t.D_inverse = D.inverse();
+  return t;
 }
 
 template <int dim>
@@ -90,10 +140,12 @@ void particles_to_grid(const Particles<dim>& P, const TransferScheme& scheme, Ad
   // The uniform loops gave the particles near embedded ghosts their mass and momentum; APIC's
   // G_k of those ghosts is added here.
   if (apic)
-    scatter_each(grid.near_embedded(), P, grid,
-                 [&](std::size_t p, int n, Index k, double w, const Vec<dim>&, const Vec<dim>&) {
-                   if (const int j = grid.ghosts(n).of_node[k]; j >= 0) affine[n][j] += w * P.mass[p] * P.C[p];
-                 });
+    for (int n = 0; n < grid.levels(); ++n)
+      scatter_colored(grid.near_embedded(n), [&](std::uint32_t p) {
+        grid.for_each_weight(n, grid.half_cells(p), P.x[p], [&](Index k, double w, const Vec<dim>&, const Vec<dim>&) {
+          if (const int j = grid.ghosts(n).of_node[k]; j >= 0) affine[n][j] += w * P.mass[p] * P.C[p];
+        });
+      });
   grid.push_momentum(affine);
 }
 
@@ -123,19 +175,19 @@ template <int dim>
 void grid_to_particles(Particles<dim>& P, const TransferScheme& scheme, const AdaptiveGrid<dim>& grid, double dt) {
   MPM_ASSERT(grid.particle_count() == P.size());
   const bool apic = scheme.type == TransferScheme::Type::apic;
-  // The uniform loops' C_p assumes the uniform D_p: the particles near embedded ghosts get
-  // theirs through the ghosts, from their positions before the advection.
-  std::vector<Mat<dim>> C_near(apic ? grid.near_embedded().size() : 0);
-  if (apic)
-    gather_each(grid.near_embedded(), grid, [&](std::size_t i, std::size_t p, int n) {
-      Vec<dim> v;
-      Mat<dim> B, D;
-      apic_moments(grid, n, grid.half_cells(p), P.x[p], v, B, D);
-      C_near[i] = B * D.inverse();
-    });
+  // The uniform loops' C_p has neither the ghosts' terms nor their D_p: the particles near
+  // embedded ghosts add them, at their positions before the advection (a small copy: a
+  // scratch of the terms themselves would cost more in fresh pages than their walk).
+  std::vector<std::vector<Vec<dim>>> x_before(grid.levels());
+  for (int n = 0; apic && n < grid.levels(); ++n)
+    for (const std::uint32_t p : grid.near_embedded(n).particle) x_before[n].push_back(P.x[p]);
   for (int n = 0; n < grid.levels(); ++n)
     mpm::grid_to_particles(P, grid.regular(n), grid.regular_kernel(), scheme, grid.level(n), dt);
-  for (std::size_t i = 0; i < C_near.size(); ++i) P.C[grid.near_embedded()[i]] = C_near[i];
+  for (int n = 0; apic && n < grid.levels(); ++n)
+    gather_each(grid.near_embedded(n).particle, grid, [&](std::size_t i, std::size_t p, int) {
+      const GhostTerms<dim> t = ghost_terms(grid, n, grid.half_cells(p), x_before[n][i]);
+      P.C[p] = (P.C[p] * t.D_uniform.asDiagonal() + t.dB) * t.D_inverse;
+    });
   gather_each(grid.irregular(), grid, [&](std::size_t, std::size_t p, int n) {
     const SparseGrid<dim>& g = grid.level(n);
     const Vec<dim> xp = P.x[p];

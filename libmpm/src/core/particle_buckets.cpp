@@ -129,14 +129,13 @@ void identity(std::vector<std::uint32_t>& index, std::size_t n) {
   std::iota(index.begin(), index.end(), std::uint32_t{0});
 }
 
-// Scattered: on average fewer than 8 particles per run of consecutive storage indices, so
-// reaching particles through the index misses the cache at almost every particle.
+}  // namespace
+
 bool scattered(const std::vector<std::uint32_t>& index) {
   std::size_t breaks = 0;
   for (std::size_t i = 1; i < index.size(); ++i) breaks += index[i] != index[i - 1] + 1;
   return 8 * breaks > index.size();
 }
-}  // namespace
 
 template <int dim>
 IVec<dim> stencil_base(const SparseGrid<dim>& grid, const Kernel& kernel, const Vec<dim>& x) {

@@ -84,17 +84,22 @@ public:
 
   //! Finds the transfer level of every particle (positions x, types `type`), allocates the
   //! level grids and builds the ghost tables. Throws NumericalError naming `stage` for a
-  //! particle that is not finite or whose stencil leaves the grid.
-  void prepare(const std::vector<Vec<dim>>& x, const std::vector<std::uint16_t>& type,
-               const std::string& stage = "prepare");
+  //! particle that is not finite or whose stencil leaves the grid. When the particles' storage
+  //! is scattered against the transfer order (level 0's buckets, ..., the finest level's, then
+  //! the irregular particles) and `move` is given, calls move(order) for the caller to store
+  //! them anew in that order (new index i holds old index order[i]; the transfers reach them
+  //! through the buckets, and resampling appends and removes particles anywhere), renumbers
+  //! its own tables and returns true.
+  bool prepare(const std::vector<Vec<dim>>& x, const std::vector<std::uint16_t>& type,
+               const std::string& stage = "prepare", const MoveParticles& move = {});
   std::size_t particle_count() const { return transfer_level_.size(); }
   //! The particles that transfer on level n as on a uniform grid: on their own level, with
   //! regular_kernel()'s stencil inside the level. The uniform loops (transfer.h) serve them, in
   //! parallel.
   const ParticleBuckets<dim>& regular(int n) const { return regular_[n]; }
-  //! The regular particles whose stencil holds an embedded ghost, by index: APIC adds the
-  //! ghosts' affine terms for them beside the uniform loops (adaptive_transfer.h).
-  const std::vector<std::uint32_t>& near_embedded() const { return near_embedded_; }
+  //! The regular particles of level n whose stencil holds an embedded ghost, in their buckets:
+  //! APIC adds the ghosts' affine terms for them beside the uniform loops (adaptive_transfer.h).
+  const ParticleBuckets<dim>& near_embedded(int n) const { return near_embedded_[n]; }
   //! The other particles, by index: they take the general path (for_each_weight).
   const std::vector<std::uint32_t>& irregular() const { return irregular_; }
   //! Transfer level of particle p (after prepare).
@@ -167,7 +172,9 @@ private:
   std::vector<double> half_cells_;
   std::vector<ParticleBuckets<dim>> regular_;
   std::vector<std::uint32_t> irregular_;
-  std::vector<std::uint32_t> near_embedded_;
+  std::vector<ParticleBuckets<dim>> near_embedded_;
+  //! prepare()'s move: stores the particles in transfer order when they are scattered.
+  bool store_in_transfer_order(const MoveParticles& move);
 
   // Node statuses per block for the tree status_tree_; a tree change keeps those of the blocks
   // it cannot reach (forget_changed_statuses()).
@@ -187,6 +194,14 @@ private:
     std::vector<NodeWeight<dim>> links;
     std::vector<std::pair<int, BlockKey>> reached;  // (level, block) of a block's ghosts' links
   };
+  struct FreshStatus {  // one block's status before it joins its level's tables
+    std::uint64_t embedded = 0;
+    std::vector<PendingGhost> ghosts;  // links relative to `links`
+    std::vector<NodeWeight<dim>> links;
+    std::vector<std::pair<int, BlockKey>> reached;
+  };
+  //! The status of the nodes of block `key` of level n under the current tree.
+  FreshStatus block_status(int n, BlockKey key) const;
   CellTree<dim> status_tree_;
   std::vector<LevelStatus> status_;
   //! After a tree change: drops the statuses the change can reach and those of unused blocks.

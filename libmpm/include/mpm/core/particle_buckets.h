@@ -72,6 +72,11 @@ bool sort_into_buckets(Particles<dim>& particles, const Kernel& kernel, SparseGr
 
 using MoveParticles = std::function<void(const std::vector<std::uint32_t>& order)>;
 
+//! True when an index into particle storage is scattered: on average fewer than 8 particles
+//! per run of consecutive storage indices, so reaching the particles through it misses the
+//! cache at almost every particle and storing them anew in index order pays.
+bool scattered(const std::vector<std::uint32_t>& index);
+
 //! sort_into_buckets for positions in any storage and precision (T = double or float): when
 //! the index is scattered, calls move(order) for the caller to store its particles anew in
 //! bucket order (new index i holds old index order[i]); without `move` the index stays.

@@ -9,7 +9,8 @@ namespace mpm::stages {
 template <int dim>
 void SortParticles<dim>::run(MpmState<dim>& s) {
   if (s.adaptive)  // transfer levels, level grids and ghost tables (adaptive_grid.h)
-    s.adaptive->prepare(s.particles.x, s.particles.template channel<std::uint16_t>(adaptive::kParticleLevel), name());
+    s.adaptive->prepare(s.particles.x, s.particles.template channel<std::uint16_t>(adaptive::kParticleLevel), name(),
+                        [&](const std::vector<std::uint32_t>& order) { s.particles.permute(order); });
   else
     sort_into_buckets(s.particles, s.kernel, s.grid, s.buckets, name());
 }
