@@ -55,7 +55,10 @@ struct UGimp {
   double h = 0.5;  //!< particle half-size in cells, (0, 0.5]
   static const char* name() { return "ugimp"; }
 
-  static double hat(double r) { return std::fmax(0.0, 1.0 - std::fabs(r)); }
+  static double hat(double r) {  // max(0, 1 - |r|), 0 for NaN as std::fmax, but inlined (no libm call)
+    const double t = 1.0 - std::fabs(r);
+    return t > 0.0 ? t : 0.0;
+  }
   static double hat_integral(double s) {  // H(s) = int_{-inf}^{s} N1
     if (s <= -1.0) return 0.0;
     if (s <= 0.0) return 0.5 * (1.0 + s) * (1.0 + s);
