@@ -179,7 +179,7 @@ public:
 private:
   static std::vector<std::string> channels() {
     return {"particle.x",       "particle.v",        "particle.C", "particle.mass",
-            "particle.volume0", "particle.material", "particle.F"};
+            "particle.volume0", "particle.material", "particle.F", "particle.reference_x"};
   }
   double band_;
 };
@@ -189,7 +189,9 @@ class ManufacturedBodyForce final : public Stage<MpmState<2>> {
 public:
   explicit ManufacturedBodyForce(const AxisAligned& field) : field_(field) {}
   std::string name() const override { return "body_force"; }
-  std::vector<std::string> reads() const override { return {"grid.force", "particle.x", "particle.mass"}; }
+  std::vector<std::string> reads() const override {
+    return {"grid.force", "particle.x", "particle.mass", "particle.reference_x"};
+  }
   std::vector<std::string> writes() const override { return {"grid.force"}; }
   void run(MpmState<2>& s) override {
     const Particles<2>& P = s.particles;

@@ -296,14 +296,14 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
         for (std::uint32_t j = block[b]->first_ghost, out = first_ghost[b]; j < block[b]->end_ghost; ++j, ++out) {
           const PendingGhost& ghost = status.ghosts[j];
           const Index k = levels_[n].node_index(ghost.node);
-          const Vec<dim> xk = tree_.position(ghost.node * tree_.scale(n));
+          const Vec<dim> xk = node_position(n, k);
           Mat<dim> spread = Mat<dim>::Zero();
           std::uint32_t l_out = g.begin[out];
           for (std::size_t l = ghost.first_link; l < ghost.end_link; ++l, ++l_out) {
             const NodeWeight<dim>& link = status.links[l];
-            const Vec<dim> r = tree_.position(link.point) - xk;
-            g.link[l_out] = {link.level, levels_[link.level].node_index(link.point / tree_.scale(link.level)),
-                             link.weight, r};
+            g.link[l_out] = {levels_[link.level].node_index(link.point / tree_.scale(link.level)), link.weight,
+                             link.level};
+            const Vec<dim> r = link_offset(g.link[l_out], xk);
             spread.noalias() += link.weight * r * r.transpose();
           }
           g.of_node[static_cast<std::size_t>(k)] = static_cast<int>(out);
@@ -439,12 +439,13 @@ void AdaptiveGrid<dim>::push_momentum(const std::vector<std::vector<Mat<dim>>>& 
     SparseGrid<dim>& from = levels_[n];
     for (std::size_t j = 0; j < g.node.size(); ++j) {
       const std::size_t k = static_cast<std::size_t>(g.node[j]);
+      const Vec<dim> xk = from.node_position(k);
       for (std::uint32_t l = g.begin[j]; l < g.begin[j + 1]; ++l) {
         const GhostLink<dim>& link = g.link[l];
         SparseGrid<dim>& to = levels_[link.level];
         const std::size_t i = static_cast<std::size_t>(link.index);
         to.mass[i] += link.weight * from.mass[k];
-        to.velocity[i] += link.weight * (from.velocity[k] + affine[n][j] * link.offset);
+        to.velocity[i] += link.weight * (from.velocity[k] + affine[n][j] * link_offset(link, xk));
       }
       from.mass[k] = 0.0;
       from.velocity[k].setZero();
@@ -460,6 +461,7 @@ void AdaptiveGrid<dim>::pull_velocity(bool old) {
     g.velocity_moment.assign(g.node.size(), Mat<dim>::Zero());
     for (std::size_t j = 0; j < g.node.size(); ++j) {
       const std::size_t k = static_cast<std::size_t>(g.node[j]);
+      const Vec<dim> xk = to.node_position(k);
       Vec<dim> v = Vec<dim>::Zero(), v_old = Vec<dim>::Zero();
       for (std::uint32_t l = g.begin[j]; l < g.begin[j + 1]; ++l) {
         const GhostLink<dim>& link = g.link[l];
@@ -467,7 +469,7 @@ void AdaptiveGrid<dim>::pull_velocity(bool old) {
         const std::size_t i = static_cast<std::size_t>(link.index);
         v += link.weight * from.velocity[i];
         if (old) v_old += link.weight * from.velocity_old[i];
-        g.velocity_moment[j].noalias() += link.weight * from.velocity[i] * link.offset.transpose();
+        g.velocity_moment[j].noalias() += link.weight * from.velocity[i] * link_offset(link, xk).transpose();
       }
       to.velocity[k] = v;
       if (old) to.velocity_old[k] = v_old;

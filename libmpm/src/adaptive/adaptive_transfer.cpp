@@ -90,8 +90,9 @@ GhostTerms<dim> ghost_terms(const AdaptiveGrid<dim>& grid, int n, double h, cons
   GhostTerms<dim> t;
   GimpAxis axis[dim];
   grid.axis_weights(n, h, xp, axis);
+  const double inv_dx = 1.0 / g.dx();  // axis_weights' expression: the uniform loops' D_p to the last bit
   for (int a = 0; a < dim; ++a) {
-    const double xi = (xp[a] - g.origin()[a]) / g.dx();
+    const double xi = (xp[a] - g.origin()[a]) * inv_dx;
     double D = 0;
     for (int k = 0; k < axis[a].count; ++k) D += axis[a].w[k] * (axis[a].base + k - xi) * (axis[a].base + k - xi);
     t.D_uniform[a] = D * g.dx() * g.dx();

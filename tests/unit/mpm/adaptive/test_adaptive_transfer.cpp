@@ -44,7 +44,6 @@ Particles<dim> random_particles(const CellTree<dim>& tree, std::size_t n, unsign
   return P;
 }
 
-// Calls fn(level, storage index) for every real node with mass.
 template <int dim>
 std::size_t near_embedded_count(const AdaptiveGrid<dim>& grid) {
   std::size_t count = 0;
@@ -52,6 +51,7 @@ std::size_t near_embedded_count(const AdaptiveGrid<dim>& grid) {
   return count;
 }
 
+// Calls fn(level, storage index) for every real node with mass.
 template <int dim, class Fn>
 void for_each_massive_node(const AdaptiveGrid<dim>& grid, Fn&& fn) {
   for (int n = 0; n < grid.levels(); ++n)
@@ -191,7 +191,8 @@ template <int dim>
 void check_transfer_order(unsigned seed) {
   const CellTree<dim> tree = test::random_tree<dim>(seed, 4, 3);
   std::vector<std::uint16_t> type;
-  Particles<dim> A = random_particles(tree, dim == 2 ? 400 : 300, seed + 5, type);
+  // More particles than the loops run serially below (bucket_loops.h): the parallel paths count.
+  Particles<dim> A = random_particles(tree, 6000, seed + 5, type);
   Particles<dim> M = A;
   std::vector<std::uint16_t> type_M = type;
   AdaptiveGrid<dim> in_place(tree), moving(tree);
