@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <tuple>
 
 #include <tbb/parallel_for.h>
 
@@ -65,7 +66,10 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
   // Particles on their own level (h = 1/2, the quadratic B-spline) go in buckets for the
   // uniform loops; the others (irregular) take the general path.
   std::vector<std::vector<std::pair<BlockKey, std::uint32_t>>> bucketed(L);
-  irregular_.clear();
+  // The irregular particles by (transfer level, block of the first stencil node), and the
+  // most blocks a stencil spans on an axis: the colouring's period.
+  std::vector<std::tuple<int, BlockKey, std::uint32_t>> irregular_at;
+  int span = 1;
 
   // Transfer level of every particle (in parallel: the tree walk is the cost).
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 4096), [&](const auto& range) {
@@ -114,7 +118,8 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
       first[a] /= B;
       last[a] /= B;
     }
-    irregular_.push_back(static_cast<std::uint32_t>(p));
+    irregular_at.emplace_back(n, g.block_id(first * B), static_cast<std::uint32_t>(p));
+    span = std::max(span, (last - first).maxCoeff() + 1);
     IVec<dim> b = first;
     while (true) {
       const BlockKey key = g.block_id(b * B);
@@ -253,7 +258,7 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
     regular_[n].begin.push_back(static_cast<std::uint32_t>(regular_[n].particle.size()));
     near_embedded_[n].begin.push_back(static_cast<std::uint32_t>(near_embedded_[n].particle.size()));
   }
-  std::sort(irregular_.begin(), irregular_.end());
+  group_irregular(irregular_at, span);
   const bool moved = move && store_in_transfer_order(move);
 
   // The grids and ghost tables follow from the tree and the blocks alone: while neither changes
@@ -314,6 +319,28 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
     });
   }
   return moved;
+}
+
+template <int dim>
+void AdaptiveGrid<dim>::group_irregular(std::vector<std::tuple<int, BlockKey, std::uint32_t>>& at, int span) {
+  std::sort(at.begin(), at.end());
+  irregular_.clear();
+  IrregularGroups& groups = irregular_groups_;
+  groups.begin.assign(1, 0);
+  groups.by_color.assign(static_cast<std::size_t>(ipow(span, dim)), {});
+  for (std::size_t i = 0; i < at.size(); ++i) {
+    const auto& [n, block, p] = at[i];
+    if (i == 0 || n != std::get<0>(at[i - 1]) || block != std::get<1>(at[i - 1])) {
+      if (i > 0) groups.begin.push_back(static_cast<std::uint32_t>(i));
+      // Groups of one colour lie `span` blocks apart on some axis: their stencils share no node.
+      const IVec<dim> c = levels_[n].block_coord(block);
+      int color = 0;
+      for (int a = dim - 1; a >= 0; --a) color = color * span + c[a] % span;
+      groups.by_color[static_cast<std::size_t>(color)].push_back(static_cast<int>(groups.begin.size()) - 1);
+    }
+    irregular_.push_back(p);
+  }
+  if (!at.empty()) groups.begin.push_back(static_cast<std::uint32_t>(at.size()));
 }
 
 template <int dim>

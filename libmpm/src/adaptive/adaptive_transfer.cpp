@@ -12,17 +12,26 @@
 namespace mpm::adaptive {
 
 namespace {
-// fn(p, n, k, w, grad_w, x_k) over the stencil of every particle of `list` (transfer level n),
-// serially (P2G scatters); the regular ones go through the uniform loops of transfer.h.
+// fn(p, n, k, w, grad_w, x_k) over the stencil of every irregular particle (transfer level n),
+// colour by colour, the groups of a colour in parallel (P2G scatters; adaptive_grid.h).
 template <int dim, class Fn>
-void scatter_each(const std::vector<std::uint32_t>& list, const Particles<dim>& P, const AdaptiveGrid<dim>& grid,
-                  Fn&& fn) {
-  for (const std::uint32_t p : list) {
-    const int n = grid.transfer_level(p);
-    grid.for_each_weight(
-        n, grid.half_cells(p), P.x[p],
-        [&](Index k, double w, const Vec<dim>& grad, const Vec<dim>& xk) { fn(p, n, k, w, grad, xk); });
-  }
+void scatter_irregular(const Particles<dim>& P, const AdaptiveGrid<dim>& grid, Fn&& fn) {
+  const std::vector<std::uint32_t>& list = grid.irregular();
+  const auto& groups = grid.irregular_groups();
+  const bool serial = list.size() < detail::serial_below_particles;
+  for (const std::vector<int>& same_color : groups.by_color)
+    detail::for_each_range(same_color.size(), std::size_t{1}, serial, [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t i = r.begin(); i != r.end(); ++i) {
+        const int g = same_color[i];
+        for (std::uint32_t e = groups.begin[g]; e < groups.begin[g + 1]; ++e) {
+          const std::uint32_t p = list[e];
+          const int n = grid.transfer_level(p);
+          grid.for_each_weight(
+              n, grid.half_cells(p), P.x[p],
+              [&](Index k, double w, const Vec<dim>& grad, const Vec<dim>& xk) { fn(p, n, k, w, grad, xk); });
+        }
+      }
+    });
 }
 
 // fn(p) for every particle of `buckets`, one colour after the other, the buckets of a colour in
@@ -126,18 +135,17 @@ void particles_to_grid(const Particles<dim>& P, const TransferScheme& scheme, Ad
     mpm::particles_to_grid(P, grid.regular(n), grid.regular_kernel(), scheme, grid.level(n));  // zeroes first
     affine[n].assign(grid.ghosts(n).node.size(), Mat<dim>::Zero());
   }
-  scatter_each(grid.irregular(), P, grid,
-               [&](std::size_t p, int n, Index k, double w, const Vec<dim>&, const Vec<dim>& xk) {
-                 SparseGrid<dim>& g = grid.level(n);
-                 const double wm = w * P.mass[p];
-                 g.mass[k] += wm;
-                 if (apic) {
-                   g.velocity[k] += wm * (P.v[p] + P.C[p] * (xk - P.x[p]));
-                   if (const int j = grid.ghosts(n).of_node[k]; j >= 0) affine[n][j] += wm * P.C[p];
-                 } else {
-                   g.velocity[k] += wm * P.v[p];
-                 }
-               });
+  scatter_irregular(P, grid, [&](std::size_t p, int n, Index k, double w, const Vec<dim>&, const Vec<dim>& xk) {
+    SparseGrid<dim>& g = grid.level(n);
+    const double wm = w * P.mass[p];
+    g.mass[k] += wm;
+    if (apic) {
+      g.velocity[k] += wm * (P.v[p] + P.C[p] * (xk - P.x[p]));
+      if (const int j = grid.ghosts(n).of_node[k]; j >= 0) affine[n][j] += wm * P.C[p];
+    } else {
+      g.velocity[k] += wm * P.v[p];
+    }
+  });
   // The uniform loops gave the particles near embedded ghosts their mass and momentum; APIC's
   // G_k of those ghosts is added here.
   if (apic)
@@ -160,10 +168,9 @@ void stress_to_grid_forces(const std::vector<Mat<dim>>& S, const Particles<dim>&
   MPM_ASSERT(grid.particle_count() == P.size());
   for (int n = 0; n < grid.levels(); ++n)  // zeroes first
     mpm::stress_to_grid_forces(S, P, grid.regular(n), grid.regular_kernel(), grid.level(n));
-  scatter_each(grid.irregular(), P, grid,
-               [&](std::size_t p, int n, Index k, double, const Vec<dim>& grad, const Vec<dim>&) {
-                 grid.level(n).force[k] -= S[p] * grad;
-               });
+  scatter_irregular(P, grid, [&](std::size_t p, int n, Index k, double, const Vec<dim>& grad, const Vec<dim>&) {
+    grid.level(n).force[k] -= S[p] * grad;
+  });
   grid.push(per_level(grid, &SparseGrid<dim>::force));
 }
 

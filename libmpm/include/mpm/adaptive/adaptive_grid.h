@@ -26,6 +26,7 @@
 #include <mpm/core/sparse_grid.h>
 
 #include <cstdint>
+#include <tuple>
 #include <vector>
 
 namespace mpm::adaptive {
@@ -100,8 +101,16 @@ public:
   //! The regular particles of level n whose stencil holds an embedded ghost, in their buckets:
   //! APIC adds the ghosts' affine terms for them beside the uniform loops (adaptive_transfer.h).
   const ParticleBuckets<dim>& near_embedded(int n) const { return near_embedded_[n]; }
-  //! The other particles, by index: they take the general path (for_each_weight).
+  //! The other particles: they take the general path (for_each_weight). Ordered by transfer
+  //! level and block of their first stencil node, in groups of one (level, block).
   const std::vector<std::uint32_t>& irregular() const { return irregular_; }
+  //! The groups of irregular() (group g: entries begin[g] .. begin[g + 1] - 1) by colour: the
+  //! stencils of two groups of one colour share no node, so a colour scatters in parallel.
+  struct IrregularGroups {
+    std::vector<std::uint32_t> begin{0};
+    std::vector<std::vector<int>> by_color;
+  };
+  const IrregularGroups& irregular_groups() const { return irregular_groups_; }
   //! Transfer level of particle p (after prepare).
   int transfer_level(std::size_t p) const { return transfer_level_[p]; }
   //! Half-size of particle p's GIMP box in cells of its transfer level (after prepare).
@@ -176,6 +185,9 @@ private:
   std::vector<double> half_cells_;
   std::vector<ParticleBuckets<dim>> regular_;
   std::vector<std::uint32_t> irregular_;
+  IrregularGroups irregular_groups_;
+  //! Fills irregular_ and irregular_groups_ from (level, first block, particle) triples.
+  void group_irregular(std::vector<std::tuple<int, BlockKey, std::uint32_t>>& at, int span);
   std::vector<ParticleBuckets<dim>> near_embedded_;
   //! prepare()'s move: stores the particles in transfer order when they are scattered.
   bool store_in_transfer_order(const MoveParticles& move);
