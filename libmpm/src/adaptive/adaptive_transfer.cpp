@@ -12,40 +12,30 @@
 namespace mpm::adaptive {
 
 namespace {
-// fn(p, n, k, w, grad_w, x_k) over the stencil of every irregular particle (transfer level n),
-// colour by colour, the groups of a colour in parallel (P2G scatters; adaptive_grid.h).
-template <int dim, class Fn>
-void scatter_irregular(const Particles<dim>& P, const AdaptiveGrid<dim>& grid, Fn&& fn) {
-  const std::vector<std::uint32_t>& list = grid.irregular();
-  const auto& groups = grid.irregular_groups();
+// fn(list[e]) for the entries e of every group (group g: begin[g] .. begin[g + 1] - 1), one
+// colour after the other, the groups of a colour in parallel: the colourings keep the stencils
+// of one colour's groups apart (particle_buckets.h, AdaptiveGrid::irregular_groups).
+template <class Colors, class Fn>
+void scatter_by_color(const Colors& by_color, const std::vector<std::uint32_t>& begin,
+                      const std::vector<std::uint32_t>& list, Fn&& fn) {
   const bool serial = list.size() < detail::serial_below_particles;
-  for (const std::vector<int>& same_color : groups.by_color)
+  for (const std::vector<int>& same_color : by_color)
     detail::for_each_range(same_color.size(), std::size_t{1}, serial, [&](const tbb::blocked_range<std::size_t>& r) {
-      for (std::size_t i = r.begin(); i != r.end(); ++i) {
-        const int g = same_color[i];
-        for (std::uint32_t e = groups.begin[g]; e < groups.begin[g + 1]; ++e) {
-          const std::uint32_t p = list[e];
-          const int n = grid.transfer_level(p);
-          grid.for_each_weight(
-              n, grid.half_cells(p), P.x[p],
-              [&](Index k, double w, const Vec<dim>& grad, const Vec<dim>& xk) { fn(p, n, k, w, grad, xk); });
-        }
-      }
+      for (std::size_t i = r.begin(); i != r.end(); ++i)
+        for (std::uint32_t e = begin[same_color[i]]; e < begin[same_color[i] + 1]; ++e) fn(list[e]);
     });
 }
 
-// fn(p) for every particle of `buckets`, one colour after the other, the buckets of a colour in
-// parallel: their 3^dim stencils never share a node (particle_buckets.h).
+// fn(p, n, k, w, grad_w, x_k) over the stencil of every irregular particle (transfer level n).
 template <int dim, class Fn>
-void scatter_colored(const ParticleBuckets<dim>& buckets, Fn&& fn) {
-  const bool serial = buckets.particle.size() < detail::serial_below_particles;
-  for (const std::vector<int>& same_color : buckets.by_color)
-    detail::for_each_range(same_color.size(), std::size_t{4}, serial, [&](const tbb::blocked_range<std::size_t>& r) {
-      for (std::size_t i = r.begin(); i != r.end(); ++i) {
-        const int b = same_color[i];
-        for (std::uint32_t k = buckets.begin[b]; k < buckets.begin[b + 1]; ++k) fn(buckets.particle[k]);
-      }
-    });
+void scatter_irregular(const Particles<dim>& P, const AdaptiveGrid<dim>& grid, Fn&& fn) {
+  const auto& groups = grid.irregular_groups();
+  scatter_by_color(groups.by_color, groups.begin, grid.irregular(), [&](std::uint32_t p) {
+    const int n = grid.transfer_level(p);
+    grid.for_each_weight(
+        n, grid.half_cells(p), P.x[p],
+        [&](Index k, double w, const Vec<dim>& grad, const Vec<dim>& xk) { fn(p, n, k, w, grad, xk); });
+  });
 }
 
 // fn(i, p, n) for every particle p = list[i] (transfer level n), in parallel (G2P-like gathers).
@@ -97,7 +87,7 @@ GhostTerms<dim> ghost_terms(const AdaptiveGrid<dim>& grid, int n, double h, cons
   const SparseGrid<dim>& g = grid.level(n);
   const auto& ghosts = grid.ghosts(n);
   GhostTerms<dim> t;
-  GimpAxis axis[dim];
+  GimpAxis axis[dim];  // once: for D_p^u and for the walk over the ghosts
   grid.axis_weights(n, h, xp, axis);
   const double inv_dx = 1.0 / g.dx();  // axis_weights' expression: the uniform loops' D_p to the last bit
   for (int a = 0; a < dim; ++a) {
@@ -108,7 +98,7 @@ GhostTerms<dim> ghost_terms(const AdaptiveGrid<dim>& grid, int n, double h, cons
   }
   t.dB.setZero();
   Mat<dim> D = t.D_uniform.asDiagonal();
-  grid.for_each_weight(n, h, xp, [&](Index k, double w, const Vec<dim>&, const Vec<dim>&) {
+  grid.for_each_weight(n, axis, [&](Index k, double w, const Vec<dim>&, const Vec<dim>&) {
     if (const int j = ghosts.of_node[k]; j >= 0) {
       t.dB += w * ghosts.velocity_moment[j];
       D += w * ghosts.spread[j];
@@ -148,13 +138,14 @@ void particles_to_grid(const Particles<dim>& P, const TransferScheme& scheme, Ad
   });
   // The uniform loops gave the particles near embedded ghosts their mass and momentum; APIC's
   // G_k of those ghosts is added here.
-  if (apic)
-    for (int n = 0; n < grid.levels(); ++n)
-      scatter_colored(grid.near_embedded(n), [&](std::uint32_t p) {
-        grid.for_each_weight(n, grid.half_cells(p), P.x[p], [&](Index k, double w, const Vec<dim>&, const Vec<dim>&) {
-          if (const int j = grid.ghosts(n).of_node[k]; j >= 0) affine[n][j] += w * P.mass[p] * P.C[p];
-        });
+  for (int n = 0; apic && n < grid.levels(); ++n) {
+    const ParticleBuckets<dim>& near = grid.near_embedded(n);
+    scatter_by_color(near.by_color, near.begin, near.particle, [&](std::uint32_t p) {
+      grid.for_each_weight(n, grid.half_cells(p), P.x[p], [&](Index k, double w, const Vec<dim>&, const Vec<dim>&) {
+        if (const int j = grid.ghosts(n).of_node[k]; j >= 0) affine[n][j] += w * P.mass[p] * P.C[p];
       });
+    });
+  }
   grid.push_momentum(affine);
 }
 

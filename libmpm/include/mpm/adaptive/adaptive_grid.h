@@ -120,7 +120,14 @@ public:
   //! particle at x that transfers on level n with half-size h cells: w = w_kp (uniform GIMP),
   //! grad_w [1/m], x_k the node's position [m].
   template <class Fn>
-  void for_each_weight(int n, double h, const Vec<dim>& x, Fn&& fn) const;
+  void for_each_weight(int n, double h, const Vec<dim>& x, Fn&& fn) const {
+    GimpAxis axis[dim];
+    axis_weights(n, h, x, axis);
+    for_each_weight(n, axis, fn);
+  }
+  //! The same from the 1D weights axis_weights() gave, for a caller that reads them too.
+  template <class Fn>
+  void for_each_weight(int n, const GimpAxis* axis, Fn&& fn) const;
   //! First node of the 3^dim stencil of regular_kernel() at x on level n: the expression of
   //! the uniform loops (CellMap, then floor(xi - 1/2)).
   IVec<dim> uniform_base(int n, const Vec<dim>& x) const {
@@ -227,11 +234,9 @@ private:
 
 template <int dim>
 template <class Fn>
-void AdaptiveGrid<dim>::for_each_weight(int n, double h, const Vec<dim>& x, Fn&& fn) const {
+void AdaptiveGrid<dim>::for_each_weight(int n, const GimpAxis* axis, Fn&& fn) const {
   const SparseGrid<dim>& g = levels_[n];
   const double inv_dx = 1.0 / g.dx();
-  GimpAxis axis[dim];
-  axis_weights(n, h, x, axis);
   int offset[dim] = {};
   BlockKey last_block = ~BlockKey{0};
   Index first_node = -1;  // storage index of node 0 of last_block

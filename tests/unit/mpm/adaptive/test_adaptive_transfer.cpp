@@ -19,6 +19,7 @@
 #include "angular_momentum.h"
 #include "random_tree.h"
 
+#include <map>
 #include <random>
 #include <utility>
 
@@ -197,6 +198,25 @@ void check_transfer_order(unsigned seed) {
   std::vector<std::uint16_t> type_M = type;
   AdaptiveGrid<dim> in_place(tree), moving(tree);
   CHECK_FALSE(in_place.prepare(A.x, type));
+  // The irregular particles scatter a colour's groups in parallel: no node in two of them.
+  const auto& groups = in_place.irregular_groups();
+  std::size_t colored = 0;
+  for (const std::vector<int>& same_color : groups.by_color) {
+    std::map<std::pair<int, Index>, int> owner;
+    for (const int g : same_color)
+      for (std::uint32_t e = groups.begin[g]; e < groups.begin[g + 1]; ++e) {
+        const std::uint32_t p = in_place.irregular()[e];
+        const int n = in_place.transfer_level(p);
+        ++colored;
+        in_place.for_each_weight(n, in_place.half_cells(p), A.x[p],
+                                 [&](Index k, double, const Vec<dim>&, const Vec<dim>&) {
+                                   const auto [it, inserted] = owner.try_emplace({n, k}, g);
+                                   CHECK((inserted || it->second == g));
+                                 });
+      }
+  }
+  CHECK(colored == in_place.irregular().size());
+  REQUIRE(in_place.irregular().size() > 2048);  // the parallel path (bucket_loops.h)
   std::vector<std::uint32_t> order;
   const auto move = [&](const std::vector<std::uint32_t>& o) {
     order = o;
