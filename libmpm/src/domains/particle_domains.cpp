@@ -30,7 +30,8 @@ std::size_t ParticleDomains<dim>::memory_bytes() const {
          inverse_side.capacity() * sizeof(Vec<dim>) +
          (sharing_begin.capacity() + sharing.capacity()) * sizeof(std::uint32_t) +
          surface.capacity() * sizeof(surface[0]) + buckets.memory_bytes() + mass.capacity() * sizeof(double) +
-         (momentum.capacity() + force.capacity()) * sizeof(Vec<dim>) + enriched.capacity();
+         (momentum.capacity() + force.capacity()) * sizeof(Vec<dim>) + enriched.capacity() + point.capacity() +
+         (stress.capacity() + velocity_gradient.capacity()) * sizeof(Mat<dim>);
 }
 
 template <int dim>
@@ -65,12 +66,30 @@ void add_body(ParticleDomains<dim>& domains, std::size_t first, const std::vecto
         corner[a] = lo[a] + (c - 0.5) * spacing;
       }
       const auto [it, added] = corner_at.try_emplace(key, static_cast<std::uint32_t>(domains.x.size()));
-      if (added) domains.x.push_back(corner);
+      if (added) {
+        domains.x.push_back(corner);
+        domains.point.push_back(0);
+      }
       own[alpha] = it->second;
     }
     domains.corner_of.push_back(own);
     domains.inverse_side.push_back(stretch / spacing);
   }
+}
+
+template <int dim>
+void add_points(ParticleDomains<dim>& domains, std::size_t first, const std::vector<Vec<dim>>& positions) {
+  MPM_VERIFY(first == domains.particle_count(), Error,
+             "particle domains: particles must get their domains in the order they were added");
+  for (const Vec<dim>& x : positions) {
+    std::array<std::uint32_t, ParticleDomains<dim>::corners> own;
+    own.fill(static_cast<std::uint32_t>(domains.x.size()));
+    domains.x.push_back(x);
+    domains.point.push_back(1);
+    domains.corner_of.push_back(own);
+    domains.inverse_side.push_back(Vec<dim>::Zero());  // no reference box: grad_X w_alpha_p = 0
+  }
+  domains.point_count += positions.size();
 }
 
 namespace {
@@ -84,7 +103,7 @@ void find_surface(ParticleDomains<dim>& d) {
   using Face = std::array<std::uint32_t, K>;
   std::map<Face, std::pair<int, Face>> seen;  // sorted corners -> (count, oriented face)
   for (const auto& own : d.corner_of)
-    for (int a = 0; a < dim; ++a)
+    for (int a = 0; a < dim && !d.point[own[0]]; ++a)
       for (int side = 0; side < 2; ++side) {
         Face face;
         for (int k = 0; k < K; ++k) {
@@ -200,7 +219,7 @@ void mark_enrichment(ParticleDomains<dim>& d, const std::vector<Mat<dim>>& F, bo
   std::vector<std::uint8_t> particle_enriched(d.particle_count());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, d.particle_count(), 4096), [&](const auto& r) {
     for (std::size_t p = r.begin(); p != r.end(); ++p)
-      particle_enriched[p] = enrichment_metric<dim>(F[p]) <= d.enrichment_threshold;
+      particle_enriched[p] = !d.is_point(p) && enrichment_metric<dim>(F[p]) <= d.enrichment_threshold;
   });
   constexpr int K = ParticleDomains<dim>::corners;
   d.enriched.resize(d.corner_count());
@@ -261,6 +280,9 @@ void corners_to_grid(ParticleDomains<dim>& d, const Kernel& kernel, SparseGrid<d
     channels[1 + dim + a] = detail::component_view<dim>(grid.force, a);
   }
   using Node = Eigen::Matrix<double, Ch, 1>;
+  MPM_VERIFY(d.point_count == 0 || d.stress.size() == d.corner_count(), Error,
+             "stage '" + stage + "': the material points' stress is not set");
+  const double inv_dx = 1.0 / grid.dx();
   std::visit(
       [&](const auto& k) {
         using K = std::decay_t<decltype(k)>;
@@ -268,11 +290,22 @@ void corners_to_grid(ParticleDomains<dim>& d, const Kernel& kernel, SparseGrid<d
                                  [&](std::uint32_t c, const PatchFrame<dim>& f, double* patch) {
                                    if (!d.enriched.empty() && d.enriched[c]) return;  // stops at the corner
                                    Stencil<dim, K::support> st;
-                                   st.template compute<false>(k, f.cells(d.x[c]), f.origin);
                                    Node values[dim + 1];
                                    for (Node& v : values) v.setZero();
                                    values[0] << d.mass[c], d.momentum[c], d.force[c];
+                                   if (!d.point[c]) {
+                                     st.template compute<false>(k, f.cells(d.x[c]), f.origin);
+                                     detail::spread<false>(st, values, patch);
+                                     return;
+                                   }
+                                   // A material point: its stress as standard MPM scatters it.
+                                   st.compute(k, f.cells(d.x[c]), f.origin);
                                    detail::spread<false>(st, values, patch);
+                                   const Mat<dim> A = -inv_dx * d.stress[c];
+                                   st.for_each_node([&](int node, double, const Vec<dim>& grad, const Vec<dim>&) {
+                                     const Vec<dim> fi = A * grad;
+                                     for (int a = 0; a < dim; ++a) patch[node * Ch + 1 + dim + a] += fi[a];
+                                   });
                                  });
       },
       kernel);
@@ -280,6 +313,7 @@ void corners_to_grid(ParticleDomains<dim>& d, const Kernel& kernel, SparseGrid<d
 
 template <int dim>
 void grid_to_corners(ParticleDomains<dim>& d, const Kernel& kernel, const SparseGrid<dim>& grid, bool flip) {
+  const double inv_dx = 1.0 / grid.dx();
   const auto run = [&](auto channel_count) {
     constexpr int Ch = decltype(channel_count)::value;
     std::array<ChannelView, Ch> channels;
@@ -293,22 +327,30 @@ void grid_to_corners(ParticleDomains<dim>& d, const Kernel& kernel, const Sparse
                                   [&](std::uint32_t c, const PatchFrame<dim>& f, const double* patch) {
                                     if (!d.enriched.empty() && d.enriched[c]) return;
                                     Stencil<dim, K::support> st;
-                                    st.template compute<false>(k, f.cells(d.x[c]), f.origin);
+                                    const bool point = d.point[c];
+                                    if (point)
+                                      st.compute(k, f.cells(d.x[c]), f.origin);
+                                    else
+                                      st.template compute<false>(k, f.cells(d.x[c]), f.origin);
                                     Vec<dim> v = Vec<dim>::Zero(), dv = Vec<dim>::Zero();
-                                    st.for_each_node([&](int node, double w, const Vec<dim>&, const Vec<dim>&) {
+                                    Mat<dim> grad_v = Mat<dim>::Zero();
+                                    st.for_each_node([&](int node, double w, const Vec<dim>& grad, const Vec<dim>&) {
                                       const Eigen::Map<const Vec<dim>> vi(patch + node * Ch);
                                       v.noalias() += w * vi;
                                       if constexpr (Ch == 2 * dim)
                                         dv.noalias() += w * (vi - Eigen::Map<const Vec<dim>>(patch + node * Ch + dim));
+                                      if (point) grad_v.noalias() += vi * grad.transpose();
                                     });
                                     d.momentum[c] = v;
                                     d.force[c] = dv;
+                                    if (point) d.velocity_gradient[c] = grad_v * inv_dx;
                                   });
         },
         kernel);
   };
   d.momentum.resize(d.corner_count());
   d.force.resize(d.corner_count());
+  if (d.point_count) d.velocity_gradient.resize(d.corner_count());
   if (flip)
     run(std::integral_constant<int, 2 * dim>{});
   else
@@ -496,6 +538,7 @@ void restore(ParticleDomains<dim>& d, const CarriedData& data) {
 #define MPM_INSTANTIATE(dim)                                                                                         \
   template struct ParticleDomains<dim>;                                                                              \
   template void add_body(ParticleDomains<dim>&, std::size_t, const std::vector<Vec<dim>>&, double, const Vec<dim>&); \
+  template void add_points(ParticleDomains<dim>&, std::size_t, const std::vector<Vec<dim>>&);                        \
   template void index_sharing(ParticleDomains<dim>&);                                                                \
   template void corners_to_grid(ParticleDomains<dim>&, const Kernel&, SparseGrid<dim>&, const std::string&);         \
   template double enrichment_metric<dim>(const Mat<dim>&);                                                           \

@@ -16,6 +16,7 @@
 #include <mpm/solid/solid_channels.h>
 #include <mpm/solid/solid_scene.h>
 #include <mpm/solid/stages/domain_transfer.h>
+#include <mpm/solid/stages/return_map.h>
 
 #include <Eigen/Geometry>
 
@@ -99,10 +100,20 @@ void seed_body(SolidScene<dim>& scene, const Config& body) {
   const std::size_t first = scene.state.particles.size();
   Particles<dim>& P = scene.state.particles;
   add_particles(scene, x, body_particles.volume, m, velocity, body.path());
-  if (scene.state.domains) {  // the domains are the cells of the seeding lattice
+  // The domains are the cells of the seeding lattice; a plastic body runs among them as
+  // material points (particle_domains.h).
+  const bool elastic = std::holds_alternative<plasticity::NoPlasticity>(scene.materials.at(m).plasticity);
+  if (!scene.state.domains && body.has("domains"))
+    body.fail("domains", "chooses domains or material points in a scene with particle_domains: true");
+  if (scene.state.domains && body.flag("domains", elastic)) {
+    if (!elastic)
+      body.fail("domains", "a body with particle domains needs an elastic material ('" + scene.materials.at(m).name +
+                               "' is plastic): set domains: false to run it as material points");
     if (body.number("jitter", 0.0, Range::any()) != 0.0)
       body.fail("jitter", "particle_domains need particles on the seeding lattice: jitter must be 0");
     domains::add_body(*scene.state.domains, first, x, std::pow(body_particles.volume, 1.0 / dim), stretch);
+  } else if (scene.state.domains) {
+    domains::add_points(*scene.state.domains, first, x);
   }
   for (std::size_t p = first; p < P.size(); ++p) {  // the rest state of a stretched body
     P.volume0[p] /= std::fabs(stretch.prod());
@@ -166,8 +177,8 @@ void seed_bodies(SolidScene<dim>& solid, const Config& scene) {
 }
 
 namespace {
-//! The scenes particle domains support (particle_domains.h): elastic solids, explicit or
-//! implicit, on a uniform, non-periodic grid with the PIC/FLIP transfer of Zhu et al.
+//! The scenes particle domains support (particle_domains.h): explicit or implicit, on a
+//! uniform, non-periodic grid with the PIC/FLIP transfer of Zhu et al. (bodies: seed_body).
 template <int dim>
 void check_particle_domains(const SolidScene<dim>& s, const Config& scene) {
   const std::string why = "particle_domains: true needs ";
@@ -178,9 +189,6 @@ void check_particle_domains(const SolidScene<dim>& s, const Config& scene) {
     if (s.settings.periodic[a]) scene.fail("particle_domains", why + "walls on every axis (no periodic axis)");
   if (s.settings.transfer.type != TransferScheme::Type::flip)
     scene.fail("particle_domains", why + "transfer.scheme: flip (the domains blend PIC and FLIP; flip_ratio 0 is PIC)");
-  for (const Material<dim>& m : s.materials)
-    if (!std::holds_alternative<plasticity::NoPlasticity>(m.plasticity))
-      scene.fail("particle_domains", why + "elastic materials (material '" + m.name + "' is plastic)");
 }
 }  // namespace
 
@@ -210,7 +218,12 @@ SolidScene<dim> load_solid_scene(const Config& scene) {
     scene.fail("domain_enrichment", "enriches particle domains: it needs particle_domains: true");
   }
   seed_bodies(s, scene);
-  if (s.state.domains) domains::index_sharing(*s.state.domains);
+  if (s.state.domains) {
+    domains::index_sharing(*s.state.domains);
+    if (solver == "implicit" && s.state.domains->point_count)
+      scene.fail("solver", "solver 'implicit' with particle_domains needs domains on every body (" +
+                               std::to_string(s.state.domains->point_count) + " particles are material points)");
+  }
   return s;
 }
 
@@ -254,6 +267,8 @@ Pipeline<MpmState<dim>> make_solid_pipeline(const SolidScene<dim>& scene) {
   if (scene.state.adaptive) p.add(std::make_unique<stages::GhostVelocities<dim>>());
   if (scene.state.domains) {
     p.add(std::make_unique<stages::DomainsFromGrid<dim>>(scene.colliders, implicit));
+    if (stages::any_plastic(scene.materials))  // the material points' (bodies with domains are elastic)
+      p.add(std::make_unique<stages::ReturnMap<dim>>(scene.materials));
   } else {
     for (auto& stage : scene.solver->particle_update()) p.add(std::move(stage));
     p.add(std::make_unique<stages::GridToParticles<dim>>());

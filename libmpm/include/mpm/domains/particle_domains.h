@@ -30,6 +30,15 @@
 //! grid's interpolation error. Its explicit step is bounded by the thinnest enriched domain
 //! (enriched_length) as well as by the cell.
 //!
+//! Material points among domains: a body seeded with domains: false (a plastic body: a
+//! snowball that shatters against an elastic body with domains) gives each particle one corner
+//! of its own at x_p, flagged `point`, that all its 2^dim corner slots name. Its m, p sums are
+//! then the particle's own, and the corner carries the standard MPM terms the two-step weights
+//! cannot give a point: the Kirchhoff stress S_p = V_p^0 tau_p, scattered as
+//! f_i -= S_p grad w_i(x_p), and the gathered grad v_p = sum_i v_i grad w_i(x_p)^T that updates
+//! F_p = (I + dt grad v_p) F_p. With the scene's PIC/FLIP transfer this is the standard step,
+//! and a scene of material points only gives the standard pipeline's results to round-off.
+//!
 //! Particles of a scene with domains are never reordered (no sort moves them, no source or
 //! sink adds or removes any): the corner table indexes them by storage position.
 #include <mpm/core/kernels.h>
@@ -51,6 +60,8 @@ struct ParticleDomains {
   static constexpr int corners = 1 << dim;  //!< corners per domain
 
   std::vector<Vec<dim>> x;                                    //!< corner positions [m]
+  std::vector<std::uint8_t> point;                            //!< per corner: 1 when a material point's own
+  std::size_t point_count = 0;                                //!< particles that are material points
   std::vector<std::array<std::uint32_t, corners>> corner_of;  //!< per particle: corner alpha -> corner index
   std::vector<Vec<dim>> inverse_side;                         //!< per particle: 1 / L_a of its reference box [1/m]
   //! Corner -> (particle, alpha) pairs, packed as particle * corners + alpha: a corner's sums run
@@ -76,8 +87,13 @@ struct ParticleDomains {
   std::vector<double> mass;        //!< m_alpha [kg]
   std::vector<Vec<dim>> momentum;  //!< p_alpha [kg m/s]; after G2P the corner velocity v_alpha [m/s]
   std::vector<Vec<dim>> force;     //!< f_alpha [N]; after G2P the FLIP increment of v_alpha [m/s]
+  // Material points only (sized to the corners when there are any).
+  std::vector<Mat<dim>> stress;             //!< S_p = V_p^0 tau_p of a point's corner [N m]
+  std::vector<Mat<dim>> velocity_gradient;  //!< grad v at a point's corner after G2P [1/s]
 
   std::size_t corner_count() const { return x.size(); }
+  //! True when particle p is a material point (no domain).
+  bool is_point(std::size_t p) const { return point[corner_of[p][0]] != 0; }
   std::size_t particle_count() const { return corner_of.size(); }
   std::size_t memory_bytes() const;
 
@@ -116,6 +132,12 @@ template <int dim>
 void add_body(ParticleDomains<dim>& domains, std::size_t first, const std::vector<Vec<dim>>& positions, double spacing,
               const Vec<dim>& stretch);
 
+//! Gives the particles [first, first + positions.size()) no domain: each is a material point,
+//! a corner of its own at its position (see above). Error when `first` is not the particle
+//! count so far.
+template <int dim>
+void add_points(ParticleDomains<dim>& domains, std::size_t first, const std::vector<Vec<dim>>& positions);
+
 //! The corner -> particle table (sharing_begin, sharing) and the surface, after the last add_body.
 template <int dim>
 void index_sharing(ParticleDomains<dim>& domains);
@@ -126,7 +148,7 @@ void index_sharing(ParticleDomains<dim>& domains);
 template <int dim>
 double enrichment_metric(const Mat<dim>& F);
 
-//! Marks the corners of every particle with K(F_p) <= domains.enrichment_threshold and sets
+//! Marks the corners of every particle with a domain and K(F_p) <= domains.enrichment_threshold and sets
 //! enriched_particles; clears the marks when the threshold is 0. With `explicit_step` (the
 //! enriched corners are stepped explicitly) also enriched_length, and a NumericalError naming
 //! the first enriched domain thinner than 1e-6 of its rest size (no explicit step is stable
@@ -136,7 +158,8 @@ void mark_enrichment(ParticleDomains<dim>& domains, const std::vector<Mat<dim>>&
 
 //! Sorts the corners into buckets of `grid` (allocating the blocks their stencils touch) and
 //! scatters m_alpha, p_alpha, f_alpha (in domains.mass, momentum, force) of the corners not
-//! enriched into grid.mass, grid.velocity (momentum) and grid.force, each zeroed first.
+//! enriched into grid.mass, grid.velocity (momentum) and grid.force, each zeroed first, and
+//! the stress of the material points' corners (domains.stress) as - S_p grad w_i.
 //! NumericalError naming `stage` when a corner (enriched or not) is not finite or its stencil
 //! leaves the grid.
 template <int dim>
@@ -144,8 +167,9 @@ void corners_to_grid(ParticleDomains<dim>& domains, const Kernel& kernel, Sparse
                      const std::string& stage);
 
 //! For the corners not enriched: v_alpha = sum_i w_i(x_alpha) v_i into domains.momentum, with
-//! `flip` the increment sum_i w_i (v_i - v_i^old) into domains.force. Enriched corners keep
-//! their p_alpha and f_alpha for integrate_enriched.
+//! `flip` the increment sum_i w_i (v_i - v_i^old) into domains.force, and at the material
+//! points' corners grad v into domains.velocity_gradient. Enriched corners keep their p_alpha
+//! and f_alpha for integrate_enriched.
 template <int dim>
 void grid_to_corners(ParticleDomains<dim>& domains, const Kernel& kernel, const SparseGrid<dim>& grid, bool flip);
 

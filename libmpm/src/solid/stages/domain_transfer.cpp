@@ -6,6 +6,7 @@
 #include <mpm/core/finite_guard.h>
 #include <mpm/solid/solid_channels.h>
 #include <mpm/solid/stages/domain_transfer.h>
+#include <mpm/solid/stages/stress_forces.h>
 
 #include <tbb/parallel_for.h>
 
@@ -36,23 +37,45 @@ void DomainsToGrid<dim>::run(MpmState<dim>& s) {
   const Particles<dim>& P = s.particles;
   check_pairing(d, P, name());
   const std::vector<Mat<dim>>& F = solid::elastic_F(P);
+  const std::vector<double>& plastic = solid::plastic_state(P);
+  const std::vector<Mat<dim>>* cache = solid::stress_cache(P);
+  // A domain's stress acts through its corners as V^0 P (eq. 8); a material point's as
+  // standard MPM's V^0 tau at its own corner (zero for the corner sums).
   weighted_stress_.resize(P.size());
+  if (d.point_count) d.stress.resize(d.corner_count());
   for (std::size_t m = 0; m < materials_.size(); ++m)
     std::visit(
-        [&](const auto& model) {
+        [&](const auto& model, const auto& plasticity) {
+          using Plasticity = std::decay_t<decltype(plasticity)>;
+          const bool cached = cache && !std::is_same_v<Plasticity, plasticity::NoPlasticity>;
           tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.size(), 4096), [&](const auto& r) {
-            for (std::size_t p = r.begin(); p != r.end(); ++p)
-              if (P.material[p] == m) weighted_stress_[p] = P.volume0[p] * model.first_piola(F[p]);
+            for (std::size_t p = r.begin(); p != r.end(); ++p) {
+              if (P.material[p] != m) continue;
+              if (!d.is_point(p)) {
+                weighted_stress_[p] = P.volume0[p] * model.first_piola(F[p]);
+                continue;
+              }
+              weighted_stress_[p].setZero();
+              d.stress[d.corner_of[p][0]] = weighted_kirchhoff(model, plasticity, P.volume0[p], F[p], plastic[p],
+                                                               cached ? &(*cache)[p] : nullptr);
+            }
           });
         },
-        materials_[m].elastic);
+        materials_[m].elastic, materials_[m].plasticity);
   check_finite(weighted_stress_, name(), "particle", "first Piola-Kirchhoff stress");
+  if (d.point_count) check_finite(d.stress, name(), "material point", "Kirchhoff stress");
 
   constexpr int K = domains::ParticleDomains<dim>::corners;
   d.mass.resize(d.corner_count());
   d.momentum.resize(d.corner_count());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, d.corner_count(), 4096), [&](const auto& r) {
     for (std::size_t c = r.begin(); c != r.end(); ++c) {
+      if (d.point[c]) {  // the particle's own m and m v, not a sum of K equal shares
+        const std::size_t p = d.sharing[d.sharing_begin[c]] / K;
+        d.mass[c] = P.mass[p];
+        d.momentum[c] = P.mass[p] * P.v[p];
+        continue;
+      }
       double m = 0.0;
       Vec<dim> momentum = Vec<dim>::Zero();
       for (std::uint32_t k = d.sharing_begin[c]; k != d.sharing_begin[c + 1]; ++k) {
@@ -96,7 +119,10 @@ void DomainsFromGrid<dim>::run(MpmState<dim>& s) {
       pic /= K;
       P.v[p] = flip ? Vec<dim>(a * (P.v[p] + increment / K) + (1.0 - a) * pic) : pic;
       P.x[p] = d.centre(p);
-      F[p] = d.deformation(p);
+      if (d.is_point(p))  // standard MPM: F = (I + dt grad v) F
+        F[p] = (Mat<dim>::Identity() + s.dt * d.velocity_gradient[d.corner_of[p][0]]) * F[p];
+      else
+        F[p] = d.deformation(p);
     }
   });
   check_finite(P.v, name(), "particle", "velocity");

@@ -36,14 +36,10 @@ void StressForces<dim>::run(MpmState<dim>& s) {
           using Plasticity = std::decay_t<decltype(plasticity)>;
           const bool cached = cache && !std::is_same_v<Plasticity, plasticity::NoPlasticity>;
           tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.size(), 4096), [&](const auto& r) {
-            for (std::size_t p = r.begin(); p != r.end(); ++p) {
-              if (P.material[p] != m) continue;
-              const double scale = P.volume0[p] * plasticity.modulus_scale(plastic[p]);
-              if (cached && solid::known_stress((*cache)[p]))
-                weighted_stress_[p] = scale * (*cache)[p];
-              else
-                weighted_stress_[p] = scale * model.first_piola(F[p]) * F[p].transpose();
-            }
+            for (std::size_t p = r.begin(); p != r.end(); ++p)
+              if (P.material[p] == m)
+                weighted_stress_[p] = weighted_kirchhoff(model, plasticity, P.volume0[p], F[p], plastic[p],
+                                                         cached ? &(*cache)[p] : nullptr);
           });
         },
         materials_[m].elastic, materials_[m].plasticity);

@@ -383,6 +383,103 @@ TEST_CASE("particle domains: enriched corners obey the walls") {
   CHECK(lowest < floor + 0.1 * scene.settings.dx);  // enriched corners did reach the floor
 }
 
+namespace {
+//! An elastic box and a snowball (snow plasticity) thrown at it and at the floor; `domains`:
+//! the box's key (the snowball is a material point body either way).
+template <int dim>
+std::string mixed_scene_yaml(const std::string& particle_domains, const std::string& box_domains) {
+  const std::string lo = dim == 2 ? "[0, 0]" : "[0, 0, 0]", hi = dim == 2 ? "[1, 1]" : "[1, 1, 1]";
+  const std::string blo = dim == 2 ? "[0.5, 0.1]" : "[0.5, 0.1, 0.4]",
+                    bhi = dim == 2 ? "[0.7, 0.4]" : "[0.65, 0.3, 0.55]";
+  const std::string centre = dim == 2 ? "[0.3, 0.25]" : "[0.3, 0.2, 0.47]";
+  const std::string v = dim == 2 ? "[4, -3]" : "[4, -3, 0.5]";
+  const std::string g = dim == 2 ? "[0, -9.81]" : "[0, -9.81, 0]";
+  return "dim: " + std::to_string(dim) + "\ndomain: {lo: " + lo + ", hi: " + hi + "}\ngrid: {dx: 0.05}\n" +
+         "time: {end: 0.1}\ngravity: " + g + "\nwalls: {contact: separate}\n" +
+         "transfer: {scheme: flip, flip_ratio: 0.9}\nparticle_domains: " + particle_domains + "\n" +
+         "materials: [{name: m, density: 1000, youngs_modulus: 1e5, poisson_ratio: 0.3, elasticity: neo_hookean},\n" +
+         "  {name: snow, density: 400, youngs_modulus: 1.4e5, poisson_ratio: 0.2, elasticity: fixed_corotated,\n" +
+         "   plasticity: {model: snow, critical_compression: 2.5e-2, critical_stretch: 7.5e-3, hardening: 10}}]\n" +
+         "bodies: [{shape: box, lo: " + blo + ", hi: " + bhi + ", material: m" + box_domains + "},\n" +
+         "  {shape: sphere, center: " + centre + ", radius: 0.1, material: snow, velocity: " + v + "}]\n";
+}
+
+template <int dim>
+void run_steps(solid::SolidScene<dim>& scene, int steps) {
+  Pipeline<MpmState<dim>> pipeline = solid::make_solid_pipeline(scene);
+  for (int n = 0; n < steps; ++n) {
+    scene.state.dt_limit = 5e-4;
+    pipeline.step(scene.state);
+    scene.state.time += scene.state.dt;
+  }
+}
+}  // namespace
+
+TEST_CASE_TEMPLATE("particle domains: material points among them take the standard step", Dim,
+                   std::integral_constant<int, 2>, std::integral_constant<int, 3>) {
+  // Every body a material point (domains: false) in a scene with particle_domains: the
+  // standard pipeline's FLIP step, stress scatter, F update and snow return map, to round-off.
+  constexpr int dim = Dim::value;
+  solid::SolidScene<dim> points =
+      solid::load_solid_scene<dim>(Config::parse(mixed_scene_yaml<dim>("true", ", domains: false")));
+  solid::SolidScene<dim> standard = solid::load_solid_scene<dim>(Config::parse(mixed_scene_yaml<dim>("false", "")));
+  REQUIRE(points.state.domains->point_count == points.state.particles.size());
+  // A tag follows each particle of the standard run through its sorts.
+  auto& tag = standard.state.particles.template add_channel<double>("tag", 0.0, ChannelUse{});
+  for (std::size_t p = 0; p < tag.size(); ++p) tag[p] = static_cast<double>(p);
+  run_steps(points, 120);
+  run_steps(standard, 120);
+  const Particles<dim>&A = points.state.particles, &B = standard.state.particles;
+  REQUIRE(A.size() == B.size());
+  CHECK(points.state.time == doctest::Approx(standard.state.time).epsilon(1e-14));
+  const auto& FA = solid::elastic_F(A);
+  const auto& FB = solid::elastic_F(B);
+  const auto& plastic = solid::plastic_state(A);
+  double dx = 0.0, dv = 0.0, dF = 0.0, vmax = 0.0, hardened = 0.0;
+  for (std::size_t q = 0; q < B.size(); ++q) {
+    const auto p = static_cast<std::size_t>(B.template channel<double>("tag")[q]);
+    dx = std::max(dx, (A.x[p] - B.x[q]).norm());
+    dv = std::max(dv, (A.v[p] - B.v[q]).norm());
+    dF = std::max(dF, (FA[p] - FB[q]).norm());
+    vmax = std::max(vmax, B.v[q].norm());
+    hardened = std::max(hardened, std::fabs(plastic[p]));
+  }
+  CHECK(hardened > 1e-3);  // the snow yielded, so the return map is part of the comparison
+  CHECK(dx < 1e-11);
+  CHECK(dv < 1e-9 * vmax);
+  CHECK(dF < 1e-9);
+}
+
+TEST_CASE_TEMPLATE("particle domains: a body with domains and material points conserve momentum as they meet", Dim,
+                   std::integral_constant<int, 2>, std::integral_constant<int, 3>) {
+  constexpr int dim = Dim::value;
+  // No gravity, and walls only on the boundary nodes, which the bodies' stencils never reach.
+  std::vector<std::string> no_gravity{dim == 2 ? "gravity=[0, 0]" : "gravity=[0, 0, 0]", "walls.thickness=0.01"};
+  solid::SolidScene<dim> scene =
+      solid::load_solid_scene<dim>(Config::parse(mixed_scene_yaml<dim>("true", ""), "scene.yaml", no_gravity));
+  const domains::ParticleDomains<dim>& d = *scene.state.domains;
+  const Particles<dim>& P = scene.state.particles;
+  REQUIRE(d.point_count > 0);
+  REQUIRE(d.point_count < P.size());
+  // Aim the ball at the box instead of the floor.
+  for (std::size_t p = 0; p < P.size(); ++p)
+    if (d.is_point(p)) scene.state.particles.v[p][1] = 0.0;
+  const auto momentum = [&] {
+    Vec<dim> m = Vec<dim>::Zero();
+    for (std::size_t p = 0; p < P.size(); ++p) m += P.mass[p] * P.v[p];
+    return m;
+  };
+  const Vec<dim> p0 = momentum();
+  double scale = 0.0;
+  for (std::size_t p = 0; p < P.size(); ++p) scale += P.mass[p] * P.v[p].norm();
+  run_steps(scene, 80);
+  double box_speed = 0.0;
+  for (std::size_t p = 0; p < P.size(); ++p)
+    if (!d.is_point(p)) box_speed = std::max(box_speed, P.v[p].norm());
+  CHECK(box_speed > 0.1);  // the ball has hit the box
+  CHECK((momentum() - p0).norm() < 1e-12 * scale);
+}
+
 TEST_CASE("particle domains: bad input names the key") {
   const std::string yaml = scene_yaml<2>();
   const auto error = [&](const std::vector<std::string>& overrides) {
@@ -398,7 +495,8 @@ TEST_CASE("particle domains: bad input names the key") {
   CHECK(error({"solver=implicit"}).empty());
   CHECK(error({"solver=grains"}).find("solver: explicit or implicit") != std::string::npos);
   CHECK(error({"adaptive={levels: 2}"}).find("uniform grid") != std::string::npos);
-  CHECK(error({"materials.0.elasticity=hencky_stvk", "materials.0.plasticity={model: von_mises, yield_stress: 1e4}"})
+  CHECK(error({"materials.0.elasticity=hencky_stvk", "materials.0.plasticity={model: von_mises, yield_stress: 1e4}",
+               "bodies.0.domains=true"})
             .find("is plastic") != std::string::npos);
   CHECK(error({"particle_domains=maybe"}).find("particle_domains") != std::string::npos);
   CHECK(error({"domain_enrichment=1"}).find("domain_enrichment") != std::string::npos);
@@ -407,6 +505,14 @@ TEST_CASE("particle domains: bad input names the key") {
   CHECK(error({"particle_domains=false", "domain_enrichment=0.6"}).find("needs particle_domains: true") !=
         std::string::npos);
   CHECK(error({"bodies.0.jitter=0.3"}).find("jitter must be 0") != std::string::npos);
+  // Material points: any body may be one; a plastic body must be; an implicit step takes none.
+  CHECK(error({"bodies.0.domains=false"}).empty());
+  CHECK(error({"bodies.0.domains=false", "solver=implicit"}).find("domains on every body") != std::string::npos);
+  CHECK(error({"particle_domains=false", "bodies.0.domains=false"}).find("bodies.0.domains") != std::string::npos);
+  CHECK(
+      error({"materials.0.elasticity=fixed_corotated", "materials.0.plasticity={model: snow}", "bodies.0.domains=true"})
+          .find("set domains: false") != std::string::npos);
+  CHECK(error({"materials.0.elasticity=fixed_corotated", "materials.0.plasticity={model: snow}"}).empty());
   CHECK(error({"periodic=[true, false]", "walls={contact: separate, x_min: open, x_max: open}"})
             .find("no periodic axis") != std::string::npos);
 }

@@ -4,7 +4,9 @@
 //!   [enrichment ->] time_step -> domains_to_grid -> grid_update -> boundary -> domains_from_grid,
 //! and of sort -> p2g and deformation -> g2p around the implicit update (which solves for the
 //! grid and the enriched corners together, implicit_update.h).
-//! Elastic materials only (a return map would need F^E apart from the corners' F).
+//! Bodies with domains are elastic (a return map would need F^E apart from the corners' F);
+//! plastic bodies run among them as material points (particle_domains.h), whose return map
+//! follows domains_from_grid in the explicit step.
 #include <mpm/core/stage.h>
 #include <mpm/core/state.h>
 #include <mpm/geometry/collider.h>
@@ -34,14 +36,14 @@ private:
 };
 
 //! Corner masses, momenta and forces f_alpha = - sum_p V_p^0 P(F_p) grad_X w_alpha_p (eq. 8),
-//! scattered to the grid from the corners.
+//! scattered to the grid from the corners; the material points' V^0 tau as in StressForces.
 template <int dim>
 class DomainsToGrid final : public Stage<MpmState<dim>> {
 public:
   explicit DomainsToGrid(std::vector<Material<dim>> materials) : materials_(std::move(materials)) {}
   std::string name() const override { return "domains_to_grid"; }
   std::vector<std::string> reads() const override {
-    return {"particle.v", "particle.mass", "particle.volume0", "particle.material", "particle.F"};
+    return {"particle.v", "particle.mass", "particle.volume0", "particle.material", "particle.F", "particle.plastic"};
   }
   std::vector<std::string> writes() const override {
     return {"grid.blocks", "grid.mass", "grid.momentum", "grid.force"};
@@ -55,7 +57,7 @@ private:
 
 //! Corner velocities from the grid (eq. 9), the enriched corners' own update with the
 //! colliders, the corners moved; then per particle the PIC/FLIP velocity, x_p as the mean of its
-//! corners and F_p from them (eq. 7).
+//! corners and F_p from them (eq. 7), or for a material point F_p = (I + dt grad v_p) F_p.
 template <int dim>
 class DomainsFromGrid final : public Stage<MpmState<dim>> {
 public:

@@ -2,8 +2,20 @@
 #include <mpm/core/stage.h>
 #include <mpm/core/state.h>
 #include <mpm/solid/material.h>
+#include <mpm/solid/solid_channels.h>
 
 namespace mpm::stages {
+
+//! V^0 tau of one particle of a material (model, plasticity): tau = P(F^E) F^E^T, scaled by the
+//! plasticity's hardening of the particle's plastic state; the return map's cached tau instead
+//! where `cached` points at a known one (solid_channels.h).
+template <int dim, class Elastic, class Plasticity>
+Mat<dim> weighted_kirchhoff(const Elastic& model, const Plasticity& plasticity, double volume0, const Mat<dim>& F,
+                            double plastic, const Mat<dim>* cached) {
+  const double scale = volume0 * plasticity.modulus_scale(plastic);
+  if (cached && solid::known_stress(*cached)) return scale * *cached;
+  return scale * model.first_piola(F) * F.transpose();
+}
 
 //! Internal elastic forces on grid nodes from the particles' Kirchhoff stress. A scene whose
 //! particles may carry an index outside the material list (stress_free_material: discrete
