@@ -54,7 +54,6 @@
 #include <mpm/geometry/seeding.h>
 #include <mpm/solid/material.h>
 #include <mpm/solid/solid_channels.h>
-#include <mpm/solid/stages/deformation_update.h>
 #include <mpm/solid/stages/stress_forces.h>
 
 #include <mpm/constitutive/neo_hookean.h>
@@ -350,8 +349,7 @@ MmsErrors run_mms(int cells, const Kernel& kernel, const MmsSettings& in, int le
   pipeline.add(std::make_unique<ManufacturedBodyForce>(field));
   pipeline.add(std::make_unique<stages::GridVelocityUpdate<2>>(true));
   if (levels > 1) pipeline.add(std::make_unique<stages::GhostVelocities<2>>());
-  pipeline.add(std::make_unique<stages::DeformationUpdate<2>>());
-  pipeline.add(std::make_unique<stages::GridToParticles<2>>());
+  pipeline.add(std::make_unique<stages::GridToParticles<2>>(solid::kElasticF));
 
   double space_time = 0.0, stripe = 0.0;
   for (int n = 0; n < steps; ++n) {

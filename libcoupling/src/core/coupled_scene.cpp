@@ -151,11 +151,12 @@ mpm::Pipeline<CoupledState<dim>> make_coupled_pipeline(const CoupledScene<dim>& 
   } else if (wet) {
     for (auto& stage : scene.fluid_solver->projection()) on(Phase::fluid, std::move(stage));
   }
-  if (wet)
+  if (wet) {
     for (auto& stage : scene.fluid_solver->particle_update()) on(Phase::fluid, std::move(stage));
-  if (sandy)
+    on(Phase::fluid, std::make_unique<ms::GridToParticles<dim>>());
+  }
+  if (sandy)  // g2p first, with the deformation update where the solver tracks F
     for (auto& stage : scene.solid_solver->particle_update()) on(Phase::sediment, std::move(stage));
-  both([] { return std::make_unique<ms::GridToParticles<dim>>(); });
   if (switching)
     p.add(
         std::make_unique<stages::ReclassifySediment<dim>>(*scene.sediment->switching, scene.sediment->density, 0, wet));

@@ -1,4 +1,5 @@
 #include <mpm/core/detail/transfer_loops.h>
+#include <mpm/core/error.h>
 #include <mpm/core/transfer.h>
 
 namespace mpm {
@@ -50,22 +51,31 @@ void momentum_to_velocity(SparseGrid<dim>& grid, const TransferScheme& scheme) {
 
 template <int dim>
 void grid_to_particles(Particles<dim>& particles, const ParticleBuckets<dim>& buckets, const Kernel& kernel,
-                       const TransferScheme& scheme, const SparseGrid<dim>& grid, double dt) {
+                       const TransferScheme& scheme, const SparseGrid<dim>& grid, double dt, std::vector<Mat<dim>>* F) {
+  MPM_VERIFY(!F || F->size() == particles.size(), Error, "grid_to_particles: F needs one entry per particle");
   const std::array<ChannelView, dim> velocity = vector_views<dim>(grid.velocity);
-  std::visit(
-      [&](const auto& k) {
-        using K = std::decay_t<decltype(k)>;
-        if (scheme.type == TransferScheme::Type::apic) {
-          detail::g2p<dim, K, false>(particles, buckets, k, grid, velocity, 0.0, dt);
-        } else {
-          std::array<ChannelView, 2 * dim> both;
-          const std::array<ChannelView, dim> old = vector_views<dim>(grid.velocity_old);
-          std::copy(velocity.begin(), velocity.end(), both.begin());
-          std::copy(old.begin(), old.end(), both.begin() + dim);
-          detail::g2p<dim, K, true>(particles, buckets, k, grid, both, scheme.flip_ratio, dt);
-        }
-      },
-      kernel);
+  const auto run = [&](auto deform) {
+    constexpr bool fused = decltype(deform)::value;
+    Mat<dim>* f = fused ? F->data() : nullptr;
+    std::visit(
+        [&](const auto& k) {
+          using K = std::decay_t<decltype(k)>;
+          if (scheme.type == TransferScheme::Type::apic) {
+            detail::g2p<dim, K, false, fused>(particles, buckets, k, grid, velocity, 0.0, dt, f);
+          } else {
+            std::array<ChannelView, 2 * dim> both;
+            const std::array<ChannelView, dim> old = vector_views<dim>(grid.velocity_old);
+            std::copy(velocity.begin(), velocity.end(), both.begin());
+            std::copy(old.begin(), old.end(), both.begin() + dim);
+            detail::g2p<dim, K, true, fused>(particles, buckets, k, grid, both, scheme.flip_ratio, dt, f);
+          }
+        },
+        kernel);
+  };
+  if (F)
+    run(std::true_type{});
+  else
+    run(std::false_type{});
 }
 
 template <int dim>
@@ -152,7 +162,7 @@ void stress_to_nodes(const std::vector<Mat<dim>>& weighted_stress, const Particl
                                   const TransferScheme&, SparseGrid<dim>&);                                           \
   template void momentum_to_velocity(SparseGrid<dim>&, const TransferScheme&);                                        \
   template void grid_to_particles(Particles<dim>&, const ParticleBuckets<dim>&, const Kernel&, const TransferScheme&, \
-                                  const SparseGrid<dim>&, double);                                                    \
+                                  const SparseGrid<dim>&, double, std::vector<Mat<dim>>*);                            \
   template void scalar_to_grid(const std::vector<double>&, const Particles<dim>&, const ParticleBuckets<dim>&,        \
                                const Kernel&, const SparseGrid<dim>&, std::vector<double>&);                          \
   template void stress_to_grid_forces(const std::vector<Mat<dim>>&, const Particles<dim>&,                            \

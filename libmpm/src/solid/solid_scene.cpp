@@ -3,7 +3,6 @@
 #include <mpm/core/error.h>
 #include <mpm/core/stages/ghost_velocities.h>
 #include <mpm/core/stages/grid_boundary.h>
-#include <mpm/core/stages/grid_to_particles.h>
 #include <mpm/core/stages/grid_velocity_update.h>
 #include <mpm/core/stages/particles_to_grid.h>
 #include <mpm/core/stages/refine_grid.h>
@@ -271,7 +270,6 @@ Pipeline<MpmState<dim>> make_solid_pipeline(const SolidScene<dim>& scene) {
       p.add(std::make_unique<stages::ReturnMap<dim>>(scene.materials));
   } else {
     for (auto& stage : scene.solver->particle_update()) p.add(std::move(stage));
-    p.add(std::make_unique<stages::GridToParticles<dim>>());
   }
   return p;
 }

@@ -3,8 +3,8 @@
 #include <mpm/solid/solid_solver.h>
 
 #include <mpm/core/error.h>
+#include <mpm/core/stages/grid_to_particles.h>
 #include <mpm/core/stages/grid_velocity_update.h>
-#include <mpm/solid/stages/deformation_update.h>
 #include <mpm/solid/stages/return_map.h>
 #include <mpm/solid/stages/stress_forces.h>
 
@@ -49,12 +49,12 @@ stages::ImplicitSettings parse_implicit_settings(const Config& parent, const std
 }
 
 namespace {
-//! deformation -> plasticity (only when a material is plastic): the particle update of both
-//! elastoplastic solvers.
+//! g2p with the deformation update -> plasticity (only when a material is plastic): the
+//! particle update of both elastoplastic solvers.
 template <int dim>
 typename SolidSolver<dim>::Stages elastoplastic_particle_update(const std::vector<Material<dim>>& materials) {
   typename SolidSolver<dim>::Stages s;
-  s.push_back(std::make_unique<stages::DeformationUpdate<dim>>());
+  s.push_back(std::make_unique<stages::GridToParticles<dim>>(kElasticF));
   if (stages::any_plastic(materials)) s.push_back(std::make_unique<stages::ReturnMap<dim>>(materials));
   return s;
 }
@@ -106,6 +106,13 @@ typename ImplicitSolver<dim>::Stages ImplicitSolver<dim>::grid_update() const {
 template <int dim>
 typename ImplicitSolver<dim>::Stages ImplicitSolver<dim>::particle_update() const {
   return elastoplastic_particle_update(materials_);
+}
+
+template <int dim>
+typename GrainSolver<dim>::Stages GrainSolver<dim>::particle_update() const {
+  Stages s;
+  s.push_back(std::make_unique<stages::GridToParticles<dim>>());
+  return s;
 }
 
 template <int dim>

@@ -6,6 +6,5 @@ list(APPEND MPM_SOLID_SOURCES
   src/solid/stages/stress_forces.cpp
   src/solid/stages/domain_transfer.cpp
   src/solid/stages/implicit_update.cpp
-  src/solid/stages/deformation_update.cpp
   src/solid/stages/return_map.cpp
 )

@@ -32,10 +32,13 @@ void particles_to_grid(const Particles<dim>& particles, const ParticleBuckets<di
 template <int dim>
 void momentum_to_velocity(SparseGrid<dim>& grid, const TransferScheme& scheme);
 
-//! Updates v_p, C_p from grid.velocity (and velocity_old for FLIP) and advects x_p by dt.
+//! Updates v_p, C_p from grid.velocity (and velocity_old for FLIP) and advects x_p by dt. With
+//! `F` (a deformation gradient per particle) the same gather also updates
+//! F_p = (I + dt grad v_p) F_p, grad v_p = sum_i v_i (grad w_ip)^T before the advection.
 template <int dim>
 void grid_to_particles(Particles<dim>& particles, const ParticleBuckets<dim>& buckets, const Kernel& kernel,
-                       const TransferScheme& scheme, const SparseGrid<dim>& grid, double dt);
+                       const TransferScheme& scheme, const SparseGrid<dim>& grid, double dt,
+                       std::vector<Mat<dim>>* F = nullptr);
 
 //! out_i = sum_p w_ip values[p] on every node (out sized to the grid's node storage, zeroed
 //! first): a per-particle quantity carried to the grid with the P2G weights (a volume fraction).

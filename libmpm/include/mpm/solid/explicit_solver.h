@@ -1,7 +1,8 @@
 #pragma once
 //! The explicit symplectic-Euler elastoplastic step (docs/architecture.md, "The explicit solid
 //! step"): grid_update() = stress_forces -> grid_update (forces and gravity);
-//! particle_update() = deformation -> plasticity (only when a material is plastic). Stable for
+//! particle_update() = g2p with the deformation update -> plasticity (only when a material is
+//! plastic). Stable for
 //! dt < dx / c, c the fastest elastic wave of the materials.
 #include <mpm/solid/solid_channels.h>
 #include <mpm/solid/solid_solver.h>
@@ -35,7 +36,7 @@ public:
   void add_channels(Particles<dim>& /*particles*/) const override {}
   double wave_speed() const override { return 0.0; }
   Stages grid_update() const override;
-  Stages particle_update() const override { return {}; }
+  Stages particle_update() const override;  //!< g2p alone
 };
 
 }  // namespace mpm::solid

@@ -1,7 +1,7 @@
 #pragma once
 //! The implicit (backward Euler) elastoplastic step: grid_update() = implicit_update (Newton
-//! on the incremental potential, stages/implicit_update.h); particle_update() = deformation ->
-//! plasticity, as in the explicit step. Stable at any step: the time step follows the particle
+//! on the incremental potential, stages/implicit_update.h); particle_update() = g2p with the
+//! deformation update -> plasticity, as in the explicit step. Stable at any step: the time step follows the particle
 //! CFL condition alone, not the elastic wave speed.
 #include <mpm/geometry/collider.h>
 #include <mpm/solid/solid_channels.h>

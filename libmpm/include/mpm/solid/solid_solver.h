@@ -2,9 +2,9 @@
 //! The solid-step interface: what a solid solver adds to a step, so that a solid scene and the
 //! sediment of a coupled scene assemble their pipelines from the same solver and a scene can
 //! swap it (`solver:` in a solid scene, `sediment.solver:` in a coupled one). A pipeline runs
-//!   time_step -> sort -> p2g -> grid_update() -> boundary -> particle_update() -> g2p
-//! and a coupled step puts the exchange and the mixture projection between grid_update() and
-//! particle_update() (libcoupling). The implicit solver enforces walls and colliders inside its
+//!   time_step -> sort -> p2g -> grid_update() -> boundary -> particle_update()
+//! (particle_update() begins with g2p) and a coupled step puts the exchange and the mixture
+//! projection between grid_update() and particle_update() (libcoupling). The implicit solver enforces walls and colliders inside its
 //! grid update as well; the boundary stage after it then leaves its velocities unchanged.
 #include <mpm/core/config.h>
 #include <mpm/core/particles.h>
@@ -33,7 +33,8 @@ public:
   virtual double wave_speed() const = 0;
   //! From the transferred grid momentum to the grid velocity before the boundary conditions.
   virtual Stages grid_update() const = 0;
-  //! From the final grid velocity to the particle state that g2p completes.
+  //! From the final grid velocity to the new particle state: g2p (with the deformation update
+  //! where the solver tracks F), then what follows it.
   virtual Stages particle_update() const = 0;
 };
 

@@ -160,43 +160,62 @@ template <class Acc, class X>
 //! Moments of the node values v (Ch values apart in the patch; Lanes = Pack<T, Ch>) over the
 //! stencil: s = sum w v and t[a] = sum w n_a v with the integer node offsets
 //! n_a = rel_a - rel_a[0], so sum w rel_a v = t[a] + rel_a[0] s. Integer offsets turn the
-//! moments into sums of the products w v: a node costs one multiply and a few adds.
-template <int Ch, int dim, int S, class T, class Lanes>
-[[gnu::always_inline]] inline void collect(const Stencil<dim, S, T>& st, const T* patch, Lanes& s, Lanes (&t)[dim]) {
+//! moments into sums of the products w v: a node costs one multiply and a few adds. With
+//! `gradient` (the stencil computed with dw) also g[a] = sum (dw/dxi_a) v [1/cell], the velocity
+//! gradient's column a, from the same loads: the row sums of w v and dw v share each node.
+template <int Ch, bool gradient = false, int dim, int S, class T, class Lanes>
+[[gnu::always_inline]] inline void collect(const Stencil<dim, S, T>& st, const T* patch, Lanes& s, Lanes (&t)[dim],
+                                           [[maybe_unused]] Lanes* g = nullptr) {
   constexpr int W = patch_width<dim>;
-  const auto row = [&](int offset, Lanes& m0, Lanes& m1) {  // sum w v and sum n_0 w v along axis 0
+  // Along axis 0: sum w v, sum n_0 w v and (gradient) sum dw v.
+  const auto row = [&](int offset, Lanes& m0, Lanes& m1, [[maybe_unused]] Lanes& md) {
     for (int i = 0; i < S; ++i) {
       Lanes v;
       load_pack(v, patch + (offset + i) * Ch);
       const Lanes wv = st.w[0][i] * v;
       accumulate(i == 0, m0, wv);
       if (i > 0) accumulate(i == 1, m1, T(i) * wv);
+      if constexpr (gradient) accumulate(i == 0, md, st.dw[0][i] * v);
     }
   };
-  Lanes m0, m1;
+  Lanes m0, m1, md{};
   if constexpr (dim == 2) {
     for (int j = 0; j < S; ++j) {
-      row(st.patch_offset + W * j, m0, m1);
+      row(st.patch_offset + W * j, m0, m1, md);
       const Lanes b = st.w[1][j] * m0;
       accumulate(j == 0, s, b);
       accumulate(j == 0, t[0], st.w[1][j] * m1);
       if (j > 0) accumulate(j == 1, t[1], T(j) * b);
+      if constexpr (gradient) {
+        accumulate(j == 0, g[0], st.w[1][j] * md);
+        accumulate(j == 0, g[1], st.dw[1][j] * m0);
+      }
     }
   } else {
     for (int k = 0; k < S; ++k) {
-      Lanes M0, M1, M2;  // over the rows of one k: sum w v, sum n_0 w v, sum n_1 w v
+      Lanes M0, M1, M2;               // over the rows of one k: sum w v, sum n_0 w v, sum n_1 w v
+      [[maybe_unused]] Lanes G0, G1;  // (gradient) over the rows of one k: sum dw_0 w_1 v, sum w_0 dw_1 v
       for (int j = 0; j < S; ++j) {
-        row(st.patch_offset + W * (j + W * k), m0, m1);
+        row(st.patch_offset + W * (j + W * k), m0, m1, md);
         const Lanes b = st.w[1][j] * m0;
         accumulate(j == 0, M0, b);
         accumulate(j == 0, M1, st.w[1][j] * m1);
         if (j > 0) accumulate(j == 1, M2, T(j) * b);
+        if constexpr (gradient) {
+          accumulate(j == 0, G0, st.w[1][j] * md);
+          accumulate(j == 0, G1, st.dw[1][j] * m0);
+        }
       }
       const Lanes d = st.w[2][k] * M0;
       accumulate(k == 0, s, d);
       accumulate(k == 0, t[0], st.w[2][k] * M1);
       accumulate(k == 0, t[1], st.w[2][k] * M2);
       if (k > 0) accumulate(k == 1, t[2], T(k) * d);
+      if constexpr (gradient) {
+        accumulate(k == 0, g[0], st.w[2][k] * G0);
+        accumulate(k == 0, g[1], st.w[2][k] * G1);
+        accumulate(k == 0, g[2], st.dw[2][k] * M0);
+      }
     }
   }
 }
@@ -234,17 +253,26 @@ void p2g(const PS& P, const ParticleBuckets<dim>& buckets, const K& kernel, cons
 //! APIC (flip = false): v_p = sum w v_i, C_p = B_p D_p^-1 from `velocity` channels.
 //! FLIP (flip = true): v_p = a (v_p + sum w (v_i - v_i^old)) + (1 - a) v^PIC from `velocity`
 //! followed by `velocity_old` channels (2 dim of them). Both advect x_p += dt v^PIC.
-template <int dim, class K, bool flip, class PS, class T, std::size_t Ch>
+//! With `deform`, the same gather also updates F_p = (I + dt grad v_p) F_p in `F` (indexed like
+//! the particles), grad v_p = sum_i v_i (grad w_ip)^T at x_p before the advection: the
+//! deformation update without a second pass over particles and grid.
+template <int dim, class K, bool flip, bool deform = false, class PS, class T, std::size_t Ch>
 void g2p(PS& P, const ParticleBuckets<dim>& buckets, const K& kernel, const SparseGrid<dim>& grid,
-         const std::array<BasicChannelView<T>, Ch>& channels, T flip_ratio, T dt) {
+         const std::array<BasicChannelView<T>, Ch>& channels, T flip_ratio, T dt,
+         Eigen::Matrix<T, dim, dim>* F = nullptr) {
   static_assert(Ch == (flip ? 2 * dim : dim));
   using VecT = Eigen::Matrix<T, dim, 1>;
+  using MatT = Eigen::Matrix<T, dim, dim>;
   // APIC reads the velocity padded to a whole number of SIMD packets (the extra lane repeats
   // component 0 and is ignored), so the stencil sums are packet operations.
   constexpr int lanes = flip || dim != 3 ? int(Ch) : 4;
   std::array<BasicChannelView<T>, lanes> read;
   for (int c = 0; c < lanes; ++c) read[c] = channels[c < int(Ch) ? c : 0];
   const T inv_dx = static_cast<T>(1.0 / grid.dx());
+  // F_p <- (I + dt grad v) F_p with grad v = G inv_dx, G's columns g[a] [1/cell].
+  [[maybe_unused]] const auto deform_particle = [&](std::uint32_t p, const MatT& G) __attribute__((always_inline)) {
+    F[p] = (MatT::Identity() + (dt * inv_dx) * G) * F[p];
+  };
   const auto bucket = [&](const std::uint32_t* first, const std::uint32_t* last, const PatchFrame<dim>* f,
                           const T* patch) __attribute__((always_inline)) {
     Stencil<dim, K::support, T> st[chunk_size];
@@ -255,29 +283,40 @@ void g2p(PS& P, const ParticleBuckets<dim>& buckets, const K& kernel, const Spar
           prefetch(P.x[p]);
           prefetch(P.v[p]);
           if constexpr (!flip) prefetch(P.C[p]);
+          if constexpr (deform) prefetch(F[p]);
         },
         [&](std::uint32_t p, int q) __attribute__((always_inline)) {
-          st[q].template compute<flip>(kernel, f->cells(P.x[p]), f->origin);
+          st[q].template compute<flip || deform>(kernel, f->cells(P.x[p]), f->origin);
           if constexpr (!flip) st[q].inverse_inertia(inv_D[q]);
         },
         [&](std::uint32_t p, int q) __attribute__((always_inline)) {
           if constexpr (flip) {
             VecT v_pic = VecT::Zero();
             VecT dv = VecT::Zero();
-            st[q].for_each_node([&](int node, T w, const VecT&, const VecT&) {
+            MatT G = MatT::Zero();
+            st[q].for_each_node([&](int node, T w, const VecT& grad, const VecT&) {
               const Eigen::Map<const VecT> vi(patch + node * lanes);
               v_pic.noalias() += w * vi;
               dv.noalias() += w * (vi - Eigen::Map<const VecT>(patch + node * lanes + dim));
+              if constexpr (deform) G.noalias() += vi * grad.transpose();
             });
+            if constexpr (deform) deform_particle(p, G);
             P.v[p] = flip_ratio * (P.v[p] + dv) + (1 - flip_ratio) * v_pic;
             P.x[p] += dt * v_pic;
           } else {
             using Lanes = Pack<T, lanes>;
             Lanes s, t[dim];  // B_p = sum w v (x_i - x_p)^T [cells]: column a is t[a] + rel_a[0] s
-            collect<lanes>(st[q], patch, s, t);
+            Lanes g[dim];     // (deform) column a of grad v [1/cell]
+            collect<lanes, deform>(st[q], patch, s, t, g);
             for (int a = 0; a < dim; ++a) {
               const Lanes column = (t[a] + st[q].rel[a][0] * s) * (inv_D[q][a] * inv_dx);
               for (int b = 0; b < dim; ++b) P.C[p](b, a) = column[b];
+            }
+            if constexpr (deform) {
+              MatT G;
+              for (int a = 0; a < dim; ++a)
+                for (int b = 0; b < dim; ++b) G(b, a) = g[a][b];
+              deform_particle(p, G);
             }
             for (int b = 0; b < dim; ++b) {
               P.v[p][b] = s[b];

@@ -2,16 +2,26 @@
 #include <mpm/core/stage.h>
 #include <mpm/core/state.h>
 
+#include <string>
+
 namespace mpm::stages {
 
-//! G2P and advection: v_p, C_p from the grid; x_p += dt v_p^PIC.
+//! G2P and advection: v_p, C_p from the grid; x_p += dt v_p^PIC. Given the name of a matrix
+//! channel (the solid's elastic F), also the deformation update F_p = (I + dt grad v_p) F_p of
+//! every particle in the same gather (stress-free grains too: their owner resets F, so the loop
+//! stays branch-free).
 template <int dim>
 class GridToParticles final : public Stage<MpmState<dim>> {
 public:
+  explicit GridToParticles(std::string deformation = {}) : deformation_(std::move(deformation)) {}
   std::string name() const override { return "g2p"; }
-  std::vector<std::string> reads() const override { return {"grid.velocity", "particle.order"}; }
-  std::vector<std::string> writes() const override { return {"particle.v", "particle.C", "particle.x"}; }
+  std::vector<std::string> reads() const override;
+  std::vector<std::string> writes() const override;
   void run(MpmState<dim>& s) override;
+
+private:
+  std::string deformation_;       // channel updated with the velocity gradient; empty: none
+  std::vector<Mat<dim>> grad_v_;  // adaptive grids: the gradient before the gather
 };
 
 }  // namespace mpm::stages
