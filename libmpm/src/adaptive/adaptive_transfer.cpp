@@ -171,7 +171,8 @@ void pull_velocities(AdaptiveGrid<dim>& grid, const TransferScheme& scheme) {
 }
 
 template <int dim>
-void grid_to_particles(Particles<dim>& P, const TransferScheme& scheme, const AdaptiveGrid<dim>& grid, double dt) {
+void grid_to_particles(Particles<dim>& P, const TransferScheme& scheme, const AdaptiveGrid<dim>& grid, double dt,
+                       std::vector<Mat<dim>>* F) {
   MPM_ASSERT(grid.particle_count() == P.size());
   const bool apic = scheme.type == TransferScheme::Type::apic;
   // The uniform loops' C_p has neither the ghosts' terms nor their D_p: the particles near
@@ -181,7 +182,7 @@ void grid_to_particles(Particles<dim>& P, const TransferScheme& scheme, const Ad
   for (int n = 0; apic && n < grid.levels(); ++n)
     for (const std::uint32_t p : grid.near_embedded(n).particle) x_before[n].push_back(P.x[p]);
   for (int n = 0; n < grid.levels(); ++n)
-    mpm::grid_to_particles(P, grid.regular(n), grid.regular_kernel(), scheme, grid.level(n), dt);
+    mpm::grid_to_particles(P, grid.regular(n), grid.regular_kernel(), scheme, grid.level(n), dt, F);
   for (int n = 0; apic && n < grid.levels(); ++n)
     gather_each(grid.near_embedded(n).particle, grid, [&](std::size_t i, std::size_t p, int) {
       const GhostTerms<dim> t = ghost_terms(grid, n, grid.half_cells(p), x_before[n][i]);
@@ -190,6 +191,13 @@ void grid_to_particles(Particles<dim>& P, const TransferScheme& scheme, const Ad
   gather_each(grid.irregular(), grid, [&](std::size_t, std::size_t p, int n) {
     const SparseGrid<dim>& g = grid.level(n);
     const Vec<dim> xp = P.x[p];
+    if (F) {
+      Mat<dim> G = Mat<dim>::Zero();
+      grid.for_each_weight(n, grid.half_cells(p), xp, [&](Index k, double, const Vec<dim>& grad, const Vec<dim>&) {
+        G.noalias() += g.velocity[k] * grad.transpose();
+      });
+      (*F)[p] = (Mat<dim>::Identity() + dt * G) * (*F)[p];
+    }
     Vec<dim> v_pic = Vec<dim>::Zero();
     if (apic) {
       Mat<dim> B, D;
@@ -206,22 +214,6 @@ void grid_to_particles(Particles<dim>& P, const TransferScheme& scheme, const Ad
       P.C[p].setZero();
     }
     P.x[p] += dt * v_pic;
-  });
-}
-
-template <int dim>
-void velocity_gradient(const Particles<dim>& P, const AdaptiveGrid<dim>& grid, std::vector<Mat<dim>>& grad_v) {
-  MPM_ASSERT(grid.particle_count() == P.size());
-  grad_v.resize(P.size());
-  for (int n = 0; n < grid.levels(); ++n)
-    mpm::velocity_gradient(P, grid.regular(n), grid.regular_kernel(), grid.level(n), grad_v);
-  gather_each(grid.irregular(), grid, [&](std::size_t, std::size_t p, int n) {
-    const SparseGrid<dim>& g = grid.level(n);
-    Mat<dim> G = Mat<dim>::Zero();
-    grid.for_each_weight(n, grid.half_cells(p), P.x[p], [&](Index k, double, const Vec<dim>& grad, const Vec<dim>&) {
-      G.noalias() += g.velocity[k] * grad.transpose();
-    });
-    grad_v[p] = G;
   });
 }
 
@@ -250,8 +242,8 @@ std::vector<RealWeight<dim>> real_weights(const AdaptiveGrid<dim>& grid, int n, 
   template void momentum_to_velocity(AdaptiveGrid<dim>&, const TransferScheme&);                                \
   template void stress_to_grid_forces(const std::vector<Mat<dim>>&, const Particles<dim>&, AdaptiveGrid<dim>&); \
   template void pull_velocities(AdaptiveGrid<dim>&, const TransferScheme&);                                     \
-  template void grid_to_particles(Particles<dim>&, const TransferScheme&, const AdaptiveGrid<dim>&, double);    \
-  template void velocity_gradient(const Particles<dim>&, const AdaptiveGrid<dim>&, std::vector<Mat<dim>>&);     \
+  template void grid_to_particles(Particles<dim>&, const TransferScheme&, const AdaptiveGrid<dim>&, double,     \
+                                  std::vector<Mat<dim>>*);                                                      \
   template std::vector<RealWeight<dim>> real_weights(const AdaptiveGrid<dim>&, int, double, const Vec<dim>&);
 MPM_INSTANTIATE(2)
 MPM_INSTANTIATE(3)

@@ -31,18 +31,16 @@ template <int dim>
 void stress_to_grid_forces(const std::vector<Mat<dim>>& weighted_stress, const Particles<dim>& particles,
                            AdaptiveGrid<dim>& grid);
 
-//! Fills the ghosts from the real nodes after the grid update; G2P and velocity_gradient read them.
+//! Fills the ghosts from the real nodes after the grid update; G2P reads them.
 template <int dim>
 void pull_velocities(AdaptiveGrid<dim>& grid, const TransferScheme& scheme);
 
-//! Updates v_p and C_p (APIC) or v_p (FLIP, C_p = 0) and advects x_p by dt with v^PIC.
+//! Updates v_p and C_p (APIC) or v_p (FLIP, C_p = 0) and advects x_p by dt with v^PIC; with
+//! `F`, also F_p = (I + dt grad v_p) F_p, grad v_p = sum_i v_i (grad w_ip)^T at x_p before the
+//! advection (the uniform loops gather it with v and C, mpm::grid_to_particles).
 template <int dim>
 void grid_to_particles(Particles<dim>& particles, const TransferScheme& scheme, const AdaptiveGrid<dim>& grid,
-                       double dt);
-
-//! grad v_p = sum_i v_i (grad w_ip)^T [1/s].
-template <int dim>
-void velocity_gradient(const Particles<dim>& particles, const AdaptiveGrid<dim>& grid, std::vector<Mat<dim>>& grad_v);
+                       double dt, std::vector<Mat<dim>>* F = nullptr);
 
 //! The weights of one particle on the real nodes: w_ip and grad w_ip [1/m] by (level, storage
 //! index), summed over its ghosts. For tests and diagnostics; the transfers never build it.

@@ -4,14 +4,12 @@
 //   x_p += dt v_p^PIC
 // and, for a solid, the deformation update (sec. 3.2)  F_p <- (I + dt grad v_p) F_p,
 // grad v_p = sum_i v_i (grad w_ip)^T, with the grid velocities after boundary conditions. On a
-// uniform grid both come from one gather (transfer.h); the trial F^E of a plastic material is
-// projected afterwards by stage 'plasticity'.
+// uniform grid (and for the regular particles of an adaptive one) both come from one gather
+// (transfer.h); the trial F^E of a plastic material is projected afterwards by stage 'plasticity'.
 #include <mpm/adaptive/adaptive_transfer.h>
 #include <mpm/core/finite_guard.h>
 #include <mpm/core/stages/grid_to_particles.h>
 #include <mpm/core/transfer.h>
-
-#include <tbb/parallel_for.h>
 
 namespace mpm::stages {
 
@@ -33,18 +31,10 @@ template <int dim>
 void GridToParticles<dim>::run(MpmState<dim>& s) {
   Particles<dim>& P = s.particles;
   std::vector<Mat<dim>>* F = deformation_.empty() ? nullptr : &P.template channel<Mat<dim>>(deformation_);
-  if (s.adaptive) {
-    if (F) {  // the gradient at x_p before the gather advects it
-      adaptive::velocity_gradient(P, *s.adaptive, grad_v_);
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.size(), 4096), [&](const auto& r) {
-        for (std::size_t p = r.begin(); p != r.end(); ++p)
-          (*F)[p] = (Mat<dim>::Identity() + s.dt * grad_v_[p]) * (*F)[p];
-      });
-    }
-    adaptive::grid_to_particles(P, s.transfer, *s.adaptive, s.dt);
-  } else {
+  if (s.adaptive)
+    adaptive::grid_to_particles(P, s.transfer, *s.adaptive, s.dt, F);
+  else
     grid_to_particles(P, s.buckets, s.kernel, s.transfer, s.grid, s.dt, F);
-  }
   if (F) check_finite(*F, name(), "particle", "deformation gradient F");
   check_finite(P.v, name(), "particle", "velocity");
 }

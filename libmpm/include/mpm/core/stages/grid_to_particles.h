@@ -20,8 +20,7 @@ public:
   void run(MpmState<dim>& s) override;
 
 private:
-  std::string deformation_;       // channel updated with the velocity gradient; empty: none
-  std::vector<Mat<dim>> grad_v_;  // adaptive grids: the gradient before the gather
+  std::string deformation_;  // channel updated with the velocity gradient; empty: none
 };
 
 }  // namespace mpm::stages
