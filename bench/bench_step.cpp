@@ -11,7 +11,7 @@
 //   jello: a fixed-corotated cube 0.4 m wide thrown onto the floor at (1, -2, 0.5) m/s from
 //          touching it (the sticky floor strains it from the first step).
 // The library runs the scene's own pipeline (solid::load_solid_scene: time step, sort, P2G,
-// stress forces, grid update, walls, deformation, return map, G2P). The reference is the
+// stress forces, grid update, walls, G2P with the deformation update, return map). The reference is the
 // straightforward version of that step, one thread, kept here: a dense grid, one loop over the
 // particles that computes each stress (Eigen's JacobiSVD) and scatters mass, APIC momentum and
 // force, a loop over the nodes, and one loop that gathers v, C and grad v, updates F and

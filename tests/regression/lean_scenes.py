@@ -7,7 +7,7 @@ summary.json ("info": "stages", "memory_bytes.<field>"):
           fluid field and runs no fluid, pressure, exchange or volume-fraction stage; its stages,
           its memory per field and its motion are those of the same scene run by the solid app;
   fluid   a fluid-only scene (dam break) holds no particle.F / particle.plastic and runs no
-          stress_forces, deformation or plasticity stage;
+          stress_forces or plasticity stage;
   elastic an elastic scene (jello_collide) runs no plasticity stage;
   uniform a scene without the key `adaptive` builds nothing of the adaptive grid: no refine or
           ghost_velocities stage, no particle.level, one grid; the adaptive jello has all three;
@@ -162,8 +162,8 @@ def main():
                     if re.search(r"particle\.(F|plastic)$", k) and v > 0}
     c.expect("fluid: no particle.F / particle.plastic memory", not solid_fields, str(solid_fields))
     c.expect("fluid: the memory report is there", fluid_memory.get("particle.x", 0) > 0)
-    solid_stages = [s for s in stages(fluid) if re.search(r"stress_forces|deformation|plasticity", s)]
-    c.expect("fluid: no stress_forces, deformation or plasticity stage", not solid_stages, ",".join(solid_stages))
+    solid_stages = [s for s in stages(fluid) if re.search(r"stress_forces|plasticity", s)]
+    c.expect("fluid: no stress_forces or plasticity stage", not solid_stages, ",".join(solid_stages))
     c.expect("fluid: a pressure stage runs", "pressure" in stages(fluid), fluid["info"]["stages"])
 
     # An elastic scene runs no plasticity stage.

@@ -4,7 +4,7 @@
 //            explicit estimate of the step),
 //   continuum -> discrete if phi_p < phi_low, discrete -> continuum if phi_p > phi_high,
 //   F^E = I and plastic = 0 for every particle that is discrete now or was during the step
-//   (DeformationUpdate moved its F; a new continuum particle starts stress-free), and a
+//   (g2p moved its F; a new continuum particle starts stress-free), and a
 //   dilatant sand's rest packing unknown (the return map starts it at the critical packing).
 // The stencil reads the nodes through node_index: after advection a particle may leave the
 // patch of the bucket it was sorted into, and nodes that are not allocated hold no sediment.

@@ -147,11 +147,7 @@ void stress_to_nodes(const std::vector<Mat<dim>>& weighted_stress, const Particl
         detail::scatter<dim, dim>(g, buckets, channels, [&](std::uint32_t p, const PatchFrame<dim>& f, double* patch) {
           Stencil<dim, K::support> st;
           st.compute(k, f.cells(P.x[p]), f.origin);
-          const Mat<dim> A = -inv_dx * weighted_stress[p];
-          st.for_each_node([&](int node, double, const Vec<dim>& grad, const Vec<dim>&) {
-            const Vec<dim> fi = A * grad;
-            for (int a = 0; a < dim; ++a) patch[node * dim + a] += fi[a];
-          });
+          detail::spread_gradient<dim>(st, Mat<dim>(-inv_dx * weighted_stress[p]), patch, 0);
         });
       },
       kernel);

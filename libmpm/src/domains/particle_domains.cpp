@@ -301,11 +301,7 @@ void corners_to_grid(ParticleDomains<dim>& d, const Kernel& kernel, SparseGrid<d
                                    // A material point: its stress as standard MPM scatters it.
                                    st.compute(k, f.cells(d.x[c]), f.origin);
                                    detail::spread<false>(st, values, patch);
-                                   const Mat<dim> A = -inv_dx * d.stress[c];
-                                   st.for_each_node([&](int node, double, const Vec<dim>& grad, const Vec<dim>&) {
-                                     const Vec<dim> fi = A * grad;
-                                     for (int a = 0; a < dim; ++a) patch[node * Ch + 1 + dim + a] += fi[a];
-                                   });
+                                   detail::spread_gradient<Ch>(st, Mat<dim>(-inv_dx * d.stress[c]), patch, 1 + dim);
                                  });
       },
       kernel);

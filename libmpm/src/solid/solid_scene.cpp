@@ -249,8 +249,8 @@ Pipeline<MpmState<dim>> make_solid_pipeline(const SolidScene<dim>& scene) {
   if (scene.refinement && scene.refinement->follow_particles)
     p.add(std::make_unique<stages::RefineGrid<dim>>(
         adaptive::build_tree(*scene.refinement, scene.settings, scene.colliders)));
-  // Particle domains (elastic only) replace sort, p2g, the explicit stress forces, the
-  // deformation update and g2p by the two transfers through the corners (domain_transfer.h).
+  // Particle domains replace sort, p2g, the explicit stress forces and g2p (with the deformation
+  // update) by the two transfers through the corners (domain_transfer.h).
   if (scene.state.domains) {
     p.add(std::make_unique<stages::DomainsToGrid<dim>>(scene.materials));
     if (implicit)

@@ -376,6 +376,9 @@ void ImplicitUpdate<dim>::apply_hessian(const MpmState<dim>& s, const std::vecto
 template <int dim>
 void ImplicitUpdate<dim>::run(MpmState<dim>& s) {
   MPM_VERIFY(!s.adaptive, InputError, "solver 'implicit' runs on a uniform grid only (the scene is adaptive)");
+  MPM_VERIFY(!s.domains || s.domains->point_count == 0, InputError,
+             "solver 'implicit' with particle domains needs domains on every body (material points take no part "
+             "in its solve)");
   SparseGrid<dim>& g = s.grid;
   momentum_to_velocity(g, s.transfer);
   const std::vector<double>& mass = unknown_mass(s);

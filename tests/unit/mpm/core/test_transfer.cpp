@@ -154,7 +154,55 @@ void check_fused_deformation(const Kernel& kernel, const TransferScheme& scheme)
   CHECK(scale > 0.1);  // the update is not negligible
   CHECK(worst < 1e-13 * scale);
 }
+//! The stress scatter f_i = -sum_p S_p grad w_ip against the textbook loop over each
+//! particle's nodes with the gradient formed per node from the kernel's axis weights.
+template <int dim>
+void check_stress_scatter(const Kernel& kernel) {
+  CAPTURE(dim);
+  CAPTURE(kernel_name(kernel));
+  SparseGrid<dim> grid(Vec<dim>::Zero(), Vec<dim>::Ones(), 1.0 / 16);
+  Particles<dim> P = random_cloud<dim>(dim == 2 ? 2000 : 8000, Vec<dim>::Constant(0.2), Vec<dim>::Constant(0.8), 9);
+  ParticleBuckets<dim> buckets;
+  sort_into_buckets(P, kernel, grid, buckets);
+  std::vector<Mat<dim>> S(P.size());
+  for (std::size_t p = 0; p < P.size(); ++p) S[p] = P.C[p];  // random, not symmetric
+  stress_to_grid_forces(S, P, buckets, kernel, grid);
+  std::vector<Vec<dim>> expected(grid.node_storage(), Vec<dim>::Zero());
+  std::visit(
+      [&](const auto& k) {
+        constexpr int support = std::decay_t<decltype(k)>::support;
+        for (std::size_t p = 0; p < P.size(); ++p) {
+          int base[dim];
+          double w[dim][support], dw[dim][support];
+          for (int a = 0; a < dim; ++a) k((P.x[p][a] - grid.origin()[a]) / grid.dx(), base[a], w[a], dw[a]);
+          for (int t = 0; t < ipow(support, dim); ++t) {
+            IVec<dim> node;
+            Vec<dim> grad = Vec<dim>::Ones() / grid.dx();
+            for (int a = 0, rest = t; a < dim; ++a, rest /= support) {
+              node[a] = base[a] + rest % support;
+              for (int b = 0; b < dim; ++b) grad[b] *= b == a ? dw[a][rest % support] : w[a][rest % support];
+            }
+            expected[grid.node_index(node)] -= S[p] * grad;
+          }
+        }
+      },
+      kernel);
+  double worst = 0.0, scale = 0.0;
+  for (std::size_t i = 0; i < expected.size(); ++i) {
+    worst = std::max(worst, (grid.force[i] - expected[i]).norm());
+    scale = std::max(scale, expected[i].norm());
+  }
+  REQUIRE(scale > 0.0);
+  CHECK(worst < 1e-13 * scale);
+}
 }  // namespace
+
+TEST_CASE("the stress scatter is the textbook sum of -S grad w over each particle's nodes") {
+  for (const Kernel& k : {Kernel{QuadraticBSpline{}}, Kernel{CubicBSpline{}}, Kernel{UGimp{0.3}}}) {
+    check_stress_scatter<2>(k);
+    check_stress_scatter<3>(k);
+  }
+}
 
 TEST_CASE("G2P with the deformation update fused: F (I + dt grad v) to round-off, v, C, x unchanged") {
   TransferScheme flip;

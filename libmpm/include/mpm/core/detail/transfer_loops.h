@@ -147,6 +147,34 @@ template <bool affine, int dim, int S, class T, class Node>
   }
 }
 
+//! Adds A grad w_i [1/cell] to the Ch-channel patch entries at channel `first` (dim values) of
+//! every stencil node: the stress scatter f_i -= S grad w_i with A = -S / dx. The gradient
+//! factors per axis, grad w = (dw_0 w_1 w_2, w_0 dw_1 w_2, w_0 w_1 dw_2), so along a row of
+//! axis 0 the value is w_0[i] P + dw_0[i] Q with P = A_1 dw_1 w_2 + A_2 w_1 dw_2 and
+//! Q = A_0 w_1 w_2 (A_a the columns of A) formed once per row: two multiply-adds per node and
+//! component where the per-node gradient and matrix product take a dozen.
+template <int Ch, int dim, int S, class T>
+[[gnu::always_inline]] inline void spread_gradient(const Stencil<dim, S, T>& st, const Eigen::Matrix<T, dim, dim>& A,
+                                                   T* patch, int first) {
+  using VecT = Eigen::Matrix<T, dim, 1>;
+  constexpr int W = patch_width<dim>;
+  const auto row = [&](int offset, const VecT& P, const VecT& Q) {
+    for (int i = 0; i < S; ++i) {
+      const VecT f = st.w[0][i] * P + st.dw[0][i] * Q;
+      for (int a = 0; a < dim; ++a) patch[(offset + i) * Ch + first + a] += f[a];
+    }
+  };
+  if constexpr (dim == 2) {
+    for (int j = 0; j < S; ++j) row(st.patch_offset + W * j, st.dw[1][j] * A.col(1), st.w[1][j] * A.col(0));
+  } else {
+    for (int k = 0; k < S; ++k)
+      for (int j = 0; j < S; ++j) {
+        const VecT P = (st.dw[1][j] * st.w[2][k]) * A.col(1) + (st.w[1][j] * st.dw[2][k]) * A.col(2);
+        row(st.patch_offset + W * (j + W * k), P, (st.w[1][j] * st.w[2][k]) * A.col(0));
+      }
+  }
+}
+
 //! acc = x for the first term of a sum, acc += x after: starting from zero is not free
 //! (-0 + 0 = +0 keeps the compiler from dropping the add).
 template <class Acc, class X>

@@ -1,8 +1,9 @@
 #pragma once
 //! The transfers of a scene with particle domains (mpm/domains/particle_domains.h): they take the
-//! place of sort -> p2g -> stress_forces and of deformation -> g2p in the explicit step,
+//! place of sort -> p2g -> stress_forces and of g2p (with the deformation update) in the
+//! explicit step,
 //!   [enrichment ->] time_step -> domains_to_grid -> grid_update -> boundary -> domains_from_grid,
-//! and of sort -> p2g and deformation -> g2p around the implicit update (which solves for the
+//! and of sort -> p2g and g2p around the implicit update (which solves for the
 //! grid and the enriched corners together, implicit_update.h).
 //! Bodies with domains are elastic (a return map would need F^E apart from the corners' F);
 //! plastic bodies run among them as material points (particle_domains.h), whose return map
@@ -66,7 +67,7 @@ public:
   DomainsFromGrid(geometry::ColliderSet<dim> colliders, bool enriched_stepped)
       : colliders_(std::move(colliders)), enriched_stepped_(enriched_stepped) {}
   std::string name() const override { return "domains_from_grid"; }
-  std::vector<std::string> reads() const override { return {"grid.velocity", "particle.v"}; }
+  std::vector<std::string> reads() const override { return {"grid.velocity", "particle.v", "particle.F"}; }
   std::vector<std::string> writes() const override { return {"particle.x", "particle.v", "particle.F"}; }
   void run(MpmState<dim>& s) override;
 
