@@ -252,7 +252,7 @@ Pipeline<MpmState<dim>> make_solid_pipeline(const SolidScene<dim>& scene) {
   // Particle domains replace sort, p2g, the explicit stress forces and g2p (with the deformation
   // update) by the two transfers through the corners (domain_transfer.h).
   if (scene.state.domains) {
-    p.add(std::make_unique<stages::DomainsToGrid<dim>>(scene.materials));
+    p.add(std::make_unique<stages::DomainsToGrid<dim>>(scene.materials, !implicit));
     if (implicit)
       for (auto& stage : scene.solver->grid_update()) p.add(std::move(stage));
     else

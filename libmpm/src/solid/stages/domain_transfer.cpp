@@ -37,38 +37,39 @@ void DomainsToGrid<dim>::run(MpmState<dim>& s) {
   const Particles<dim>& P = s.particles;
   check_pairing(d, P, name());
   const std::vector<Mat<dim>>& F = solid::elastic_F(P);
-  const std::vector<double>& plastic = solid::plastic_state(P);
-  const std::vector<Mat<dim>>* cache = solid::stress_cache(P);
-  // A domain's stress acts through its corners as V^0 P (eq. 8); a material point's as
-  // standard MPM's V^0 tau at its own corner (its zero reference gradients keep it out of the
-  // corner sums).
-  weighted_stress_.resize(P.size());
-  for (std::size_t m = 0; m < materials_.size(); ++m)
-    std::visit(
-        [&](const auto& model, const auto& plasticity) {
-          using Plasticity = std::decay_t<decltype(plasticity)>;
-          const bool cached = cache && !std::is_same_v<Plasticity, plasticity::NoPlasticity>;
-          tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.size(), 4096), [&](const auto& r) {
-            for (std::size_t p = r.begin(); p != r.end(); ++p) {
-              if (P.material[p] != m) continue;
-              if (d.is_point(p))
-                weighted_stress_[p] = weighted_kirchhoff(model, plasticity, P.volume0[p], F[p], plastic[p],
-                                                         cached ? &(*cache)[p] : nullptr);
-              else
-                weighted_stress_[p] = P.volume0[p] * model.first_piola(F[p]);
-            }
-          });
-        },
-        materials_[m].elastic, materials_[m].plasticity);
-  check_finite(weighted_stress_, name(), "particle", "stress");
-  if (d.point_count) {
-    if (d.stress.size() != d.corner_count()) d.stress.assign(d.corner_count(), Mat<dim>::Zero());
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.size(), 4096), [&](const auto& r) {
-      for (std::size_t p = r.begin(); p != r.end(); ++p)
-        if (d.is_point(p)) d.stress[d.corner_of[p][0]] = weighted_stress_[p];
-    });
+  if (forces_) {
+    const std::vector<double>& plastic = solid::plastic_state(P);
+    const std::vector<Mat<dim>>* cache = solid::stress_cache(P);
+    // A domain's stress acts through its corners as V^0 P (eq. 8); a material point's as
+    // standard MPM's V^0 tau at its own corner (its zero reference gradients keep it out of the
+    // corner sums).
+    weighted_stress_.resize(P.size());
+    for (std::size_t m = 0; m < materials_.size(); ++m)
+      std::visit(
+          [&](const auto& model, const auto& plasticity) {
+            using Plasticity = std::decay_t<decltype(plasticity)>;
+            const bool cached = cache && !std::is_same_v<Plasticity, plasticity::NoPlasticity>;
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.size(), 4096), [&](const auto& r) {
+              for (std::size_t p = r.begin(); p != r.end(); ++p) {
+                if (P.material[p] != m) continue;
+                if (d.is_point(p))
+                  weighted_stress_[p] = weighted_kirchhoff(model, plasticity, P.volume0[p], F[p], plastic[p],
+                                                           cached ? &(*cache)[p] : nullptr);
+                else
+                  weighted_stress_[p] = P.volume0[p] * model.first_piola(F[p]);
+              }
+            });
+          },
+          materials_[m].elastic, materials_[m].plasticity);
+    check_finite(weighted_stress_, name(), "particle", "stress");
+    if (d.point_count) {
+      if (d.stress.size() != d.corner_count()) d.stress.assign(d.corner_count(), Mat<dim>::Zero());
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.size(), 4096), [&](const auto& r) {
+        for (std::size_t p = r.begin(); p != r.end(); ++p)
+          if (d.is_point(p)) d.stress[d.corner_of[p][0]] = weighted_stress_[p];
+      });
+    }
   }
-
   constexpr int K = domains::ParticleDomains<dim>::corners;
   d.mass.resize(d.corner_count());
   d.momentum.resize(d.corner_count());
@@ -91,7 +92,10 @@ void DomainsToGrid<dim>::run(MpmState<dim>& s) {
       d.momentum[c] = momentum / K;
     }
   });
-  domains::corner_forces(d, weighted_stress_, d.force);
+  if (forces_)
+    domains::corner_forces(d, weighted_stress_, d.force);
+  else
+    d.force.assign(d.corner_count(), Vec<dim>::Zero());
   domains::corners_to_grid(d, s.kernel, s.grid, name());
 }
 

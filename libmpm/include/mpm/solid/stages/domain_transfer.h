@@ -38,10 +38,13 @@ private:
 
 //! Corner masses, momenta and forces f_alpha = - sum_p V_p^0 P(F_p) grad_X w_alpha_p (eq. 8),
 //! scattered to the grid from the corners; the material points' V^0 tau as in StressForces.
+//! Without `forces` (an implicit step, which forms its forces inside the solve) the stress and
+//! the corner forces are skipped and grid.force stays zero.
 template <int dim>
 class DomainsToGrid final : public Stage<MpmState<dim>> {
 public:
-  explicit DomainsToGrid(std::vector<Material<dim>> materials) : materials_(std::move(materials)) {}
+  explicit DomainsToGrid(std::vector<Material<dim>> materials, bool forces = true)
+      : materials_(std::move(materials)), forces_(forces) {}
   std::string name() const override { return "domains_to_grid"; }
   std::vector<std::string> reads() const override {
     return {"particle.v", "particle.mass", "particle.volume0", "particle.material", "particle.F", "particle.plastic"};
@@ -53,6 +56,7 @@ public:
 
 private:
   std::vector<Material<dim>> materials_;
+  bool forces_;
   std::vector<Mat<dim>> weighted_stress_;  // V_p^0 P_p per particle [N m]
 };
 
