@@ -53,10 +53,15 @@ int run(const CommandLine& cl, const Config& scene) {
     scene.fail("rest_state", "the rest-state error needs exactly one body of an elastic material (" +
                                  std::to_string(elastic_bodies) +
                                  " here) and a solver that tracks F (explicit or implicit)");
-  if (rest_state) {
+  // The elastic body's particles (a particle keeps its material).
+  const auto elastic_particles = [&] {
     std::vector<std::size_t> body;
     for (std::size_t p = 0; p < P.size(); ++p)
       if (elastic_material(P.material[p])) body.push_back(p);
+    return body;
+  };
+  if (rest_state) {
+    const std::vector<std::size_t> body = elastic_particles();
     const auto rest = solid::rest_shape(gather(P.x, body), gather(*F, body), gather(P.mass, body));
     auto& X =
         P.template add_channel<Vec<dim>>("rest_position", Vec<dim>::Constant(std::nan("")), ChannelUse{false, true});
@@ -88,9 +93,7 @@ int run(const CommandLine& cl, const Config& scene) {
       {"energy_growth", growth}, {"energy_scale", scale}, {"particles", double(solid.state.particles.size())}};
   if (rest_state) {
     const std::vector<Vec<dim>>& X = P.template channel<Vec<dim>>("rest_position");
-    std::vector<std::size_t> body;
-    for (std::size_t p = 0; p < P.size(); ++p)
-      if (!std::isnan(X[p][0])) body.push_back(p);
+    const std::vector<std::size_t> body = elastic_particles();
     summary.emplace_back("rest_state_error",
                          solid::rest_state_error(gather(X, body), gather(P.x, body), gather(P.mass, body)));
   }

@@ -31,7 +31,7 @@ std::size_t ParticleDomains<dim>::memory_bytes() const {
          (sharing_begin.capacity() + sharing.capacity()) * sizeof(std::uint32_t) +
          surface.capacity() * sizeof(surface[0]) + buckets.memory_bytes() + mass.capacity() * sizeof(double) +
          (momentum.capacity() + force.capacity()) * sizeof(Vec<dim>) + enriched.capacity() + point.capacity() +
-         (stress.capacity() + velocity_gradient.capacity()) * sizeof(Mat<dim>);
+         velocity_gradient.capacity() * sizeof(Mat<dim>);
 }
 
 template <int dim>
@@ -266,7 +266,8 @@ void mark_enrichment(ParticleDomains<dim>& d, const std::vector<Mat<dim>>& F, bo
 }
 
 template <int dim>
-void corners_to_grid(ParticleDomains<dim>& d, const Kernel& kernel, SparseGrid<dim>& grid, const std::string& stage) {
+void corners_to_grid(ParticleDomains<dim>& d, const Kernel& kernel, SparseGrid<dim>& grid, const std::string& stage,
+                     const std::vector<Mat<dim>>& point_stress) {
   sort_into_buckets<dim, double>(d.x, kernel, grid, d.buckets, {}, stage);
   const std::size_t n = grid.node_storage();
   std::fill(grid.mass.begin(), grid.mass.end(), 0.0);
@@ -280,29 +281,29 @@ void corners_to_grid(ParticleDomains<dim>& d, const Kernel& kernel, SparseGrid<d
     channels[1 + dim + a] = detail::component_view<dim>(grid.force, a);
   }
   using Node = Eigen::Matrix<double, Ch, 1>;
-  MPM_VERIFY(d.point_count == 0 || d.stress.size() == d.corner_count(), Error,
+  MPM_VERIFY(d.point_count == 0 || point_stress.size() == d.particle_count(), Error,
              "stage '" + stage + "': the material points' stress is not set");
   const double inv_dx = 1.0 / grid.dx();
   std::visit(
       [&](const auto& k) {
         using K = std::decay_t<decltype(k)>;
-        detail::scatter<dim, Ch>(grid, d.buckets, channels,
-                                 [&](std::uint32_t c, const PatchFrame<dim>& f, double* patch) {
-                                   if (!d.enriched.empty() && d.enriched[c]) return;  // stops at the corner
-                                   Stencil<dim, K::support> st;
-                                   Node values[dim + 1];
-                                   for (Node& v : values) v.setZero();
-                                   values[0] << d.mass[c], d.momentum[c], d.force[c];
-                                   if (!d.point[c]) {
-                                     st.template compute<false>(k, f.cells(d.x[c]), f.origin);
-                                     detail::spread<false>(st, values, patch);
-                                     return;
-                                   }
-                                   // A material point: its stress as standard MPM scatters it.
-                                   st.compute(k, f.cells(d.x[c]), f.origin);
-                                   detail::spread<false>(st, values, patch);
-                                   detail::spread_gradient<Ch>(st, Mat<dim>(-inv_dx * d.stress[c]), patch, 1 + dim);
-                                 });
+        detail::scatter<dim, Ch>(
+            grid, d.buckets, channels, [&](std::uint32_t c, const PatchFrame<dim>& f, double* patch) {
+              if (!d.enriched.empty() && d.enriched[c]) return;  // stops at the corner
+              Stencil<dim, K::support> st;
+              Node values[dim + 1];
+              for (Node& v : values) v.setZero();
+              values[0] << d.mass[c], d.momentum[c], d.force[c];
+              if (!d.point[c]) {
+                st.template compute<false>(k, f.cells(d.x[c]), f.origin);
+                detail::spread<false>(st, values, patch);
+                return;
+              }
+              // A material point: its stress as standard MPM scatters it.
+              st.compute(k, f.cells(d.x[c]), f.origin);
+              detail::spread<false>(st, values, patch);
+              detail::spread_gradient<Ch>(st, Mat<dim>(-inv_dx * point_stress[d.point_particle(c)]), patch, 1 + dim);
+            });
       },
       kernel);
 }
@@ -536,7 +537,8 @@ void restore(ParticleDomains<dim>& d, const CarriedData& data) {
   template void add_body(ParticleDomains<dim>&, std::size_t, const std::vector<Vec<dim>>&, double, const Vec<dim>&); \
   template void add_points(ParticleDomains<dim>&, std::size_t, const std::vector<Vec<dim>>&);                        \
   template void index_sharing(ParticleDomains<dim>&);                                                                \
-  template void corners_to_grid(ParticleDomains<dim>&, const Kernel&, SparseGrid<dim>&, const std::string&);         \
+  template void corners_to_grid(ParticleDomains<dim>&, const Kernel&, SparseGrid<dim>&, const std::string&,          \
+                                const std::vector<Mat<dim>>&);                                                       \
   template double enrichment_metric<dim>(const Mat<dim>&);                                                           \
   template void mark_enrichment(ParticleDomains<dim>&, const std::vector<Mat<dim>>&, bool);                          \
   template void grid_to_corners(ParticleDomains<dim>&, const Kernel&, const SparseGrid<dim>&, bool);                 \

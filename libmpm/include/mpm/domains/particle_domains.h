@@ -83,17 +83,17 @@ struct ParticleDomains {
   double enriched_length = std::numeric_limits<double>::infinity();
 
   // Per-step scratch, kept to avoid allocations.
-  ParticleBuckets<dim> buckets;    //!< corners ordered by grid block
-  std::vector<double> mass;        //!< m_alpha [kg]
-  std::vector<Vec<dim>> momentum;  //!< p_alpha [kg m/s]; after G2P the corner velocity v_alpha [m/s]
-  std::vector<Vec<dim>> force;     //!< f_alpha [N]; after G2P the FLIP increment of v_alpha [m/s]
-  // Material points only (sized to the corners when there are any).
-  std::vector<Mat<dim>> stress;             //!< S_p = V_p^0 tau_p of a point's corner [N m]
-  std::vector<Mat<dim>> velocity_gradient;  //!< grad v at a point's corner after G2P [1/s]
+  ParticleBuckets<dim> buckets;             //!< corners ordered by grid block
+  std::vector<double> mass;                 //!< m_alpha [kg]
+  std::vector<Vec<dim>> momentum;           //!< p_alpha [kg m/s]; after G2P the corner velocity v_alpha [m/s]
+  std::vector<Vec<dim>> force;              //!< f_alpha [N]; after G2P the FLIP increment of v_alpha [m/s]
+  std::vector<Mat<dim>> velocity_gradient;  //!< grad v at a material point's corner after G2P [1/s]
 
   std::size_t corner_count() const { return x.size(); }
   //! True when particle p is a material point (no domain).
   bool is_point(std::size_t p) const { return point[corner_of[p][0]] != 0; }
+  //! The particle whose corner c is, for a material point's corner (after index_sharing).
+  std::size_t point_particle(std::size_t c) const { return sharing[sharing_begin[c]] / corners; }
   std::size_t particle_count() const { return corner_of.size(); }
   std::size_t memory_bytes() const;
 
@@ -159,12 +159,12 @@ void mark_enrichment(ParticleDomains<dim>& domains, const std::vector<Mat<dim>>&
 //! Sorts the corners into buckets of `grid` (allocating the blocks their stencils touch) and
 //! scatters m_alpha, p_alpha, f_alpha (in domains.mass, momentum, force) of the corners not
 //! enriched into grid.mass, grid.velocity (momentum) and grid.force, each zeroed first, and
-//! the stress of the material points' corners (domains.stress) as - S_p grad w_i.
-//! NumericalError naming `stage` when a corner (enriched or not) is not finite or its stencil
-//! leaves the grid.
+//! the material points' stress S_p = V_p^0 tau_p (`point_stress`, indexed by particle; read
+//! only at points) as - S_p grad w_i. NumericalError naming `stage` when a corner (enriched or
+//! not) is not finite or its stencil leaves the grid.
 template <int dim>
 void corners_to_grid(ParticleDomains<dim>& domains, const Kernel& kernel, SparseGrid<dim>& grid,
-                     const std::string& stage);
+                     const std::string& stage, const std::vector<Mat<dim>>& point_stress = {});
 
 //! For the corners not enriched: v_alpha = sum_i w_i(x_alpha) v_i into domains.momentum, with
 //! `flip` the increment sum_i w_i (v_i - v_i^old) into domains.force, and at the material

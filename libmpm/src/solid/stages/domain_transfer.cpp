@@ -62,13 +62,6 @@ void DomainsToGrid<dim>::run(MpmState<dim>& s) {
           },
           materials_[m].elastic, materials_[m].plasticity);
     check_finite(weighted_stress_, name(), "particle", "stress");
-    if (d.point_count) {
-      if (d.stress.size() != d.corner_count()) d.stress.assign(d.corner_count(), Mat<dim>::Zero());
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.size(), 4096), [&](const auto& r) {
-        for (std::size_t p = r.begin(); p != r.end(); ++p)
-          if (d.is_point(p)) d.stress[d.corner_of[p][0]] = weighted_stress_[p];
-      });
-    }
   }
   constexpr int K = domains::ParticleDomains<dim>::corners;
   d.mass.resize(d.corner_count());
@@ -76,7 +69,7 @@ void DomainsToGrid<dim>::run(MpmState<dim>& s) {
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, d.corner_count(), 4096), [&](const auto& r) {
     for (std::size_t c = r.begin(); c != r.end(); ++c) {
       if (d.point[c]) {  // the particle's own m and m v, not a sum of K equal shares
-        const std::size_t p = d.sharing[d.sharing_begin[c]] / K;
+        const std::size_t p = d.point_particle(c);
         d.mass[c] = P.mass[p];
         d.momentum[c] = P.mass[p] * P.v[p];
         continue;
@@ -96,7 +89,7 @@ void DomainsToGrid<dim>::run(MpmState<dim>& s) {
     domains::corner_forces(d, weighted_stress_, d.force);
   else
     d.force.assign(d.corner_count(), Vec<dim>::Zero());
-  domains::corners_to_grid(d, s.kernel, s.grid, name());
+  domains::corners_to_grid(d, s.kernel, s.grid, name(), weighted_stress_);
 }
 
 template <int dim>

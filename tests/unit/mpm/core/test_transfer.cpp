@@ -154,6 +154,7 @@ void check_fused_deformation(const Kernel& kernel, const TransferScheme& scheme)
   CHECK(scale > 0.1);  // the update is not negligible
   CHECK(worst < 1e-13 * scale);
 }
+
 //! The stress scatter f_i = -sum_p S_p grad w_ip against the textbook loop over each
 //! particle's nodes with the gradient formed per node from the kernel's axis weights.
 template <int dim>
