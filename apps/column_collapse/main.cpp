@@ -17,6 +17,7 @@
 // beyond the law and fails this check: data/reference/lube2005.md.
 #include <mpm/core/app.h>
 #include <mpm/core/runner.h>
+#include <mpm/cuda/device_pipeline.h>
 #include <mpm/geometry/body_config.h>
 #include <mpm/geometry/collider_config.h>
 #include <mpm/geometry/seeding.h>
@@ -108,10 +109,11 @@ int run(const CommandLine& cl, const Config& scene) {
   }
   solid::add_particles<dim>(solid, seeded, geometry::particle_volume<dim>(dx, ppc), std::uint16_t{0}, Vec<dim>::Zero(),
                             "column");
+  const cuda::Device device = cuda::parse_device(scene);
   scene.reject_unknown_keys();
 
-  // 3. Run.
-  auto pipeline = solid::make_solid_pipeline(solid);
+  // 3. Run (on the CPU, or on a GPU with `device: cuda`).
+  auto pipeline = cuda::make_solid_pipeline(solid, device, scene);
   Runner<dim> runner("column_collapse", cl, scene, settings);
   runner.set_elastic_energy([&](const MpmState<dim>& s) { return solid::elastic_energy(s, solid.materials); });
   runner.run(solid.state, pipeline);

@@ -1,5 +1,6 @@
 // solid_scene: runs any generic solid scene file (materials, bodies, colliders, walls) with
-// the explicit elastoplastic pipeline; the scene-specific apps add their own keys and results.
+// the explicit elastoplastic pipeline (on the CPU, or on a GPU with `device: cuda`,
+// mpm/cuda/device_pipeline.h); the scene-specific apps add their own keys and results.
 //
 //   solid_scene data/scenes/jello_collide.yaml --set time.end=0.05
 //
@@ -15,6 +16,7 @@
 // al., Table 1; solid/rest_state.h).
 #include <mpm/core/app.h>
 #include <mpm/core/runner.h>
+#include <mpm/cuda/device_pipeline.h>
 #include <mpm/solid/rest_state.h>
 #include <mpm/solid/solid_channels.h>
 #include <mpm/solid/solid_scene.h>
@@ -67,8 +69,9 @@ int run(const CommandLine& cl, const Config& scene) {
         P.template add_channel<Vec<dim>>("rest_position", Vec<dim>::Constant(std::nan("")), ChannelUse{false, true});
     for (std::size_t i = 0; i < body.size(); ++i) X[body[i]] = rest[i];
   }
+  const cuda::Device device = cuda::parse_device(scene);
   scene.reject_unknown_keys();
-  auto pipeline = solid::make_solid_pipeline(solid);
+  auto pipeline = cuda::make_solid_pipeline(solid, device, scene);
   Runner<dim> runner("solid_scene", cl, scene, solid.settings);
   runner.set_elastic_energy([&](const MpmState<dim>& s) { return solid::elastic_energy(s, solid.materials); });
   runner.run(solid.state, pipeline);

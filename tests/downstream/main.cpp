@@ -6,12 +6,14 @@
 #include <fluid/scene/fluid_scene.h>
 #include <mpm/core/advance.h>
 #include <mpm/core/transfer.h>
+#include <mpm/cuda/device_pipeline.h>
 #include <mpm/geometry/collider_config.h>
 #include <mpm/geometry/seeding.h>
 #include <mpm/solid/solid_solver.h>
 
 #include <cmath>
 #include <cstdio>
+#include <string>
 
 namespace {
 
@@ -66,6 +68,9 @@ time: {end: 0.02}
 }  // namespace
 
 int main() {
+  // mpm::cuda links with or without the CUDA back-end; without a GPU it says why.
+  const std::string gpu = mpm::cuda::unavailable_reason();
+  std::printf("downstream: CUDA back-end %s\n", gpu.empty() ? "ready" : gpu.c_str());
   const bool ok = core_p2g() && coupled_step();
   std::printf("downstream: %s\n", ok ? "ok" : "FAILED");
   return ok ? 0 : 1;

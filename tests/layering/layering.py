@@ -8,6 +8,7 @@ belongs to a target, and may include only the headers of the targets it links:
 
   mpm::core           mpm/{core,adaptive,domains,io,geometry,math}
   mpm::solid          + mpm/{solid,constitutive,plasticity}
+  mpm::cuda           mpm::solid + mpm/cuda/    (the solid step on a GPU; only apps include it)
   fluid::fluid        mpm::core + fluid/        (never solid code, never coupling)
   coupling::coupling  everything above + coupling/
   apps                everything
@@ -22,8 +23,10 @@ import sys
 
 CORE = ("mpm/core/", "mpm/adaptive/", "mpm/domains/", "mpm/io/", "mpm/geometry/", "mpm/math/")
 SOLID = CORE + ("mpm/solid/", "mpm/constitutive/", "mpm/plasticity/")
+CUDA = SOLID + ("mpm/cuda/",)
 FLUID = CORE + ("fluid/",)
 COUPLING = SOLID + ("fluid/", "coupling/")
+APPS = COUPLING + ("mpm/cuda/",)
 PROJECT = ("mpm/", "fluid/", "coupling/")
 
 # (path prefix relative to ROOT, target name, allowed project include prefixes)
@@ -32,10 +35,12 @@ TARGETS = [
     ("libmpm/include/mpm/constitutive/", "mpm::solid", SOLID),
     ("libmpm/include/mpm/plasticity/", "mpm::solid", SOLID),
     ("libmpm/src/solid/", "mpm::solid", SOLID),
+    ("libmpm/include/mpm/cuda/", "mpm::cuda", CUDA),
+    ("libmpm/src/cuda/", "mpm::cuda", CUDA),
     ("libmpm/", "mpm::core", CORE),
     ("libfluid/", "fluid::fluid", FLUID),
     ("libcoupling/", "coupling::coupling", COUPLING),
-    ("apps/", "apps", COUPLING),
+    ("apps/", "apps", APPS),
 ]
 # The library that owns a header, by its include prefix.
 OWNER = [("mpm/", "libmpm/"), ("fluid/", "libfluid/"), ("coupling/", "libcoupling/")]

@@ -64,6 +64,11 @@ public:
     }
   }
 
+  //! Stage::synchronize of every stage: after stepping, before the state is read.
+  void synchronize(State& state) {
+    for (auto& stage : stages_) stage->synchronize(state);
+  }
+
   //! The carried data of every stage, each name prefixed "<stage index>.<stage name>/".
   CarriedData carried() const {
     CarriedData all;

@@ -305,10 +305,11 @@ void Runner<dim, State>::run(State& state, Pipeline<State>& pipeline) {
   const int frames = settings_.frame_count();
   const auto& out = settings_.output;
   for (int frame = first_frame + 1; frame <= frames; ++frame) {
-    if (!advance(state, pipeline, std::min(frame * settings_.frame_dt, settings_.end_time),
-                 settings_.max_steps_per_frame, 1e-12 * settings_.frame_dt,
-                 [] { return StopSignals::received() != 0; }))
-      stop(state, pipeline, frame - 1, true);
+    const bool reached =
+        advance(state, pipeline, std::min(frame * settings_.frame_dt, settings_.end_time),
+                settings_.max_steps_per_frame, 1e-12 * settings_.frame_dt, [] { return StopSignals::received() != 0; });
+    pipeline.synchronize(state);
+    if (!reached) stop(state, pipeline, frame - 1, true);
     append_diagnostics(state, frame, pipeline);
     write_frame(state, frame);
     if (frame == first_frame + 1 && cl_.restart) warn_output_size(frame);

@@ -37,6 +37,10 @@ public:
   //! The stage's diagnostics columns, the same names after every step (default: none); the
   //! Runner writes them to diagnostics.csv, so no app wires a stage's figures by hand.
   virtual std::vector<Diagnostic> diagnostics() const { return {}; }
+  //! Brings `state` up to date where the stage keeps part of it elsewhere between steps (the
+  //! CUDA step keeps the particles on the GPU); whoever reads the state after stepping (the
+  //! Runner, for output, diagnostics and checkpoints) calls Pipeline::synchronize first.
+  virtual void synchronize(State& /*state*/) {}
 };
 
 }  // namespace mpm

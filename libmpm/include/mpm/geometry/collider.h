@@ -68,6 +68,7 @@ public:
   const Shape<dim>& shape() const { return shape_; }
   const Contact& contact() const { return contact_; }
   const Vec<dim>& velocity() const { return velocity_; }
+  Motion motion() const { return motion_; }
   const Eigen::Vector3d& angular_velocity() const { return omega_; }
   bool hollow() const { return hollow_; }
   //! The largest obstacle speed at points within `reach` [m] of the rotation centre [m/s].

@@ -73,6 +73,8 @@ public:
   }
   Vec<dim> lo() const { return center_ - half_; }
   Vec<dim> hi() const { return center_ + half_; }
+  const Vec<dim>& center() const { return center_; }
+  const Vec<dim>& half_size() const { return half_; }
 
 private:
   detail::BoxDistance<dim> distance(const Vec<dim>& x) const {

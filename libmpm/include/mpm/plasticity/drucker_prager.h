@@ -117,6 +117,9 @@ public:
 
   //! mu_cone = alpha d / sqrt(2): the static friction, shear stress over pressure in simple shear.
   double friction() const { return alpha_ * dim / std::numbers::sqrt2; }
+  //! The cone's alpha and k of y(tau) above (the CUDA back-end's copy of the map reads them).
+  double cone_alpha() const { return alpha_; }
+  double cone_k() const { return k_; }
 
   //! y of the Kirchhoff stress of Fe [Pa]; <= 0 is admissible.
   double yield_function(const Mat<dim>& Fe) const {

@@ -36,6 +36,7 @@ public:
   }
 
   double modulus_scale(double /*plastic*/) const { return 1.0; }
+  double yield_stress() const { return yield_stress_; }  //!< [Pa]
 
   //! y of the Kirchhoff stress of Fe [Pa]; <= 0 is admissible.
   double yield_function(const Mat<dim>& Fe) const {

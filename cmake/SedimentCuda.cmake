@@ -1,0 +1,25 @@
+# Enables CUDA for libmpm's device step when SEDIMENT_WITH_CUDA asks for it (AUTO: where nvcc is
+# found; ON: required; OFF: never looked for). Sets SEDIMENT_CUDA_ENABLED.
+set(SEDIMENT_CUDA_ENABLED OFF)
+if(NOT SEDIMENT_WITH_CUDA STREQUAL "OFF")
+  include(CheckLanguage)
+  if(NOT DEFINED CMAKE_CUDA_ARCHITECTURES)
+    # Hopper (H100, H200); set CMAKE_CUDA_ARCHITECTURES for another GPU.
+    set(CMAKE_CUDA_ARCHITECTURES 90)
+  endif()
+  if(NOT DEFINED CMAKE_CUDA_COMPILER AND NOT DEFINED ENV{CUDACXX} AND EXISTS /usr/local/cuda/bin/nvcc)
+    set(CMAKE_CUDA_COMPILER /usr/local/cuda/bin/nvcc)
+  endif()
+  check_language(CUDA)
+  if(CMAKE_CUDA_COMPILER)
+    enable_language(CUDA)
+    set(CMAKE_CUDA_STANDARD 17)  # the kernels need no more; CMake 3.25 has no CUDA20 for nvcc 13
+    set(CMAKE_CUDA_STANDARD_REQUIRED ON)
+    set(SEDIMENT_CUDA_ENABLED ON)
+    message(STATUS "CUDA back-end: ${CMAKE_CUDA_COMPILER} (architectures ${CMAKE_CUDA_ARCHITECTURES})")
+  elseif(SEDIMENT_WITH_CUDA STREQUAL "ON")
+    message(FATAL_ERROR "SEDIMENT_WITH_CUDA=ON but no CUDA compiler (nvcc) was found; set CMAKE_CUDA_COMPILER")
+  else()
+    message(STATUS "CUDA back-end: no nvcc found, device: cuda scenes will be refused")
+  endif()
+endif()
