@@ -261,7 +261,8 @@ std::unique_ptr<Stage<MpmState<3>>> make_device_step(const solid::SolidScene<3>&
   double table = 1.0;
   for (int a = 0; a < 3; ++a) table *= (d.node_counts[a] + 3) / 4;
   const bool single = device.single_precision;
-  const double need = double(s.particles.size()) * detail::bytes_per_particle(single) + table * 8.0 +
+  const double need = double(s.particles.size()) * detail::bytes_per_particle(single) +
+                      table * double(detail::bytes_per_table_entry()) +
                       std::min(8.0 * blocks.size(), table) * detail::bytes_per_block(single);
   const double free = double(detail::device_free_bytes());
   if (need > 0.75 * free)

@@ -151,11 +151,14 @@ __global__ void keys_kernel(ParticleView<T> P, GridFrame g, unsigned* keys, unsi
   bool inside = true;
 #pragma unroll
   for (int a = 0; a < 3; ++a) {
-    int base = first_node(cells(P.x[a * P.n + p], g.origin[a], g.inv_dx));
-    if (!(base >= 0 && base + 2 < g.node_counts[a])) {  // NaN positions fail here too
-      inside = false;
-      base = 0;
-    }
+    // Tested before the conversion to int, which would turn NaN into 0 and saturate huge values:
+    // the first stencil node must lie in [0, node_counts - 3].
+    const T first = add_rn(cells(P.x[a * P.n + p], g.origin[a], g.inv_dx), T(-0.5));
+    int base = 0;
+    if (first >= T(0) && first < T(g.node_counts[a] - 2))
+      base = first_node(cells(P.x[a * P.n + p], g.origin[a], g.inv_dx));
+    else
+      inside = false;  // NaN positions too
     b[a] = base >> kBlockBits;
   }
   if (!inside) atomicOr(errors, kOutside);
@@ -393,10 +396,12 @@ __global__ void grid_kernel(GridFrame g, GridView<T> G, const unsigned* active, 
   if (n >= nodes) return;
   const T m = G.mass[n];
   T v[3] = {T(0), T(0), T(0)};
-  if (m > T(0)) {
+  if (!(m <= T(0))) {  // a NaN mass too: the check below must see it, as grid_update does
     const T gv[3] = {T(gravity.x), T(gravity.y), T(gravity.z)};
 #pragma unroll
     for (int a = 0; a < 3; ++a) v[a] = G.momentum[a * G.nodes + n] / m + dt * gv[a];
+    // Checked before the obstacles, which could set a non-finite velocity to a finite one.
+    if (!(isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2]))) atomicOr(errors, kGridNotFinite);
     int b[3];
     decode(g, active[n / kBlockNodes], b);
     const int local = static_cast<int>(n % kBlockNodes);
@@ -422,7 +427,6 @@ __global__ void grid_kernel(GridFrame g, GridView<T> G, const unsigned* active, 
 #pragma unroll
     for (int a = 0; a < 3; ++a) v[a] = T(u[a]);
   }
-  if (!(isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2]))) atomicOr(errors, kGridNotFinite);
 #pragma unroll
   for (int a = 0; a < 3; ++a) G.momentum[a * G.nodes + n] = v[a];
 }
@@ -702,6 +706,7 @@ public:
   }
 
   void step(double dt, double t_end) override {
+    timed_ = n_ > 0;
     if (n_ == 0) return;
     cudaEventRecord(events_[0]);
     unsigned* errors = reinterpret_cast<unsigned*>(scalars_.get() + 1);
@@ -781,6 +786,7 @@ public:
   }
 
   StepTimes last_times() const override {
+    if (!timed_) return {};  // no particles, no step on the device
     return {events_.seconds(0, 1), events_.seconds(1, 2), events_.seconds(2, 3), events_.seconds(3, 4), reordered_};
   }
 
@@ -822,6 +828,7 @@ private:
   Buffer<std::uint16_t> material_, spare_material_;
   Buffer<unsigned> host_index_, spare_host_index_;  //!< the host's index of each device particle
   bool reordered_ = false;
+  bool timed_ = false;  //!< the last step recorded its events
   Buffer<unsigned> keys_, index_, segment_keys_, counts_, offsets_, flags_, slot_, active_;
   Buffer<unsigned char> temp_;
   Buffer<unsigned long long> scalars_;
@@ -874,7 +881,9 @@ std::size_t device_free_bytes() {
 std::size_t bytes_per_particle(bool single_precision) {
   return 2 * (33 * (single_precision ? 4 : 8) + 2 + 4) + 4 * 4 + 3 * 4 + 16;
 }
-std::size_t bytes_per_block(bool single_precision) { return 4 * kBlockNodes * (single_precision ? 4 : 8) + 3 * 4; }
+std::size_t bytes_per_block(bool single_precision) { return 4 * kBlockNodes * (single_precision ? 4 : 8); }
+// flags, slot and active: 3 x 4 bytes per block of the domain, and the scan's storage.
+std::size_t bytes_per_table_entry() { return 3 * 4 + 4; }
 
 }  // namespace mpm::cuda::detail
 

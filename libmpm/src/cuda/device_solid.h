@@ -101,8 +101,10 @@ std::string device_unavailable_reason();
 std::string device_description();
 //! Free device memory [B] (0 without a device).
 std::size_t device_free_bytes();
-//! Bytes the device step holds per particle and per active grid block, for the memory check.
+//! Bytes the device step holds per particle, per active grid block and per block of the
+//! domain's block table, for the memory check.
 std::size_t bytes_per_particle(bool single_precision);
 std::size_t bytes_per_block(bool single_precision);
+std::size_t bytes_per_table_entry();
 
 }  // namespace mpm::cuda::detail

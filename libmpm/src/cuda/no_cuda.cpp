@@ -18,6 +18,7 @@ std::string device_description() { return "none"; }
 std::size_t device_free_bytes() { return 0; }
 std::size_t bytes_per_particle(bool) { return 0; }
 std::size_t bytes_per_block(bool) { return 0; }
+std::size_t bytes_per_table_entry() { return 0; }
 
 }  // namespace detail
 }  // namespace mpm::cuda

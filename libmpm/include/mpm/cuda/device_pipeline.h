@@ -18,8 +18,8 @@
 //! dilatancy or rate dependence) or von Mises plasticity, domain walls and half-space, box and
 //! sphere colliders (fixed or translating). Anything else under `device: cuda` is an input
 //! error naming the key, before any output is written; so is a build without the CUDA
-//! back-end, a machine without a GPU, or a scene whose estimated device memory exceeds the
-//! GPU's free memory (both figures in the message).
+//! back-end, a machine without a GPU, or a scene whose estimated device memory exceeds three
+//! quarters of the GPU's free memory (both figures in the message).
 #include <mpm/core/config.h>
 #include <mpm/core/pipeline.h>
 #include <mpm/core/state.h>
