@@ -19,6 +19,56 @@ namespace {
 
 using Triplet = Eigen::Triplet<double>;
 
+//! Spaces with fewer unknowns are smoothed and multiplied in one thread: below this size the
+//! colour sweeps and row blocks cost more to schedule than they save.
+constexpr Eigen::Index kParallelRows = 4096;
+
+//! y = A x over the rows of A in parallel (Eigen's sparse products run in one thread).
+template <class Matrix>
+void parallel_multiply(const Matrix& A, const Eigen::VectorXd& x, Eigen::VectorXd& y) {
+  y.resize(A.rows());
+  const int* start = A.outerIndexPtr();
+  const int* column = A.innerIndexPtr();
+  const double* value = A.valuePtr();
+  const auto rows = [&](Eigen::Index first, Eigen::Index last) {
+    for (Eigen::Index i = first; i < last; ++i) {
+      double sum = 0.0;
+      for (int k = start[i]; k < start[i + 1]; ++k) sum += value[k] * x[column[k]];
+      y[i] = sum;
+    }
+  };
+  if (A.rows() < kParallelRows) return rows(0, A.rows());
+  tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, A.rows(), 2048),
+                    [&](const auto& r) { rows(r.begin(), r.end()); });
+}
+
+//! The rows of each colour (c = sum_a (q_a mod 3) 3^a of the box coordinates q), or none when
+//! two rows of one colour are coupled (a periodic axis whose extent is not a multiple of 3).
+//! The coarse Galerkin stencils reach two cells along each axis, so a colour's rows, 3 apart,
+//! never meet.
+template <int dim, class Matrix>
+std::vector<std::vector<int>> colour_rows(const Matrix& A, const std::vector<IVec<dim>>& cell) {
+  const Eigen::Index n = A.rows();
+  std::vector<int> colour(static_cast<std::size_t>(n));
+  int colours = 1;
+  for (int a = 0; a < dim; ++a) colours *= 3;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    int c = 0;
+    for (int a = dim - 1; a >= 0; --a) c = 3 * c + cell[static_cast<std::size_t>(i)][a] % 3;
+    colour[static_cast<std::size_t>(i)] = c;
+  }
+  const int* start = A.outerIndexPtr();
+  const int* column = A.innerIndexPtr();
+  for (Eigen::Index i = 0; i < n; ++i)
+    for (int k = start[i]; k < start[i + 1]; ++k)
+      if (column[k] != i && colour[static_cast<std::size_t>(column[k])] == colour[static_cast<std::size_t>(i)])
+        return {};
+  std::vector<std::vector<int>> rows(static_cast<std::size_t>(colours));
+  for (Eigen::Index i = 0; i < n; ++i)
+    rows[static_cast<std::size_t>(colour[static_cast<std::size_t>(i)])].push_back(int(i));
+  return rows;
+}
+
 //! Index of box coordinates q in `extent`, x fastest.
 template <int dim>
 std::int64_t box_index(const IVec<dim>& q, const IVec<dim>& extent) {
@@ -169,6 +219,7 @@ void ModulatedMultigrid<dim>::build(int index) {
     const Eigen::VectorXd diagonal = s.A.diagonal();
     s.inverse_diagonal = (diagonal.array() > 0.0).select(diagonal.cwiseInverse(), 0.0);
     if (n == 0) return;
+    if (n >= kParallelRows && n > options_.max_bottom_unknowns) s.colours = colour_rows<dim>(s.A, s.cell);
     if (n <= options_.max_bottom_unknowns) {
       Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(Eigen::MatrixXd(s.A));
       const Eigen::VectorXd& lambda = eigen.eigenvalues();
@@ -278,10 +329,23 @@ void ModulatedMultigrid<dim>::gauss_seidel(Space& s, bool forward) const {
     for (int k = start[i]; k < start[i + 1]; ++k) sum -= value[k] * x[column[k]];
     x[i] += s.inverse_diagonal[i] * sum;
   };
-  if (forward)
-    for (Eigen::Index i = 0; i < n; ++i) update(i);
-  else
-    for (Eigen::Index i = n - 1; i >= 0; --i) update(i);
+  if (s.colours.empty()) {
+    if (forward)
+      for (Eigen::Index i = 0; i < n; ++i) update(i);
+    else
+      for (Eigen::Index i = n - 1; i >= 0; --i) update(i);
+    return;
+  }
+  // Colour by colour, forward then (post-smoothing) backward: Gauss-Seidel in the colour
+  // ordering and its reverse, so the V-cycle stays symmetric. Within a colour the rows are
+  // independent: the result does not depend on the threads.
+  const int colours = static_cast<int>(s.colours.size());
+  for (int c = 0; c < colours; ++c) {
+    const std::vector<int>& rows = s.colours[static_cast<std::size_t>(forward ? c : colours - 1 - c)];
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rows.size(), 512), [&](const auto& r) {
+      for (std::size_t k = r.begin(); k != r.end(); ++k) update(rows[k]);
+    });
+  }
 }
 
 template <int dim>
@@ -295,12 +359,16 @@ void ModulatedMultigrid<dim>::cycle(int index) {
   for (int sweep = 0; sweep < options_.smoothing_sweeps; ++sweep) gauss_seidel(s, true);
   // Child k solves for the correction S_k P0 e from the right-hand side (S_k P0)^T residual.
   auto restrict_residual = [&](const Child& child) {
-    spaces_[child.space].b.noalias() = s.R0 * child.sign.cwiseProduct(s.residual);
+    s.scratch = child.sign.cwiseProduct(s.residual);
+    parallel_multiply(s.R0, s.scratch, spaces_[child.space].b);
   };
-  auto add_correction = [&](const Child& child) { s.x += child.sign.cwiseProduct(s.P0 * spaces_[child.space].x); };
+  auto add_correction = [&](const Child& child) {
+    parallel_multiply(s.P0, spaces_[child.space].x, s.scratch);
+    s.x += child.sign.cwiseProduct(s.scratch);
+  };
   auto update_residual = [&s] {
-    s.residual = s.b;
-    s.residual.noalias() -= s.A * s.x;
+    parallel_multiply(s.A, s.x, s.residual);
+    s.residual = s.b - s.residual;
   };
   const int K = static_cast<int>(s.children.size());
   if (index == 0) {

@@ -45,15 +45,18 @@
 //!    design measurements').
 //!  * Smoother: one forward Gauss-Seidel sweep before the coarse corrections and one backward
 //!    sweep after (the adjoint), so the cycle is a symmetric positive definite map on the
-//!    range of A and CG stays valid.
+//!    range of A and CG stays valid. On spaces of at least 4096 unknowns the sweep goes colour
+//!    by colour (box coordinates mod 3 per axis: 27 colours in 3D, whose rows, 3 cells apart,
+//!    the 5^3 Galerkin stencils never couple), each colour's rows in parallel, and backward
+//!    in the reverse colour order; the result does not depend on the thread count.
 //!  * Bottom: the Moore-Penrose pseudo-inverse of a space with at most max_bottom_unknowns
 //!    unknowns (covers singular closed boxes); a space that can neither coarsen (odd periodic
 //!    count) nor be inverted is smoothed only.
 //! The iteration count stays flat under refinement where plain CG's grows. The Galerkin
 //! stencils have 5^3 points, so the nonzeros of all levels ("operator complexity") are a few
 //! times the fine ones and grow slowly with resolution, and the set-up (the Galerkin products)
-//! costs about as much as a solve. The fine level's children and the rows of the Galerkin
-//! products run in parallel. docs/performance.md has the figures ('Multigrid design
+//! costs about as much as a solve. The fine level's children, the rows of the Galerkin
+//! products, the smoother's colours and the rows of the cycle's products run in parallel. docs/performance.md has the figures ('Multigrid design
 //! measurements') and compares the other back-ends ('Pressure solvers').
 #include <fluid/pressure/cell_operator.h>
 
@@ -105,7 +108,11 @@ private:
     std::vector<Child> children;
     Matrix P0, R0;           //!< interpolation from the children's box and its transpose
     Eigen::MatrixXd bottom;  //!< pseudo-inverse; empty unless a bottom space
-    Eigen::VectorXd b, x, residual;
+    Eigen::VectorXd b, x, residual, scratch;
+    //! The rows of each colour (box coordinates mod 3 per axis): no row couples to another of
+    //! its colour, so a colour's rows relax in parallel; empty: the space is smoothed in order
+    //! (small spaces, or a periodic wrap that joins two rows of one colour).
+    std::vector<std::vector<int>> colours;
   };
 
   void build(int space);
