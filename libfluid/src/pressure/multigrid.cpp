@@ -5,6 +5,9 @@
 
 #include <mpm/core/error.h>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <array>
 
@@ -37,20 +40,29 @@ void transfer_axis(const std::vector<double>& in, const IVec<dim>& in_extent, st
   const int n_in = in_extent[a], n_out = out_extent[a];
   const int n_fine = prolong ? n_out : n_in, n_coarse = prolong ? n_in : n_out;
   out.assign(static_cast<std::size_t>(out_extent.template cast<std::int64_t>().prod()), 0.0);
-  for (std::int64_t o = 0; o < outer; ++o)
-    for (int i = 0; i < n_fine; ++i) {
-      const AxisWeights w = axis_weights(i, n_coarse, dirichlet, periodic);
-      const std::int64_t fine = (o * n_fine + i) * inner;
-      const std::int64_t near = (o * n_coarse + w.coarse[0]) * inner, far = (o * n_coarse + w.coarse[1]) * inner;
-      if (prolong) {
-        for (std::int64_t q = 0; q < inner; ++q) out[fine + q] = w.weight[0] * in[near + q] + w.weight[1] * in[far + q];
-      } else {
-        for (std::int64_t q = 0; q < inner; ++q) {
-          out[near + q] += w.weight[0] * in[fine + q];
-          out[far + q] += w.weight[1] * in[fine + q];
+  // Tasks of (outer index, chunk of the inner range): each writes its own entries of out, for
+  // every i in the same order, so the result does not depend on the threads. Chunks of the
+  // inner range give the last axis (outer = 1) its parallelism.
+  constexpr std::int64_t chunk = 2048;
+  const std::int64_t chunks = (inner + chunk - 1) / chunk;
+  tbb::parallel_for(tbb::blocked_range<std::int64_t>(0, outer * chunks), [&](const auto& tasks) {
+    for (std::int64_t task = tasks.begin(); task != tasks.end(); ++task) {
+      const std::int64_t o = task / chunks, q0 = (task % chunks) * chunk, q1 = std::min(inner, q0 + chunk);
+      for (int i = 0; i < n_fine; ++i) {
+        const AxisWeights w = axis_weights(i, n_coarse, dirichlet, periodic);
+        const std::int64_t fine = (o * n_fine + i) * inner;
+        const std::int64_t near = (o * n_coarse + w.coarse[0]) * inner, far = (o * n_coarse + w.coarse[1]) * inner;
+        if (prolong) {
+          for (std::int64_t q = q0; q < q1; ++q) out[fine + q] = w.weight[0] * in[near + q] + w.weight[1] * in[far + q];
+        } else {
+          for (std::int64_t q = q0; q < q1; ++q) {
+            out[near + q] += w.weight[0] * in[fine + q];
+            out[far + q] += w.weight[1] * in[fine + q];
+          }
         }
       }
     }
+  });
 }
 
 template <int dim>
