@@ -63,14 +63,13 @@ MPM_HD M3<T> multiply(const M3<T>& A, const M3<T>& B) {
   return C;
 }
 
-//! A^T B
 template <class T>
-MPM_HD M3<T> transpose_multiply(const M3<T>& A, const M3<T>& B) {
-  M3<T> C;
+MPM_HD M3<T> transposed(const M3<T>& A) {
+  M3<T> At;
   MPM_UNROLL
   for (int i = 0; i < 3; ++i) MPM_UNROLL
-  for (int j = 0; j < 3; ++j) C(i, j) = A(0, i) * B(0, j) + A(1, i) * B(1, j) + A(2, i) * B(2, j);
-  return C;
+  for (int j = 0; j < 3; ++j) At(i, j) = A(j, i);
+  return At;
 }
 
 //! U diag(s) V^T
@@ -229,7 +228,7 @@ MPM_HD Svd3<T> svd3(const M3<T>& F) {
   for (int i = 0; i < 3; ++i) MPM_UNROLL
   for (int j = 0; j < 3; ++j) A(i, j) = F(i, j) * scale;
 
-  M3<T> S = transpose_multiply(A, A);
+  M3<T> S = multiply(transposed(A), A);
   const T squared_tolerance = Limits<T>::epsilon * Limits<T>::epsilon;
   for (int sweep = 0; sweep < 12; ++sweep) {
     const T off = S(0, 1) * S(0, 1) + S(0, 2) * S(0, 2) + S(1, 2) * S(1, 2);

@@ -80,7 +80,6 @@ struct ParticleView {
   T *x, *v, *C, *F, *tau, *plastic, *mass, *volume0;
   std::uint16_t* material;
   std::size_t n;
-  __device__ T& at(T* channel, int component, std::size_t p) const { return channel[component * n + p]; }
 };
 
 struct GridFrame {
@@ -156,7 +155,7 @@ __global__ void keys_kernel(ParticleView<T> P, GridFrame g, unsigned* keys, unsi
     const T first = add_rn(cells(P.x[a * P.n + p], g.origin[a], g.inv_dx), T(-0.5));
     int base = 0;
     if (first >= T(0) && first < T(g.node_counts[a] - 2))
-      base = first_node(cells(P.x[a * P.n + p], g.origin[a], g.inv_dx));
+      base = static_cast<int>(floor(first));  // first_node(), from the same rounded value
     else
       inside = false;  // NaN positions too
     b[a] = base >> kBlockBits;
