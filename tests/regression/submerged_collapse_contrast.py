@@ -33,10 +33,11 @@ failures = []
 
 coarse = ["grid.dx=0.01", "walls.thickness=0.01", "time.end=1.5"]
 dense = ["sediment.packing_fraction=0.60", "bodies.0.hi=[0.07,0.052]"]
-# The control: the same scene without the two dilatancy keys.
+# The control: the same scene without the dilatancy keys (and the rate block, whose suspension
+# viscosity needs the critical packing).
 text = pathlib.Path(args.scene).read_text()
-plain = re.sub(r"\n\s*(dilatancy|critical_packing):[^\n]*", "", text)
-if plain.count("\n") != text.count("\n") - 2:
+plain = re.sub(r"\n\s*(dilatancy|critical_packing|rate):[^\n]*", "", text)
+if plain.count("\n") != text.count("\n") - 3:
     sys.exit("the scene's dilatancy keys were not found")
 plain_scene = work / "no_dilatancy.yaml"
 plain_scene.write_text(plain)

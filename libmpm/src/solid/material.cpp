@@ -77,7 +77,7 @@ Material<dim> parse_material(const Config& cfg) {
       flow.mu_2 = rate->number("mu_2", Range::closed(mu_1, 1e6));  // the message names mu_1's bound
       // The inertial number I (dry grains) when a grain diameter is given, else the viscous J.
       if (rate->has("grain_diameter")) {
-        for (const char* viscous : {"j_0", "viscosity"})
+        for (const char* viscous : {"j_0", "viscosity", "suspension", "j_min"})
           if (rate->has(viscous))
             rate->fail(viscous,
                        "belongs to the viscous number J; with grain_diameter the friction follows the "
@@ -91,6 +91,16 @@ Material<dim> parse_material(const Config& cfg) {
                      "belongs to the inertial number I, which needs grain_diameter");
         flow.j_0 = rate->number("j_0", 0.005, Range::positive());
         flow.viscosity = rate->number("viscosity", Range::positive());
+        // Boyer's suspension viscosity below jamming needs the critical packing of dilatancy.
+        flow.suspension = rate->flag("suspension", false);
+        if (flow.suspension && flow.dilatancy == 0.0)
+          rate->fail("suspension",
+                     "the suspension viscosity needs dilatancy (keys plasticity.dilatancy > 0 and "
+                     "plasticity.critical_packing)");
+        if (flow.suspension)
+          flow.j_min = rate->number("j_min", 1e-3, Range::open(0.0, 1.0));
+        else if (rate->has("j_min"))
+          rate->fail("j_min", "belongs to the suspension viscosity (key suspension: true)");
       }
     }
     material.plasticity = plasticity::DruckerPrager<dim>(friction_angle, cohesion, material.lame, flow);

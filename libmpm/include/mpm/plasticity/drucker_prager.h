@@ -50,6 +50,24 @@
 //! monotonically in dgamma: bisection); a slow flow (X -> 0) is the rate-independent map, a
 //! flow at vanishing pressure meets mu_2. With the inertial number a thin, fast layer (a
 //! collapse's front) is the most frictional part of the flow.
+//!
+//! Suspension (optional, with mu(J) and dilatancy): below jamming the grains also flow as a
+//! dense suspension (Boyer, Guazzelli & Pouliquen 2011). Their phi(J) = phi_c / (1 + sqrt J)
+//! gives the packing a viscous number J(phi) = (phi_c / phi - 1)^2, the particle pressure
+//! P = eta_f gamma_dot / J and the shear stress mu(J) P (eq. 6, with the hydrodynamic terms
+//! J + 5/2 phi_c sqrt J): a viscosity
+//!   eta_v(phi) = eta_f (mu_c(J) / J + 1 + 5/2 phi_c / sqrt J),  mu_c = mu_1 + (mu_2 - mu_1) / (1 + J_0 / J),
+//! about 180 eta_f at phi = 0.55, phi_c = 0.58. J is held at or above j_min (default 1e-3,
+//! eta_v about 370 eta_f): closer to jamming the frictional skeleton carries the flow. The sand
+//! resists shear with the larger of its frictional and its viscous strength,
+//! ||dev tau|| = max(alpha (-tr tau) + k, 2 eta_v dgamma / dt) while it flows, which is how a
+//! liquefied sand (no contact pressure, case II) keeps a shear stress. Both strengths grow
+//! with dgamma, so dgamma is the smaller of the two roots; the viscous one is closed form,
+//!   2 mu (||dev eps|| - dgamma) = 2 eta_v dgamma / dt  ->  dgamma / ||dev eps|| = mu dt / (mu dt + eta_v),
+//! an implicit (backward Euler) viscous update: the stress never exceeds the elastic trial, so
+//! the elastic wave's time step stays stable at any eta_v. Over steps longer than the Maxwell
+//! time eta_v / mu a steady shear reaches dev tau = 2 eta_v D. The particle pressure itself is
+//! not added to the grains' stress.
 #include <mpm/constitutive/hencky_stvk.h>
 #include <mpm/constitutive/lame.h>
 #include <mpm/core/error.h>
@@ -79,6 +97,8 @@ public:
     double viscosity = 0.0;         //!< eta_f of J [Pa s]; > 0 selects the viscous number
     double grain_diameter = 0.0;    //!< d of I [m]; > 0 selects the inertial number
     double grain_density = 0.0;     //!< rho_s of I [kg/m^3] > 0 with grain_diameter
+    bool suspension = false;        //!< Boyer's suspension viscosity below jamming (needs J and K > 0)
+    double j_min = 1e-3;            //!< the smallest J of the suspension viscosity [-], in (0, 1)
     bool inertial() const { return grain_diameter > 0.0; }
   };
 
@@ -113,6 +133,13 @@ public:
         verify<InputError>(flow.viscosity > 0.0,
                            "Drucker-Prager viscosity " + std::to_string(flow.viscosity) + " Pa s: expected > 0");
     }
+    if (flow.suspension) {
+      verify<InputError>(flow.mu_2 != 0.0 && !flow.inertial() && flow.dilatancy > 0.0,
+                         "Drucker-Prager suspension: needs mu(J) (mu_2, viscosity) and dilatancy (its critical "
+                         "packing)");
+      verify<InputError>(flow.j_min > 0.0 && flow.j_min < 1.0,
+                         "Drucker-Prager j_min " + std::to_string(flow.j_min) + ": expected a value in (0, 1)");
+    }
   }
 
   //! mu_cone = alpha d / sqrt(2): the static friction, shear stress over pressure in simple shear.
@@ -135,6 +162,15 @@ public:
   bool rate_dependent() const { return flow_.mu_2 > 0.0; }
   const Flow& flow() const { return flow_; }
 
+  //! The suspension viscosity eta_v [Pa s] at the packing phi (see above; 0 without suspension).
+  double suspension_viscosity(double phi) const {
+    if (!flow_.suspension) return 0.0;
+    const double phi_c = flow_.critical_packing;
+    const double J = phi < phi_c ? std::max((phi_c / phi - 1.0) * (phi_c / phi - 1.0), flow_.j_min) : flow_.j_min;
+    const double mu_c = friction() + (flow_.mu_2 - friction()) / (1.0 + flow_.j_0 / J);
+    return flow_.viscosity * (mu_c / J + 1.0 + 2.5 * phi_c / std::sqrt(J));
+  }
+
   //! Projects Fe onto the admissible set and updates the volume correction `plastic` (log
   //! volume, >= 0). Returns whether Fe changed. A changed Fe has positive singular values.
   //! `result`, when given, receives the SVD of the Fe left (the trial's when unchanged).
@@ -152,13 +188,21 @@ public:
     const double trace = eps.sum();
     const double bulk = dim * elastic_.lambda + 2.0 * elastic_.mu;  // tr tau / tr eps
     double alpha = alpha_, tan_psi = 0.0;
+    double viscous_share = 1.0;  // dgamma / ||dev eps|| of the viscous strength alone
+    const Vec<dim> dev = eps - Vec<dim>::Constant(trace / dim);
     if (rest_packing && dilatant()) {
-      tan_psi = flow_.dilatancy * (*rest_packing * std::exp(-strain.sum()) - flow_.critical_packing);
+      const double phi = *rest_packing * std::exp(-strain.sum());
+      tan_psi = flow_.dilatancy * (phi - flow_.critical_packing);
       alpha = std::max(alpha_ + tan_psi * std::numbers::sqrt2 / dim, 0.0);  // mu_cone + tan psi
+      if (flow_.suspension && dt > 0.0) {
+        const double relax = elastic_.mu * dt;
+        viscous_share = relax / (relax + suspension_viscosity(phi));
+      }
     }
     Vec<dim> H = eps;
     if (alpha > 0.0 && alpha * bulk * trace >= k_) {  // II: to the apex, store the excess
       plastic = to_apex(H, trace, alpha, bulk);
+      H += (1.0 - viscous_share) * dev;  // a suspension keeps its viscous stress
     } else {
       const double y = yield(elastic_.principal_kirchhoff(eps), alpha);
       if (y <= 0.0 && plastic == 0.0) {  // I, nothing stored to absorb
@@ -167,7 +211,6 @@ public:
       }
       plastic = 0.0;
       if (y > 0.0) {  // III
-        const Vec<dim> dev = eps - Vec<dim>::Constant(trace / dim);
         const double dev_norm = dev.norm();
         // y falls by 2 mu for each unit of dgamma and by alpha bulk sqrt(2) tan psi through
         // the plastic volume change; where that does not reach the cone before the deviator
@@ -176,13 +219,16 @@ public:
         double share = slope > 0.0 && y < slope * dev_norm ? y / (slope * dev_norm) : 1.0;      // dgamma / ||dev||
         if (rate_dependent() && dt > 0.0) {
           const auto friction_at = [&](double dgamma) { return alpha + rate_friction(dgamma, trace, tan_psi, dt); };
-          share = rate_dependent_share(dev_norm, trace, tan_psi, friction_at);
+          share = std::min(rate_dependent_share(dev_norm, trace, tan_psi, friction_at), viscous_share);
           alpha = friction_at(share * dev_norm);
         }
         H -= share * dev;
         if (tan_psi != 0.0) {
           H -= Vec<dim>::Constant(std::numbers::sqrt2 * tan_psi * share * dev_norm / dim);
-          if (const double t = H.sum(); alpha > 0.0 && alpha * bulk * t > k_) plastic = to_apex(H, t, alpha, bulk);
+          if (const double t = H.sum(); alpha > 0.0 && alpha * bulk * t > k_) {
+            plastic = to_apex(H, t, alpha, bulk);
+            H += (1.0 - viscous_share) * dev;
+          }
         }
       }
     }

@@ -352,6 +352,133 @@ TEST_CASE_TEMPLATE(
   }
 }
 
+namespace {
+//! Boyer et al. 2011's suspension viscosity written out from their eq. 6 and phi(J) (not the
+//! model's function): J = (phi_c / phi - 1)^2, eta_v = eta_f mu(J) / J with the hydrodynamic
+//! terms of mu(J), J held at or above j_min.
+template <int dim>
+double boyer_viscosity(double phi, double j_min) {
+  const double mu_1 = cone_alpha() * dim / std::numbers::sqrt2;
+  const double J = std::max(std::pow(kCritical / phi - 1.0, 2), j_min);
+  const double mu = mu_1 + (kMu2 - mu_1) / (1.0 + kJ0 / J) + J + 2.5 * kCritical * std::sqrt(J);
+  return kEta * mu / J;
+}
+
+template <int dim>
+plasticity::DruckerPrager<dim> suspension_sand(double j_min = 1e-3) {
+  return {kFriction,
+          0.0,
+          kLame,
+          {.dilatancy = kK,
+           .critical_packing = kCritical,
+           .mu_2 = kMu2,
+           .j_0 = kJ0,
+           .viscosity = kEta,
+           .suspension = true,
+           .j_min = j_min}};
+}
+
+//! tau_xy after steady simple shear at gamma_dot at constant volume (the packing stays phi).
+template <int dim>
+double steady_shear_stress(const plasticity::DruckerPrager<dim>& model, double phi, double gamma_dot, double dt) {
+  Mat<dim> Fe = Mat<dim>::Identity();
+  double plastic = 0.0, rest = phi;
+  for (int n = 0; n < 3000; ++n) {
+    Fe = shear<dim>(gamma_dot * dt) * Fe;
+    model.project(Fe, plastic, &rest, dt);
+  }
+  CHECK(rest / Fe.determinant() == doctest::Approx(phi).epsilon(1e-12));
+  return kirchhoff(Fe)(0, 1);
+}
+}  // namespace
+
+TEST_CASE_TEMPLATE("suspension: a liquefied loose sand in steady shear is a fluid of Boyer's viscosity", Matrix, Mat<2>,
+                   Mat<3>) {
+  constexpr int dim = Matrix::RowsAtCompileTime;
+  const plasticity::DruckerPrager<dim> model = suspension_sand<dim>(), without = sand<dim>();
+  // At phi = 0.55 (J = 3.0e-3) eta_v is about 200 eta_f; at 0.57 J is below j_min: the cap.
+  for (const double phi : {0.50, 0.55, 0.57}) {
+    const double eta = boyer_viscosity<dim>(phi, 1e-3);
+    CHECK(model.suspension_viscosity(phi) == doctest::Approx(eta).epsilon(1e-12));
+    // Steps shorter and longer than the Maxwell time eta / mu (1e-5 .. 3e-4 s here).
+    for (const double dt : {1e-5, 1e-4, 1e-3})
+      for (const double gamma_dot : {1.0, 30.0}) {
+        CAPTURE(phi);
+        CAPTURE(dt);
+        CAPTURE(gamma_dot);
+        CHECK(steady_shear_stress(model, phi, gamma_dot, dt) == doctest::Approx(eta * gamma_dot).epsilon(1e-3));
+      }
+    // Without the suspension the liquefied sand carries no shear stress at all.
+    CHECK(std::abs(steady_shear_stress(without, phi, 1.0, 1e-4)) < 1e-9);
+  }
+  // By hand in 2D (mu_1 = 0.462 at 30 degrees): J = 2.975e-3, mu_c = 0.5508, eta_v / eta_f =
+  // 185.1 + 1 + 26.6.
+  if (dim == 2) CHECK(model.suspension_viscosity(0.55) / kEta == doctest::Approx(212.7).epsilon(1e-3));
+}
+
+TEST_CASE_TEMPLATE("suspension: frictional sand under pressure keeps mu(J); the stress stays within the trial's",
+                   Matrix, Mat<2>, Mat<3>) {
+  constexpr int dim = Matrix::RowsAtCompileTime;
+  const plasticity::DruckerPrager<dim> model = suspension_sand<dim>(), rated = rated_sand<dim>();
+  const double mu_1 = cone_alpha() * dim / std::numbers::sqrt2, p_target = 200.0, dt = 1e-3, gamma_dot = 1.0;
+  // Drained shear from the critical packing: the viscous strength 2 eta_v(j_min) gamma_dot is
+  // a few Pa against mu P of about 90 Pa, so the flow lands on the cone of mu(J) as without it.
+  Mat<dim> Fe = Mat<dim>::Identity();
+  double plastic = 0.0, rest = kCritical;
+  for (int n = 0; n < 3000; ++n) shear_drained(model, gamma_dot * dt, dt, p_target, Fe, plastic, &rest);
+  const double J = kEta * gamma_dot / p_target;
+  CHECK(stress_ratio(kirchhoff(Fe)) ==
+        doctest::Approx((mu_1 + (kMu2 - mu_1) * J / (J + kJ0)) * std::numbers::sqrt2 / dim).epsilon(2e-3));
+  // Random trials near jamming with a nearly unbounded viscosity (j_min 1e-9): the returned
+  // deviatoric stress is at most the trial's (so the elastic wave's step stays stable), and
+  // nearly all of it is kept.
+  const plasticity::DruckerPrager<dim> stiff = suspension_sand<dim>(1e-9);
+  const auto dev_norm = [](const Mat<dim>& tau) { return (tau - tau.trace() / dim * Mat<dim>::Identity()).norm(); };
+  std::mt19937 rng(2011);
+  int kept = 0;
+  for (int n = 0; n < 200; ++n) {
+    const Mat<dim> trial = random_trial<dim>(rng);
+    Mat<dim> returned = trial;
+    double v = 0.0, packing = 0.57999 * trial.determinant();
+    stiff.project(returned, v, &packing, 1e-3);
+    const double before = dev_norm(kirchhoff(trial)), after = dev_norm(kirchhoff(returned));
+    CHECK(after <= before * (1.0 + 1e-12));
+    kept += after > 0.99 * before;
+  }
+  CHECK(kept == 200);
+  CHECK(rated.suspension_viscosity(0.55) == 0.0);
+}
+
+TEST_CASE("suspension: scene keys and their errors") {
+  const std::string base =
+      "density: 2500\nyoungs_modulus: 5e4\npoisson_ratio: 0.3\nelasticity: hencky_stvk\nplasticity: {model: "
+      "drucker_prager, friction_angle: 30";
+  const std::string dilatant = base + ", dilatancy: 4.09, critical_packing: 0.58";
+  const auto& dp = std::get<plasticity::DruckerPrager<2>>(
+      parse_material<2>(Config::parse(dilatant + ", rate: {mu_2: 0.7, viscosity: 0.012, suspension: true}}\n"))
+          .plasticity);
+  CHECK(dp.flow().suspension);
+  CHECK(dp.flow().j_min == 1e-3);
+  CHECK(dp.suspension_viscosity(0.55) > 100 * 0.012);
+  CHECK_FALSE(std::get<plasticity::DruckerPrager<2>>(
+                  parse_material<2>(Config::parse(dilatant + ", rate: {mu_2: 0.7, viscosity: 0.012}}\n")).plasticity)
+                  .flow()
+                  .suspension);
+  CHECK_THROWS_WITH_AS(
+      parse_material<2>(Config::parse(base + ", rate: {mu_2: 0.7, viscosity: 0.012, suspension: true}}\n")),
+      doctest::Contains("plasticity.rate.suspension"), InputError);
+  CHECK_THROWS_WITH_AS(parse_material<2>(Config::parse(
+                           dilatant + ", rate: {mu_2: 0.7, viscosity: 0.012, suspension: true, j_min: 1.5}}\n")),
+                       doctest::Contains("plasticity.rate.j_min"), InputError);
+  CHECK_THROWS_WITH_AS(
+      parse_material<2>(Config::parse(dilatant + ", rate: {mu_2: 0.7, viscosity: 0.012, j_min: 1e-3}}\n")),
+      doctest::Contains("plasticity.rate.j_min"), InputError);
+  CHECK_THROWS_WITH_AS(
+      parse_material<2>(Config::parse(dilatant + ", rate: {mu_2: 0.7, grain_diameter: 5e-4, suspension: true}}\n")),
+      doctest::Contains("suspension"), InputError);
+  CHECK_THROWS_AS(plasticity::DruckerPrager<2>(30, 0, kLame, {.suspension = true}), InputError);
+}
+
 TEST_CASE("dilatant sand in a solid scene: the body's packing, refused for another material") {
   const std::string head = R"(
 dim: 2
