@@ -71,19 +71,44 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
   std::vector<std::tuple<int, BlockKey, std::uint32_t>> irregular_at;
   int span = 1;
 
-  // Transfer level of every particle (in parallel: the tree walk is the cost).
+  // Transfer level, half-size and, for a particle on its own level whose stencil lies inside
+  // the level, its bucket's block, in parallel (the tree walk is the cost); the loop after it
+  // reports the first bad particle, collects the buckets in particle order and takes the
+  // others (irregular) through their general stencil.
+  enum Kind : std::uint8_t { kBucketed, kIrregular, kBad };
+  std::vector<Kind> kind(x.size());
+  std::vector<BlockKey> bucket(x.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 4096), [&](const auto& range) {
     for (std::size_t p = range.begin(); p != range.end(); ++p) {
-      const double half = 0.5 * particle_size(std::min<int>(type[p], L - 1));
-      transfer_level_[p] = x[p].allFinite() ? tree_.finest_level_in(x[p].array() - half, x[p].array() + half) : -1;
+      if (type[p] >= L || !x[p].allFinite()) {
+        kind[p] = kBad;
+        continue;
+      }
+      const double half = 0.5 * particle_size(type[p]);
+      const int n = tree_.finest_level_in(x[p].array() - half, x[p].array() + half);
+      transfer_level_[p] = n;
+      kind[p] = n < 0 ? kBad : kIrregular;
+      if (n < 0) continue;
+      const SparseGrid<dim>& g = levels_[n];
+      half_cells_[p] = half / g.dx();
+      if (n == type[p]) {  // on its own level: regular_kernel(), whose stencil holds the general one
+        const IVec<dim> base = uniform_base(n, x[p]);
+        if ((base.array() >= 0).all() && (base.array() + 2 < g.node_counts().array()).all()) {
+          bucket[p] = g.block_id(base);
+          kind[p] = kBucketed;
+        }
+      }
     }
   });
   for (std::size_t p = 0; p < x.size(); ++p) {
+    if (kind[p] == kBucketed) {
+      bucketed[transfer_level_[p]].emplace_back(bucket[p], static_cast<std::uint32_t>(p));
+      continue;
+    }
     MPM_VERIFY(type[p] < L, InputError,
                "stage '" + stage + "': particle " + std::to_string(p) + " has type " + std::to_string(type[p]) +
                    ", outside the grid's levels [0, " + std::to_string(L - 1) + "]");
-    const double half = 0.5 * particle_size(type[p]);
-    const int n = transfer_level_[p];
+    const int n = x[p].allFinite() ? transfer_level_[p] : -1;
     if (n < 0) {
       std::ostringstream s;
       s.precision(9);
@@ -93,15 +118,7 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
       throw NumericalError(s.str());
     }
     const SparseGrid<dim>& g = levels_[n];
-    const double h = half / g.dx();
-    half_cells_[p] = h;
-    if (n == type[p]) {  // on its own level: regular_kernel(), whose stencil holds the general one
-      const IVec<dim> base = uniform_base(n, x[p]);
-      if ((base.array() >= 0).all() && (base.array() + 2 < g.node_counts().array()).all()) {
-        bucketed[n].emplace_back(g.block_id(base), static_cast<std::uint32_t>(p));
-        continue;
-      }
-    }
+    const double h = half_cells_[p];
     IVec<dim> first, last;
     GimpAxis axis[dim];
     axis_weights(n, h, x[p], axis);

@@ -59,20 +59,32 @@ struct UGimp {
     const double t = 1.0 - std::fabs(r);
     return t > 0.0 ? t : 0.0;
   }
-  static double hat_integral(double s) {  // H(s) = int_{-inf}^{s} N1
-    if (s <= -1.0) return 0.0;
-    if (s <= 0.0) return 0.5 * (1.0 + s) * (1.0 + s);
-    if (s <= 1.0) return 1.0 - 0.5 * (1.0 - s) * (1.0 - s);
-    return 1.0;
+  //! H(s) = int_{-inf}^{s} N1: 0.5 (1 + s)^2 on [-1, 0], 1 - 0.5 (1 - s)^2 on [0, 1], i.e.
+  //! 1/2 + c - c |c| / 2 with c = s clamped to [-1, 1]: no branch on the data (the transfer
+  //! loops evaluate it six times per axis of every particle).
+  static double hat_integral(double s) {
+    const double lo = s > -1.0 ? s : -1.0, c = lo < 1.0 ? lo : 1.0;
+    return 0.5 + c - 0.5 * c * std::fabs(c);
   }
+  //! The three weights in closed form. An outer node at distance d in [1/2, 3/2] has, with
+  //! t = 1 + h - d and t' = t clamped to [0, 2h], w = t'^2 / (4h) + max(t - 2h, 0) (1 - d
+  //! where its box lies inside the hat's slope, the quadratic where it covers the hat's foot, 0
+  //! beyond) and dw/dd = -t' / (2h); the middle node takes the rest (the weights sum to one).
   void operator()(double xi, int& base, double* w, double* dw) const {
     base = static_cast<int>(std::floor(xi - 0.5));
-    const double inv = 0.5 / h;
-    for (int k = 0; k < support; ++k) {
-      const double r = xi - (base + k);
-      w[k] = (hat_integral(r + h) - hat_integral(r - h)) * inv;
-      dw[k] = (hat(r + h) - hat(r - h)) * inv;
-    }
+    const double fx = xi - base, inv = 0.25 / h, two_h = 2.0 * h;
+    const auto outer = [&](double d, double& weight, double& slope) {
+      const double t = 1.0 + h - d, low = t > 0.0 ? t : 0.0, clamped = low < two_h ? low : two_h;
+      weight = clamped * clamped * inv + (t > two_h ? t - two_h : 0.0);
+      slope = clamped * 2.0 * inv;  // -dw/dd
+    };
+    double s0, s2;
+    outer(fx, w[0], s0);
+    outer(2.0 - fx, w[2], s2);
+    dw[0] = -s0;
+    dw[2] = s2;
+    w[1] = 1.0 - w[0] - w[2];
+    dw[1] = s0 - s2;
   }
 };
 

@@ -87,3 +87,28 @@ TEST_CASE("kernels: uGIMP with particle size dx is the quadratic B-spline (paper
     }
   }
 }
+
+TEST_CASE("kernels: uGIMP's closed form is the hat convolved with the particle's box") {
+  // The definition (paper eq. 5-6): w(r) = (H(r + h) - H(r - h)) / (2h), dw/dr = (N1(r + h) -
+  // N1(r - h)) / (2h), H the antiderivative of the hat N1, written out piece by piece.
+  const auto N1 = [](double r) { return std::fabs(r) < 1.0 ? 1.0 - std::fabs(r) : 0.0; };
+  const auto H = [](double s) {
+    if (s <= -1.0) return 0.0;
+    if (s <= 0.0) return 0.5 * (1.0 + s) * (1.0 + s);
+    if (s <= 1.0) return 1.0 - 0.5 * (1.0 - s) * (1.0 - s);
+    return 1.0;
+  };
+  for (const double h : {0.5, 0.3, 0.25, 0.1, 0.01}) {
+    CAPTURE(h);
+    for (double xi = 2.0; xi < 4.0; xi += 0.00731) {
+      int base;
+      double w[3], dw[3];
+      UGimp{h}(xi, base, w, dw);
+      for (int i = 0; i < 3; ++i) {
+        const double r = xi - (base + i);
+        CHECK(w[i] == doctest::Approx((H(r + h) - H(r - h)) / (2 * h)).epsilon(1e-14).scale(1.0));
+        CHECK(dw[i] == doctest::Approx((N1(r + h) - N1(r - h)) / (2 * h)).epsilon(1e-13).scale(1.0));
+      }
+    }
+  }
+}
