@@ -52,6 +52,7 @@ AdaptiveGrid<dim>::AdaptiveGrid(CellTree<dim> tree, int points_per_axis)
   ghosts_.resize(tree_.levels());
   regular_.resize(tree_.levels());
   near_embedded_.resize(tree_.levels());
+  near_masks_.resize(tree_.levels());
 }
 
 template <int dim>
@@ -222,7 +223,7 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
     // Whether each bucketed particle's 3^dim stencil holds an embedded ghost, in parallel
     // (chunks of particles, one patch of block masks per block).
     const auto& pairs = bucketed[n];
-    std::vector<std::uint8_t> near(pairs.size(), 0);
+    std::vector<std::uint32_t> near(pairs.size(), 0);  // the stencil's embedded ghosts, by bit
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pairs.size(), 2048), [&](const auto& range) {
       BlockKey checked = ~BlockKey{0};
       std::uint64_t patch_mask[1 << dim] = {};  // embedded masks of the patch's blocks
@@ -244,14 +245,14 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
         // The 3^dim stencil nodes lie in the patch: test their bits.
         const IVec<dim> base = uniform_base(n, x[p]);
         const IVec<dim> first = g.block_coord(block) * B;
-        for (int j = 0; j < ipow(3, dim) && !near[i]; ++j) {
+        for (int j = 0; j < ipow(3, dim); ++j) {
           int corner = 0, local = 0;
           for (int a = 0, r = j; a < dim; ++a, r /= 3) {
             const int offset = base[a] + r % 3 - first[a];  // in [0, 2B)
             corner |= (offset >= B) << a;
             local |= (offset & (B - 1)) << (a * SparseGrid<dim>::block_bits);
           }
-          near[i] = (patch_mask[corner] >> local) & 1;
+          near[i] |= static_cast<std::uint32_t>((patch_mask[corner] >> local) & 1) << j;
         }
       }
     });
@@ -268,9 +269,13 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
     };
     regular_[n] = ParticleBuckets<dim>{};
     near_embedded_[n] = ParticleBuckets<dim>{};
+    near_masks_[n].clear();
     for (std::size_t i = 0; i < pairs.size(); ++i) {
       append(regular_[n], pairs[i].first, pairs[i].second);
-      if (near[i]) append(near_embedded_[n], pairs[i].first, pairs[i].second);
+      if (near[i]) {
+        append(near_embedded_[n], pairs[i].first, pairs[i].second);
+        near_masks_[n].push_back(near[i]);
+      }
     }
     regular_[n].begin.push_back(static_cast<std::uint32_t>(regular_[n].particle.size()));
     near_embedded_[n].begin.push_back(static_cast<std::uint32_t>(near_embedded_[n].particle.size()));
@@ -538,6 +543,7 @@ std::size_t AdaptiveGrid<dim>::index_bytes() const {
              g.of_node.capacity() * sizeof(int) + g.velocity_moment.capacity() * sizeof(Mat<dim>);
   for (const ParticleBuckets<dim>& b : regular_) bytes += b.memory_bytes();
   for (const ParticleBuckets<dim>& b : near_embedded_) bytes += b.memory_bytes();
+  for (const std::vector<std::uint32_t>& m : near_masks_) bytes += m.capacity() * sizeof(std::uint32_t);
   for (const LevelStatus& s : status_)
     bytes += s.index.bytes() + s.blocks.capacity() * sizeof(BlockStatus) + s.ghosts.capacity() * sizeof(PendingGhost) +
              s.links.capacity() * sizeof(NodeWeight<dim>) + s.reached.capacity() * sizeof(s.reached[0]);

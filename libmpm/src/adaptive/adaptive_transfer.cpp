@@ -7,22 +7,22 @@
 #include <Eigen/LU>
 
 #include <algorithm>
+#include <bit>
 #include <map>
 
 namespace mpm::adaptive {
 
 namespace {
-// fn(list[e]) for the entries e of every group (group g: begin[g] .. begin[g + 1] - 1), one
-// colour after the other, the groups of a colour in parallel: the colourings keep the stencils
-// of one colour's groups apart (particle_buckets.h, AdaptiveGrid::irregular_groups).
+// fn(e) for the entries e of every group (group g: begin[g] .. begin[g + 1] - 1), one colour
+// after the other, the groups of a colour in parallel: the colourings keep the stencils of one
+// colour's groups apart (particle_buckets.h, AdaptiveGrid::irregular_groups).
 template <class Colors, class Fn>
-void scatter_by_color(const Colors& by_color, const std::vector<std::uint32_t>& begin,
-                      const std::vector<std::uint32_t>& list, Fn&& fn) {
-  const bool serial = list.size() < detail::serial_below_particles;
+void scatter_by_color(const Colors& by_color, const std::vector<std::uint32_t>& begin, Fn&& fn) {
+  const bool serial = begin.back() < detail::serial_below_particles;
   for (const std::vector<int>& same_color : by_color)
     detail::for_each_range(same_color.size(), std::size_t{1}, serial, [&](const tbb::blocked_range<std::size_t>& r) {
       for (std::size_t i = r.begin(); i != r.end(); ++i)
-        for (std::uint32_t e = begin[same_color[i]]; e < begin[same_color[i] + 1]; ++e) fn(list[e]);
+        for (std::uint32_t e = begin[same_color[i]]; e < begin[same_color[i] + 1]; ++e) fn(e);
     });
 }
 
@@ -30,7 +30,8 @@ void scatter_by_color(const Colors& by_color, const std::vector<std::uint32_t>& 
 template <int dim, class Fn>
 void scatter_irregular(const Particles<dim>& P, const AdaptiveGrid<dim>& grid, Fn&& fn) {
   const auto& groups = grid.irregular_groups();
-  scatter_by_color(groups.by_color, groups.begin, grid.irregular(), [&](std::uint32_t p) {
+  scatter_by_color(groups.by_color, groups.begin, [&](std::uint32_t e) {
+    const std::uint32_t p = grid.irregular()[e];
     const int n = grid.transfer_level(p);
     grid.for_each_weight(
         n, grid.half_cells(p), P.x[p],
@@ -71,10 +72,67 @@ void apic_moments(const AdaptiveGrid<dim>& grid, int n, double h, const Vec<dim>
   });
 }
 
+// The regular stencil of a particle at x on level n: the uniform loops' first node
+// (uniform_base) and regular_kernel()'s weights per axis, from the same expressions.
+template <int dim>
+struct RegularStencil {
+  IVec<dim> base;
+  double xi[dim];    // position [cells of level n]
+  double w[dim][3];  // w[axis][node]
+};
+
+template <int dim>
+RegularStencil<dim> regular_stencil(const AdaptiveGrid<dim>& grid, int n, const Vec<dim>& x) {
+  const SparseGrid<dim>& g = grid.level(n);
+  const double inv_dx = 1.0 / g.dx();
+  RegularStencil<dim> s;
+  std::visit(
+      [&](const auto& kernel) {
+        if constexpr (std::decay_t<decltype(kernel)>::support == 3) {
+          double dw[3];
+          for (int a = 0; a < dim; ++a) {
+            s.xi[a] = (x[a] - g.origin()[a]) * inv_dx;
+            kernel(s.xi[a], s.base[a], s.w[a], dw);
+          }
+        } else {
+          MPM_VERIFY(false, Error, "adaptive grid: the regular kernel has a 3-node stencil");
+        }
+      },
+      grid.regular_kernel());
+  return s;
+}
+
+// fn(j, w) for the embedded ghosts j of a regular stencil: its nodes flagged in `mask`
+// (AdaptiveGrid::near_embedded_masks), w their weight.
+template <int dim, class Fn>
+void for_each_embedded(const AdaptiveGrid<dim>& grid, int n, const RegularStencil<dim>& s, std::uint32_t mask,
+                       Fn&& fn) {
+  const SparseGrid<dim>& g = grid.level(n);
+  const auto& ghosts = grid.ghosts(n);
+  BlockKey last_block = ~BlockKey{0};
+  Index first_node = 0;  // storage index of node 0 of last_block: one table lookup per block
+  for (; mask != 0; mask &= mask - 1) {
+    IVec<dim> node;
+    double w = 1.0;
+    for (int a = 0, r = std::countr_zero(mask); a < dim; ++a, r /= 3) {
+      node[a] = s.base[a] + r % 3;
+      w *= s.w[a][r % 3];
+    }
+    if (const BlockKey block = g.block_id(node); block != last_block) {
+      last_block = block;
+      first_node = static_cast<Index>(g.slot(block)) * SparseGrid<dim>::nodes_per_block;
+    }
+    const int j = ghosts.of_node[static_cast<std::size_t>(first_node + SparseGrid<dim>::local_index(node))];
+    MPM_ASSERT(j >= 0);
+    fn(j, w);
+  }
+}
+
 // What the uniform G2P leaves out for a regular particle whose stencil holds embedded ghosts:
 // the ghosts' terms of B_p and D_p (sum_ghost w_kp Q_k and w_kp R_k), with D_p^u, the uniform
 // loops' own (diagonal: the tensor weights reproduce linear fields). Then, from the uniform
-// C^u = B^u (D^u)^-1, C_p = (C^u D^u + dB) (D^u + dD)^-1.
+// C^u = B^u (D^u)^-1, C_p = (C^u D^u + dB) (D^u + dD)^-1. Ghosts that are real nodes of
+// another level add nothing (their Q_k and R_k vanish): only the embedded ones are visited.
 template <int dim>
 struct GhostTerms {
   Mat<dim> dB;
@@ -83,26 +141,21 @@ struct GhostTerms {
 };
 
 template <int dim>
-GhostTerms<dim> ghost_terms(const AdaptiveGrid<dim>& grid, int n, double h, const Vec<dim>& xp) {
-  const SparseGrid<dim>& g = grid.level(n);
+GhostTerms<dim> ghost_terms(const AdaptiveGrid<dim>& grid, int n, const Vec<dim>& xp, std::uint32_t mask) {
   const auto& ghosts = grid.ghosts(n);
+  const RegularStencil<dim> s = regular_stencil(grid, n, xp);
+  const double dx = grid.level(n).dx();
   GhostTerms<dim> t;
-  GimpAxis axis[dim];  // once: for D_p^u and for the walk over the ghosts
-  grid.axis_weights(n, h, xp, axis);
-  const double inv_dx = 1.0 / g.dx();  // axis_weights' expression: the uniform loops' D_p to the last bit
   for (int a = 0; a < dim; ++a) {
-    const double xi = (xp[a] - g.origin()[a]) * inv_dx;
     double D = 0;
-    for (int k = 0; k < axis[a].count; ++k) D += axis[a].w[k] * (axis[a].base + k - xi) * (axis[a].base + k - xi);
-    t.D_uniform[a] = D * g.dx() * g.dx();
+    for (int k = 0; k < 3; ++k) D += s.w[a][k] * (s.base[a] + k - s.xi[a]) * (s.base[a] + k - s.xi[a]);
+    t.D_uniform[a] = D * dx * dx;
   }
   t.dB.setZero();
   Mat<dim> D = t.D_uniform.asDiagonal();
-  grid.for_each_weight(n, axis, [&](Index k, double w, const Vec<dim>&, const Vec<dim>&) {
-    if (const int j = ghosts.of_node[k]; j >= 0) {
-      t.dB += w * ghosts.velocity_moment[j];
-      D += w * ghosts.spread[j];
-    }
+  for_each_embedded(grid, n, s, mask, [&](int j, double w) {
+    t.dB += w * ghosts.velocity_moment[j];
+    D += w * ghosts.spread[j];
   });
   t.D_inverse = D.inverse();
   return t;
@@ -140,10 +193,12 @@ void particles_to_grid(const Particles<dim>& P, const TransferScheme& scheme, Ad
   // G_k of those ghosts is added here.
   for (int n = 0; apic && n < grid.levels(); ++n) {
     const ParticleBuckets<dim>& near = grid.near_embedded(n);
-    scatter_by_color(near.by_color, near.begin, near.particle, [&](std::uint32_t p) {
-      grid.for_each_weight(n, grid.half_cells(p), P.x[p], [&](Index k, double w, const Vec<dim>&, const Vec<dim>&) {
-        if (const int j = grid.ghosts(n).of_node[k]; j >= 0) affine[n][j] += w * P.mass[p] * P.C[p];
-      });
+    const std::vector<std::uint32_t>& masks = grid.near_embedded_masks(n);
+    scatter_by_color(near.by_color, near.begin, [&](std::uint32_t e) {
+      const std::uint32_t p = near.particle[e];
+      const Mat<dim> mC = P.mass[p] * P.C[p];
+      for_each_embedded(grid, n, regular_stencil(grid, n, P.x[p]), masks[e],
+                        [&](int j, double w) { affine[n][j] += w * mC; });
     });
   }
   grid.push_momentum(affine);
@@ -185,7 +240,7 @@ void grid_to_particles(Particles<dim>& P, const TransferScheme& scheme, const Ad
     mpm::grid_to_particles(P, grid.regular(n), grid.regular_kernel(), scheme, grid.level(n), dt, F);
   for (int n = 0; apic && n < grid.levels(); ++n)
     gather_each(grid.near_embedded(n).particle, grid, [&](std::size_t i, std::size_t p, int) {
-      const GhostTerms<dim> t = ghost_terms(grid, n, grid.half_cells(p), x_before[n][i]);
+      const GhostTerms<dim> t = ghost_terms(grid, n, x_before[n][i], grid.near_embedded_masks(n)[i]);
       P.C[p] = (P.C[p] * t.D_uniform.asDiagonal() + t.dB) * t.D_inverse;
     });
   gather_each(grid.irregular(), grid, [&](std::size_t, std::size_t p, int n) {

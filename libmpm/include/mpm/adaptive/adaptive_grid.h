@@ -101,6 +101,10 @@ public:
   //! The regular particles of level n whose stencil holds an embedded ghost, in their buckets:
   //! APIC adds the ghosts' affine terms for them beside the uniform loops (adaptive_transfer.h).
   const ParticleBuckets<dim>& near_embedded(int n) const { return near_embedded_[n]; }
+  //! Per entry of near_embedded(n).particle: which nodes of its regular stencil are embedded
+  //! ghosts, bit i_0 + 3 i_1 (+ 9 i_2) for node uniform_base() + (i_0, i_1, i_2). The ghosts'
+  //! APIC terms visit only these nodes.
+  const std::vector<std::uint32_t>& near_embedded_masks(int n) const { return near_masks_[n]; }
   //! The other particles: they take the general path (for_each_weight). Ordered by transfer
   //! level and block of their first stencil node, in groups of one (level, block).
   const std::vector<std::uint32_t>& irregular() const { return irregular_; }
@@ -196,6 +200,7 @@ private:
   //! Fills irregular_ and irregular_groups_ from (level, first block, particle) triples.
   void group_irregular(std::vector<std::tuple<int, BlockKey, std::uint32_t>>& at, int span);
   std::vector<ParticleBuckets<dim>> near_embedded_;
+  std::vector<std::vector<std::uint32_t>> near_masks_;
   //! prepare()'s move: stores the particles in transfer order when they are scattered.
   bool store_in_transfer_order(const MoveParticles& move);
 
