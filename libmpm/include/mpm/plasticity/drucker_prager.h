@@ -57,8 +57,9 @@
 //! P = eta_f gamma_dot / J and the shear stress mu(J) P (eq. 6, with the hydrodynamic terms
 //! J + 5/2 phi_c sqrt J): a viscosity
 //!   eta_v(phi) = eta_f (mu_c(J) / J + 1 + 5/2 phi_c / sqrt J),  mu_c = mu_1 + (mu_2 - mu_1) / (1 + J_0 / J),
-//! about 180 eta_f at phi = 0.55, phi_c = 0.58. J is held at or above j_min (default 1e-3,
-//! eta_v about 370 eta_f): closer to jamming the frictional skeleton carries the flow. The sand
+//! about 210 eta_f at phi = 0.55, phi_c = 0.58 (2D, 28-30 deg). J is held at or above j_min
+//! (default 1e-3: eta_v about 550 eta_f in 2D, 740 in 3D), also at and above phi_c, so eta_v is
+//! continuous in phi: closer to jamming the frictional skeleton carries the flow. The sand
 //! resists shear with the larger of its frictional and its viscous strength,
 //! ||dev tau|| = max(alpha (-tr tau) + k, 2 eta_v dgamma / dt) while it flows, which is how a
 //! liquefied sand (no contact pressure, case II) keeps a shear stress. Both strengths grow

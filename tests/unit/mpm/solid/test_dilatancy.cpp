@@ -388,7 +388,10 @@ double steady_shear_stress(const plasticity::DruckerPrager<dim>& model, double p
     model.project(Fe, plastic, &rest, dt);
   }
   CHECK(rest / Fe.determinant() == doctest::Approx(phi).epsilon(1e-12));
-  return kirchhoff(Fe)(0, 1);
+  // Liquefied: the deviator is all the stress (no pressure, no tension).
+  const Mat<dim> tau = kirchhoff(Fe);
+  CHECK(std::abs(tau.trace()) <= 1e-13 * (dim * kLame.lambda + 2.0 * kLame.mu));  // round-off of the bulk modulus
+  return tau(0, 1);
 }
 }  // namespace
 
@@ -400,8 +403,8 @@ TEST_CASE_TEMPLATE("suspension: a liquefied loose sand in steady shear is a flui
   for (const double phi : {0.50, 0.55, 0.57}) {
     const double eta = boyer_viscosity<dim>(phi, 1e-3);
     CHECK(model.suspension_viscosity(phi) == doctest::Approx(eta).epsilon(1e-12));
-    // Steps shorter and longer than the Maxwell time eta / mu (1e-5 .. 3e-4 s here).
-    for (const double dt : {1e-5, 1e-4, 1e-3})
+    // Steps shorter and longer than the Maxwell time eta / mu (1e-6 .. 2e-5 s here).
+    for (const double dt : {1e-6, 1e-4, 1e-3})
       for (const double gamma_dot : {1.0, 30.0}) {
         CAPTURE(phi);
         CAPTURE(dt);
@@ -447,6 +450,30 @@ TEST_CASE_TEMPLATE("suspension: frictional sand under pressure keeps mu(J); the 
   }
   CHECK(kept == 200);
   CHECK(rated.suspension_viscosity(0.55) == 0.0);
+}
+
+TEST_CASE_TEMPLATE("suspension: a loose sand that dilates past the apex keeps only its viscous deviator", Matrix,
+                   Mat<2>, Mat<3>) {
+  constexpr int dim = Matrix::RowsAtCompileTime;
+  const plasticity::DruckerPrager<dim> model = suspension_sand<dim>();
+  // A slightly compressed trial (trace -0.002) sheared by 0.01: it yields (case III), and the
+  // loose packing (phi = 0.50, tan psi = -0.32) adds more volume than the compression held, so
+  // the returned state goes to the apex (trace 0) with the viscous part of the deviator left,
+  // (1 - mu dt / (mu dt + eta_v)) of the trial's.
+  Vec<dim> eps = Vec<dim>::Constant(-0.002 / dim);
+  eps(0) += 0.01;
+  eps(1) -= 0.01;
+  const Mat<dim> trial = Mat<dim>(eps.array().exp().matrix().asDiagonal());
+  Mat<dim> Fe = trial;
+  double plastic = 0.0, rest = 0.50 * trial.determinant();
+  const double dt = 1e-3;
+  REQUIRE(model.project(Fe, plastic, &rest, dt));
+  const double relax = kLame.mu * dt, kept = 1.0 - relax / (relax + boyer_viscosity<dim>(0.50, 1e-3));
+  const Vec<dim> after = log_singular_values(Fe);  // sorted: 0.01 kept, (0), -0.01 kept
+  CHECK(std::abs(after.sum()) < 1e-12);
+  CHECK(after(0) == doctest::Approx(0.01 * kept).epsilon(1e-9));
+  CHECK(after(dim - 1) == doctest::Approx(-0.01 * kept).epsilon(1e-9));
+  CHECK(kept > 1e-4);  // a deviator is left to test
 }
 
 TEST_CASE("suspension: scene keys and their errors") {
