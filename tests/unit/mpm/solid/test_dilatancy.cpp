@@ -481,16 +481,14 @@ TEST_CASE("suspension: scene keys and their errors") {
       "density: 2500\nyoungs_modulus: 5e4\npoisson_ratio: 0.3\nelasticity: hencky_stvk\nplasticity: {model: "
       "drucker_prager, friction_angle: 30";
   const std::string dilatant = base + ", dilatancy: 4.09, critical_packing: 0.58";
-  const auto& dp = std::get<plasticity::DruckerPrager<2>>(
-      parse_material<2>(Config::parse(dilatant + ", rate: {mu_2: 0.7, viscosity: 0.012, suspension: true}}\n"))
-          .plasticity);
+  const Material<2> m =
+      parse_material<2>(Config::parse(dilatant + ", rate: {mu_2: 0.7, viscosity: 0.012, suspension: true}}\n"));
+  const auto& dp = std::get<plasticity::DruckerPrager<2>>(m.plasticity);
   CHECK(dp.flow().suspension);
   CHECK(dp.flow().j_min == 1e-3);
   CHECK(dp.suspension_viscosity(0.55) > 100 * 0.012);
-  CHECK_FALSE(std::get<plasticity::DruckerPrager<2>>(
-                  parse_material<2>(Config::parse(dilatant + ", rate: {mu_2: 0.7, viscosity: 0.012}}\n")).plasticity)
-                  .flow()
-                  .suspension);
+  const Material<2> plain = parse_material<2>(Config::parse(dilatant + ", rate: {mu_2: 0.7, viscosity: 0.012}}\n"));
+  CHECK_FALSE(std::get<plasticity::DruckerPrager<2>>(plain.plasticity).flow().suspension);
   CHECK_THROWS_WITH_AS(
       parse_material<2>(Config::parse(base + ", rate: {mu_2: 0.7, viscosity: 0.012, suspension: true}}\n")),
       doctest::Contains("plasticity.rate.suspension"), InputError);
