@@ -627,15 +627,13 @@ bool run_adaptive(const Options& o, const Particles<3>& uniform_input) {
       affine_error =
           std::max({affine_error, (Q.v[p] - A * Q.x[p] - b).norm() / b.norm(), (Q.C[p] - A).norm() / A.norm()});
   }
-  adaptive::particles_to_grid(in.P, scheme, in.grid);
   const bool ok = mass_error < 1e-12 && momentum_error < 1e-12 && affine_error < 1e-10;
   std::size_t irregular = in.grid.irregular().size(), near = 0;
   for (int n = 0; n < in.grid.levels(); ++n) near += in.grid.near_embedded(n).particle.size();
   std::printf(
       "\nadaptive, double precision: %zu particles (%zu on the uniform lattice), 3 levels, finest dx = %g, "
-      "refined where x < 1/2; %zu particles near embedded ghosts, %zu irregular; P2G conserves mass to %.1e, momentum "
-      "to "
-      "%.1e (tolerance 1e-12); an affine field comes back to %.1e (tolerance 1e-10) %s\n",
+      "refined where x < 1/2; %zu particles near embedded ghosts, %zu irregular; P2G conserves mass to %.1e, "
+      "momentum to %.1e (tolerance 1e-12); an affine field comes back to %.1e (tolerance 1e-10) %s\n",
       in.P.size(), uniform_input.size(), o.dx, near, irregular, mass_error, momentum_error, affine_error,
       ok ? "ok" : "FAILED");
   if (!ok) return false;

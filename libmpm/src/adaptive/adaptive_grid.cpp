@@ -61,7 +61,7 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
   MPM_VERIFY(x.size() == type.size(), InputError, "adaptive grid: one particle type per particle");
   const int L = levels();
   constexpr int B = SparseGrid<dim>::block_size;
-  transfer_level_.assign(x.size(), 0);
+  transfer_level_.resize(x.size());
   half_cells_.assign(x.size(), 0.5);
   std::vector<std::vector<BlockKey>> own_blocks(L);
   // Particles on their own level (h = 1/2, the quadratic B-spline) go in buckets for the
@@ -76,19 +76,15 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
   // the level, its bucket's block, in parallel (the tree walk is the cost); the loop after it
   // reports the first bad particle, collects the buckets in particle order and takes the
   // others (irregular) through their general stencil.
-  enum Kind : std::uint8_t { kBucketed, kIrregular, kBad };
-  std::vector<Kind> kind(x.size());
+  std::vector<std::uint8_t> regular(x.size(), 0);
   std::vector<BlockKey> bucket(x.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 4096), [&](const auto& range) {
     for (std::size_t p = range.begin(); p != range.end(); ++p) {
-      if (type[p] >= L || !x[p].allFinite()) {
-        kind[p] = kBad;
-        continue;
-      }
+      transfer_level_[p] = -1;  // reported below (a type out of range first)
+      if (type[p] >= L || !x[p].allFinite()) continue;
       const double half = 0.5 * particle_size(type[p]);
       const int n = tree_.finest_level_in(x[p].array() - half, x[p].array() + half);
       transfer_level_[p] = n;
-      kind[p] = n < 0 ? kBad : kIrregular;
       if (n < 0) continue;
       const SparseGrid<dim>& g = levels_[n];
       half_cells_[p] = half / g.dx();
@@ -96,20 +92,20 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
         const IVec<dim> base = uniform_base(n, x[p]);
         if ((base.array() >= 0).all() && (base.array() + 2 < g.node_counts().array()).all()) {
           bucket[p] = g.block_id(base);
-          kind[p] = kBucketed;
+          regular[p] = 1;
         }
       }
     }
   });
   for (std::size_t p = 0; p < x.size(); ++p) {
-    if (kind[p] == kBucketed) {
+    if (regular[p]) {
       bucketed[transfer_level_[p]].emplace_back(bucket[p], static_cast<std::uint32_t>(p));
       continue;
     }
     MPM_VERIFY(type[p] < L, InputError,
                "stage '" + stage + "': particle " + std::to_string(p) + " has type " + std::to_string(type[p]) +
                    ", outside the grid's levels [0, " + std::to_string(L - 1) + "]");
-    const int n = x[p].allFinite() ? transfer_level_[p] : -1;
+    const int n = transfer_level_[p];
     if (n < 0) {
       std::ostringstream s;
       s.precision(9);

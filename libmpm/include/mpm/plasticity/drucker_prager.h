@@ -201,9 +201,9 @@ public:
       }
     }
     Vec<dim> H = eps;
-    if (alpha > 0.0 && alpha * bulk * trace >= k_) {  // II: to the apex, store the excess
-      plastic = to_apex(H, trace, alpha, bulk);
-      H += (1.0 - viscous_share) * dev;  // a suspension keeps its viscous stress
+    const Vec<dim> viscous_dev = (1.0 - viscous_share) * dev;  // what a suspension keeps at the apex
+    if (alpha > 0.0 && alpha * bulk * trace >= k_) {           // II: to the apex, store the excess
+      plastic = to_apex(H, trace, alpha, bulk, viscous_dev);
     } else {
       const double y = yield(elastic_.principal_kirchhoff(eps), alpha);
       if (y <= 0.0 && plastic == 0.0) {  // I, nothing stored to absorb
@@ -226,10 +226,8 @@ public:
         H -= share * dev;
         if (tan_psi != 0.0) {
           H -= Vec<dim>::Constant(std::numbers::sqrt2 * tan_psi * share * dev_norm / dim);
-          if (const double t = H.sum(); alpha > 0.0 && alpha * bulk * t > k_) {
-            plastic = to_apex(H, t, alpha, bulk);
-            H += (1.0 - viscous_share) * dev;
-          }
+          if (const double t = H.sum(); alpha > 0.0 && alpha * bulk * t > k_)
+            plastic = to_apex(H, t, alpha, bulk, viscous_dev);
         }
       }
     }
@@ -281,10 +279,11 @@ private:
     return 0.5 * (lo + hi);
   }
 
-  //! Case II: H becomes the apex; returns the log volume it discards (the new correction v).
-  double to_apex(Vec<dim>& H, double trace, double alpha, double bulk) const {
+  //! Case II: H becomes the apex plus the deviator a suspension keeps (zero without one);
+  //! returns the log volume it discards (the new correction v).
+  double to_apex(Vec<dim>& H, double trace, double alpha, double bulk, const Vec<dim>& viscous_dev) const {
     const double apex_trace = k_ / (alpha * bulk);
-    H.setConstant(apex_trace / dim);
+    H = viscous_dev + Vec<dim>::Constant(apex_trace / dim);
     return std::max(trace - apex_trace, 0.0);
   }
 
