@@ -238,18 +238,33 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
           }
         }
         if (!check_nodes) continue;
-        // The 3^dim stencil nodes lie in the patch: test their bits.
+        // The 3^dim stencil nodes lie in the patch: test their bits. Per axis, the patch block
+        // (corner bit) and the local index bits of the three nodes; the nodes combine them.
         const IVec<dim> base = uniform_base(n, x[p]);
         const IVec<dim> first = g.block_coord(block) * B;
-        for (int j = 0; j < ipow(3, dim); ++j) {
-          int corner = 0, local = 0;
-          for (int a = 0, r = j; a < dim; ++a, r /= 3) {
-            const int offset = base[a] + r % 3 - first[a];  // in [0, 2B)
-            corner |= (offset >= B) << a;
-            local |= (offset & (B - 1)) << (a * SparseGrid<dim>::block_bits);
+        int corner_bit[dim][3], local_bits[dim][3];
+        for (int a = 0; a < dim; ++a)
+          for (int r = 0; r < 3; ++r) {
+            const int offset = base[a] + r - first[a];  // in [0, 2B)
+            corner_bit[a][r] = (offset >= B) << a;
+            local_bits[a][r] = (offset & (B - 1)) << (a * SparseGrid<dim>::block_bits);
           }
-          near[i] |= static_cast<std::uint32_t>((patch_mask[corner] >> local) & 1) << j;
+        auto bit = [&](int corner, int local) { return static_cast<std::uint32_t>((patch_mask[corner] >> local) & 1); };
+        std::uint32_t bits = 0;
+        int j = 0;
+        if constexpr (dim == 2) {
+          for (int r1 = 0; r1 < 3; ++r1)
+            for (int r0 = 0; r0 < 3; ++r0, ++j)
+              bits |= bit(corner_bit[0][r0] | corner_bit[1][r1], local_bits[0][r0] | local_bits[1][r1]) << j;
+        } else {
+          for (int r2 = 0; r2 < 3; ++r2)
+            for (int r1 = 0; r1 < 3; ++r1) {
+              const int corner = corner_bit[1][r1] | corner_bit[2][r2], local = local_bits[1][r1] | local_bits[2][r2];
+              for (int r0 = 0; r0 < 3; ++r0, ++j)
+                bits |= bit(corner_bit[0][r0] | corner, local_bits[0][r0] | local) << j;
+            }
         }
+        near[i] = bits;
       }
     });
     auto append = [&](ParticleBuckets<dim>& b, BlockKey block, std::uint32_t p) {
