@@ -79,11 +79,12 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
   std::vector<std::uint8_t> regular(x.size(), 0);
   std::vector<BlockKey> bucket(x.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 4096), [&](const auto& range) {
+    CellId<dim> leaf;  // the last particle's leaf
     for (std::size_t p = range.begin(); p != range.end(); ++p) {
       transfer_level_[p] = -1;  // reported below (a type out of range first)
       if (type[p] >= L || !x[p].allFinite()) continue;
       const double half = 0.5 * particle_size(type[p]);
-      const int n = tree_.finest_level_in(x[p].array() - half, x[p].array() + half);
+      const int n = tree_.finest_level_in(x[p].array() - half, x[p].array() + half, leaf);
       transfer_level_[p] = n;
       if (n < 0) continue;
       const SparseGrid<dim>& g = levels_[n];

@@ -168,13 +168,20 @@ CellId<dim> CellTree<dim>::coarsest_leaf_at(const IVec<dim>& point) const {
 
 template <int dim>
 CellId<dim> CellTree<dim>::leaf_at(const Vec<dim>& x) const {
+  return leaf_at(x, CellId<dim>{});
+}
+
+template <int dim>
+CellId<dim> CellTree<dim>::leaf_at(const Vec<dim>& x, const CellId<dim>& hint) const {
   const Vec<dim> f = (x - origin_) / dx(finest());
   IVec<dim> cell;
   for (int a = 0; a < dim; ++a) {
     if (!(std::abs(f[a]) < 1e9)) return {};
     cell[a] = static_cast<int>(std::floor(f[a]));
   }
-  return leaf_of(cell);
+  bool inside_hint = hint.level >= 0;  // cells outside the domain (negative) never match
+  for (int a = 0; a < dim && inside_hint; ++a) inside_hint = cell[a] >> (finest() - hint.level) == hint.cell[a];
+  return inside_hint ? hint : leaf_of(cell);
 }
 
 template <int dim>
@@ -194,10 +201,17 @@ int CellTree<dim>::finest_level_in(int level, const IVec<dim>& cell, const Vec<d
 
 template <int dim>
 int CellTree<dim>::finest_level_in(const Vec<dim>& lo, const Vec<dim>& hi) const {
+  CellId<dim> none;
+  return finest_level_in(lo, hi, none);
+}
+
+template <int dim>
+int CellTree<dim>::finest_level_in(const Vec<dim>& lo, const Vec<dim>& hi, CellId<dim>& last_leaf) const {
   // The leaf at the box's centre is the answer when it is of the finest level, or when the box
   // keeps clear of its faces by more than the rounding of the walk below (most particles' boxes,
   // their own sub-cells, do one or the other).
-  if (const CellId<dim> leaf = leaf_at(0.5 * (lo + hi)); leaf.level >= 0) {
+  const CellId<dim> leaf = last_leaf = leaf_at(0.5 * (lo + hi), last_leaf);
+  if (leaf.level >= 0) {
     if (leaf.level == finest()) return leaf.level;
     const Vec<dim> leaf_lo = origin_ + dx(leaf.level) * leaf.cell.template cast<double>();
     bool inside = true;

@@ -143,7 +143,14 @@ CellTree<dim> build_tree(const RefinementSettings<dim>& r, const SceneSettings<d
 template <int dim>
 void refine_around_particles(CellTree<dim>& tree, const std::vector<Vec<dim>>& x,
                              const std::vector<std::uint16_t>& type) {
-  for (std::size_t p = 0; p < x.size(); ++p) tree.refine_to(x[p], type[p]);
+  CellId<dim> leaf;  // the previous particle's leaf while no refinement has split it
+  for (std::size_t p = 0; p < x.size(); ++p) {
+    leaf = tree.leaf_at(x[p], leaf);
+    if (leaf.level >= 0 && leaf.level < std::min<int>(type[p], tree.finest())) {
+      tree.refine_to(x[p], type[p]);
+      leaf = {};
+    }
+  }
 }
 
 template void refine_around_particles(CellTree<2>&, const std::vector<Vec<2>>&, const std::vector<std::uint16_t>&);

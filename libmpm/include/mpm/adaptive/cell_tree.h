@@ -74,9 +74,14 @@ public:
   CellId<dim> coarsest_leaf_at(const IVec<dim>& point) const;
   //! The leaf that contains position x [m] (level -1 outside).
   CellId<dim> leaf_at(const Vec<dim>& x) const;
+  //! leaf_at(x), or `hint` (a leaf of this tree, or level -1) when it contains x: loops over
+  //! particles in storage order pass the previous particle's leaf and seldom read the tables.
+  CellId<dim> leaf_at(const Vec<dim>& x, const CellId<dim>& hint) const;
   //! The finest level of the leaves that overlap the open box (lo, hi) [m]; -1 when the box
   //! misses the domain.
   int finest_level_in(const Vec<dim>& lo, const Vec<dim>& hi) const;
+  //! The same, with the leaf found for the previous box (updated): see leaf_at(x, hint).
+  int finest_level_in(const Vec<dim>& lo, const Vec<dim>& hi, CellId<dim>& last_leaf) const;
 
   //! Calls fn(level, cell) for every leaf, coarse to fine (level-0 leaves in lexicographic order).
   void for_each_leaf(const std::function<void(int, const IVec<dim>&)>& fn) const;
