@@ -519,22 +519,27 @@ void AdaptiveGrid<dim>::pull_velocity(bool old) {
   for (int n = 0; n < levels(); ++n) {
     Ghosts& g = ghosts_[n];
     SparseGrid<dim>& to = levels_[n];
-    g.velocity_moment.assign(g.node.size(), Mat<dim>::Zero());
-    for (std::size_t j = 0; j < g.node.size(); ++j) {
-      const std::size_t k = static_cast<std::size_t>(g.node[j]);
-      const Vec<dim> xk = to.node_position(k);
-      Vec<dim> v = Vec<dim>::Zero(), v_old = Vec<dim>::Zero();
-      for (std::uint32_t l = g.begin[j]; l < g.begin[j + 1]; ++l) {
-        const GhostLink<dim>& link = g.link[l];
-        const SparseGrid<dim>& from = levels_[link.level];
-        const std::size_t i = static_cast<std::size_t>(link.index);
-        v += link.weight * from.velocity[i];
-        if (old) v_old += link.weight * from.velocity_old[i];
-        g.velocity_moment[j].noalias() += link.weight * from.velocity[i] * link_offset(link, xk).transpose();
+    g.velocity_moment.resize(g.node.size());
+    // Ghosts read real nodes only and write their own: in parallel.
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, g.node.size(), 512), [&](const auto& range) {
+      for (std::size_t j = range.begin(); j != range.end(); ++j) {
+        const std::size_t k = static_cast<std::size_t>(g.node[j]);
+        const Vec<dim> xk = to.node_position(k);
+        Vec<dim> v = Vec<dim>::Zero(), v_old = Vec<dim>::Zero();
+        Mat<dim> moment = Mat<dim>::Zero();
+        for (std::uint32_t l = g.begin[j]; l < g.begin[j + 1]; ++l) {
+          const GhostLink<dim>& link = g.link[l];
+          const SparseGrid<dim>& from = levels_[link.level];
+          const std::size_t i = static_cast<std::size_t>(link.index);
+          v += link.weight * from.velocity[i];
+          if (old) v_old += link.weight * from.velocity_old[i];
+          moment.noalias() += link.weight * from.velocity[i] * link_offset(link, xk).transpose();
+        }
+        g.velocity_moment[j] = moment;
+        to.velocity[k] = v;
+        if (old) to.velocity_old[k] = v_old;
       }
-      to.velocity[k] = v;
-      if (old) to.velocity_old[k] = v_old;
-    }
+    });
   }
 }
 
