@@ -1,10 +1,11 @@
-// bench_step: the whole explicit solid step of the library against a textbook step in the
-// same process, in ns per particle-step per core, at the thread counts given.
+// bench_step: the whole step of the library against a reference step in the same process, in
+// ns per particle-step per core, at the thread counts given.
 //
 //   bench_step                                   (sand and jello, 64 cells, 1 and 2 threads)
 //   bench_step --case sand --cells 80 --steps 20 --threads 1 2 4 8 16
+//   bench_step --case fluid coupled              (builds with libcoupling: bench_step_coupled.cpp)
 //
-// Cases (3D, domain [0, 1]^3 with sticky walls, dx = 1 / cells, 8 particles per cell):
+// Solid cases (3D, domain [0, 1]^3 with sticky walls, dx = 1 / cells, 8 particles per cell):
 //   sand:  a column 0.4 x 0.5 x 0.4 m of Drucker-Prager sand (Hencky StVK, 32 deg) collapsing
 //          under gravity from rest on the floor: every stage of the granular step, the
 //          return map included;
@@ -27,6 +28,8 @@
 #include <mpm/core/memory_budget.h>
 #include <mpm/solid/solid_channels.h>
 #include <mpm/solid/solid_scene.h>
+
+#include "step_timing.h"
 
 #include <tbb/global_control.h>
 #include <CLI/CLI.hpp>
@@ -249,14 +252,9 @@ private:
   std::vector<double> mass_, volume0_, plastic_;
 };
 
-// 3. Timing.
-using Clock = std::chrono::steady_clock;
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const std::size_t h = v.size() / 2;
-  return v.size() % 2 ? v[h] : 0.5 * (v[h - 1] + v[h]);
-}
+// 3. Timing (step_timing.h).
+using bench::Clock;
+using bench::seconds_since;
 
 struct LibraryRun {
   double seconds = 0;
@@ -276,7 +274,7 @@ LibraryRun run_library(const Case& c, int steps) {
     pipeline.step(scene.state);
     run.dt.push_back(scene.state.dt);
   }
-  run.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+  run.seconds = seconds_since(t0);
   const Particles<3>& P = scene.state.particles;
   run.totals = Reference::make_totals(P.x, P.v, P.mass, solid::elastic_F(P), solid::plastic_state(P));
   run.stages = pipeline.times();
@@ -289,7 +287,7 @@ double run_reference(const Case& c, int cells, const std::vector<double>& dt, st
   ref.load(scene.state.particles);
   const auto t0 = Clock::now();
   for (double h : dt) ref.step(h);
-  const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+  const double seconds = seconds_since(t0);
   if (totals) *totals = ref.totals();
   return seconds;
 }
@@ -343,33 +341,13 @@ bool run_case(const Options& o, const std::string& name) {
     return false;
   }
 
-  std::vector<double> reference;
-  std::vector<std::vector<double>> library(o.threads.size());
-  std::vector<StageTimes> stages(o.threads.size());
-  for (int r = 0; r < o.repeat; ++r) {
-    reference.push_back(run_reference(c, o.cells, check.dt, nullptr));
-    for (std::size_t i = 0; i < o.threads.size(); ++i) {
-      tbb::global_control limit(tbb::global_control::max_allowed_parallelism, o.threads[i]);
-      const LibraryRun run = run_library(c, o.steps);
-      library[i].push_back(run.seconds);
-      stages[i] = run.stages;
-    }
-  }
-  const double n = static_cast<double>(check.particles) * o.steps;
-  const double ref_s = median(reference), one = median(library[0]);
-  std::printf("median of %d runs; ns per particle-step per core = s x threads x 1e9 / (particles x steps)\n", o.repeat);
-  std::printf("%-10s %7s | %9s %14s %12s %9s\n", "run", "threads", "s", "ns/p-step/core", "vs reference", "speed-up");
-  std::printf("%-10s %7d | %9.3f %14.1f %12s %9s\n", "reference", 1, ref_s, ref_s * 1e9 / n, "1.00", "");
-  for (std::size_t i = 0; i < o.threads.size(); ++i) {
-    const double s = median(library[i]);
-    std::printf("%-10s %7d | %9.3f %14.1f %12.2f %9.2f\n", "library", o.threads[i], s, s * o.threads[i] * 1e9 / n,
-                ref_s / s, one / s);
-  }
-  std::printf("library stages at %d thread%s (last run, ns per particle-step):", o.threads.back(),
-              o.threads.back() > 1 ? "s" : "");
-  for (std::size_t k = 0; k < stages.back().names.size(); ++k)
-    std::printf(" %s %.1f", stages.back().names[k].c_str(), stages.back().seconds[k] * 1e9 / n);
-  std::printf("\n");
+  bench::time_and_report(
+      o.threads, o.repeat, static_cast<double>(check.particles) * o.steps,
+      [&] { return run_reference(c, o.cells, check.dt, nullptr); },
+      [&] {
+        const LibraryRun run = run_library(c, o.steps);
+        return bench::StepRun{run.seconds, run.stages};
+      });
   return true;
 }
 
@@ -378,8 +356,13 @@ bool run_case(const Options& o, const std::string& name) {
 int main(int argc, char** argv) {
   Options o;
   const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  CLI::App app{"The explicit solid step: library against a textbook step, ns per particle-step per core"};
-  app.add_option("--case", o.cases, "sand, jello or both (default both)")->check(CLI::IsMember({"sand", "jello"}));
+  CLI::App app{"The whole step: library against a reference in the same process, ns per particle-step per core"};
+#ifdef SEDIMENT_BENCH_COUPLED
+  const std::vector<std::string> names = {"sand", "jello", "fluid", "coupled"};
+#else
+  const std::vector<std::string> names = {"sand", "jello"};  // fluid, coupled: built with libcoupling only
+#endif
+  app.add_option("--case", o.cases, "sand, jello, fluid, coupled (default sand jello)")->check(CLI::IsMember(names));
   app.add_option("--cells", o.cells, "grid cells per axis of the unit cube (default 64)")->check(CLI::Range(16, 512));
   app.add_option("--steps", o.steps, "steps per run (default 10)")->check(CLI::Range(1, 10000));
   app.add_option("--repeat", o.repeat, "runs per configuration; the median is reported")->check(CLI::Range(1, 100));
@@ -391,7 +374,10 @@ int main(int argc, char** argv) {
 
   bool ok = true;
   try {
-    for (const std::string& name : o.cases) ok = run_case(o, name) && ok;
+    for (const std::string& name : o.cases)
+      ok = (name == "sand" || name == "jello" ? run_case(o, name)
+                                               : bench::run_coupled_case(name, o.cells, o.steps, o.repeat, o.threads)) &&
+           ok;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_step: %s\n", e.what());
     return 2;
