@@ -186,7 +186,8 @@ ModulatedMultigrid<dim>::ModulatedMultigrid(const CellOperator<dim>& op, const O
   mpm::verify<mpm::InputError>(options.near_null_ratio > 0.0, "ModulatedMultigrid: near_null_ratio must be > 0");
   std::vector<std::int64_t> compact;
   detail::number_fluid_cells(op, compact, fluid_cells_);
-  Space fine;
+  fine_ = std::make_unique<Space>();
+  Space& fine = *fine_;
   fine.extent = op.cells;
   fine.cell.reserve(fluid_cells_.size());
   for (std::int64_t c : fluid_cells_) {
@@ -205,14 +206,12 @@ ModulatedMultigrid<dim>::ModulatedMultigrid(const CellOperator<dim>& op, const O
   });
   fine.A.resize(n, n);
   fine.A.setFromTriplets(entries.begin(), entries.end());
-  spaces_.push_back(std::move(fine));
-  build(0);
+  build(fine);
 }
 
 template <int dim>
-void ModulatedMultigrid<dim>::build(int index) {
+void ModulatedMultigrid<dim>::build(Space& s) const {
   {
-    Space& s = spaces_[index];
     s.A.makeCompressed();  // gauss_seidel reads the raw CSR arrays
     const Eigen::Index n = s.A.rows();
     s.b = s.x = s.residual = Eigen::VectorXd::Zero(n);
@@ -231,7 +230,6 @@ void ModulatedMultigrid<dim>::build(int index) {
     if (!detail::can_halve<dim>(s.extent, periodic_)) return;  // smoothed only
   }
   // P0: the coarse cells that own a cell of this space, and the interpolation weights.
-  const Space& s = spaces_[index];
   const IVec<dim> coarse_extent = (s.extent.array() + 1) / 2;
   std::vector<std::int64_t> coarse_index(static_cast<std::size_t>(coarse_extent.template cast<std::int64_t>().prod()),
                                          -1);
@@ -295,25 +293,30 @@ void ModulatedMultigrid<dim>::build(int index) {
       continue;
     Child child;
     child.pattern = pattern;
-    children.push_back(child);
+    children.push_back(std::move(child));
     signs.push_back(std::move(sign));
   }
   Matrix R0 = P0.transpose();
   std::vector<Matrix> child_matrices = modulated_galerkin(s.A, P0, R0, signs);
-  for (std::size_t k = 0; k < children.size(); ++k) children[k].sign = std::move(signs[k]);
-  Space& parent = spaces_[index];
-  parent.P0 = std::move(P0);
-  parent.R0 = std::move(R0);
+  s.P0 = std::move(P0);
+  s.R0 = std::move(R0);
   for (std::size_t k = 0; k < children.size(); ++k) {
-    Space coarse;
+    children[k].sign = std::move(signs[k]);
+    children[k].space = std::make_unique<Space>();
+    Space& coarse = *children[k].space;
     coarse.A = std::move(child_matrices[k]);
     coarse.extent = coarse_extent;
     coarse.cell = coarse_cell;
-    children[k].space = static_cast<int>(spaces_.size());
-    spaces_.push_back(std::move(coarse));
   }
-  spaces_[index].children = std::move(children);
-  for (const Child& child : spaces_[index].children) build(child.space);
+  s.children = std::move(children);
+  tbb::parallel_for(std::size_t{0}, s.children.size(), [&](std::size_t k) { build(*s.children[k].space); });
+}
+
+template <int dim>
+template <class Fn>
+void ModulatedMultigrid<dim>::for_each_space(const Space& s, Fn&& fn) {
+  fn(s);
+  for (const Child& child : s.children) for_each_space(*child.space, fn);
 }
 
 template <int dim>
@@ -349,8 +352,7 @@ void ModulatedMultigrid<dim>::gauss_seidel(Space& s, bool forward) const {
 }
 
 template <int dim>
-void ModulatedMultigrid<dim>::cycle(int index) {
-  Space& s = spaces_[index];
+void ModulatedMultigrid<dim>::cycle(Space& s, bool fine) {
   if (s.bottom.size() > 0) {
     s.x.noalias() = s.bottom * s.b;
     return;
@@ -360,10 +362,10 @@ void ModulatedMultigrid<dim>::cycle(int index) {
   // Child k solves for the correction S_k P0 e from the right-hand side (S_k P0)^T residual.
   auto restrict_residual = [&](const Child& child) {
     s.scratch = child.sign.cwiseProduct(s.residual);
-    parallel_multiply(s.R0, s.scratch, spaces_[child.space].b);
+    parallel_multiply(s.R0, s.scratch, child.space->b);
   };
   auto add_correction = [&](const Child& child) {
-    parallel_multiply(s.P0, spaces_[child.space].x, s.scratch);
+    parallel_multiply(s.P0, child.space->x, s.scratch);
     s.x += child.sign.cwiseProduct(s.scratch);
   };
   auto update_residual = [&s] {
@@ -371,12 +373,12 @@ void ModulatedMultigrid<dim>::cycle(int index) {
     s.residual = s.b - s.residual;
   };
   const int K = static_cast<int>(s.children.size());
-  if (index == 0) {
+  if (fine) {
     // Additive: all children from one residual (one product with the largest matrix). Their
     // subtrees share nothing, so they run in parallel; the sum is taken in a fixed order.
     if (K > 0) update_residual();
     for (const Child& child : s.children) restrict_residual(child);
-    tbb::parallel_for(0, K, [&](int k) { cycle(s.children[k].space); });
+    tbb::parallel_for(0, K, [&](int k) { cycle(*s.children[k].space, false); });
     for (const Child& child : s.children) add_correction(child);
   } else {
     // Multiplicative, children 0 .. K-1 .. 0, each from the updated residual (header).
@@ -384,7 +386,7 @@ void ModulatedMultigrid<dim>::cycle(int index) {
       const Child& child = s.children[step < K ? step : 2 * K - 2 - step];
       update_residual();
       restrict_residual(child);
-      cycle(child.space);
+      cycle(*child.space, false);
       add_correction(child);
     }
   }
@@ -394,25 +396,32 @@ void ModulatedMultigrid<dim>::cycle(int index) {
 template <int dim>
 void ModulatedMultigrid<dim>::apply(const std::vector<double>& r, std::vector<double>& z) {
   z.assign(r.size(), 0.0);
-  Space& fine = spaces_[0];
+  Space& fine = *fine_;
   if (fine.A.rows() == 0) return;
   for (std::size_t i = 0; i < fluid_cells_.size(); ++i) fine.b[static_cast<Eigen::Index>(i)] = r[fluid_cells_[i]];
-  cycle(0);
+  cycle(fine, true);
   for (std::size_t i = 0; i < fluid_cells_.size(); ++i) z[fluid_cells_[i]] = fine.x[static_cast<Eigen::Index>(i)];
 }
 
 template <int dim>
 std::vector<int> ModulatedMultigrid<dim>::fine_patterns() const {
   std::vector<int> patterns;
-  for (const Child& child : spaces_[0].children) patterns.push_back(child.pattern);
+  for (const Child& child : fine_->children) patterns.push_back(child.pattern);
   return patterns;
 }
 
 template <int dim>
 double ModulatedMultigrid<dim>::operator_complexity() const {
   double total = 0.0;
-  for (const Space& s : spaces_) total += static_cast<double>(s.A.nonZeros());
-  return spaces_[0].A.nonZeros() > 0 ? total / static_cast<double>(spaces_[0].A.nonZeros()) : 1.0;
+  for_each_space(*fine_, [&](const Space& s) { total += static_cast<double>(s.A.nonZeros()); });
+  return fine_->A.nonZeros() > 0 ? total / static_cast<double>(fine_->A.nonZeros()) : 1.0;
+}
+
+template <int dim>
+int ModulatedMultigrid<dim>::space_count() const {
+  int count = 0;
+  for_each_space(*fine_, [&](const Space&) { ++count; });
+  return count;
 }
 
 template class ModulatedMultigrid<2>;

@@ -65,7 +65,7 @@
 
 #include <array>
 #include <cstdint>
-#include <deque>
+#include <memory>
 #include <vector>
 
 namespace fluid {
@@ -87,7 +87,7 @@ public:
   void apply(const std::vector<double>& r, std::vector<double>& z);
 
   //! Spaces in the tree (the fine one included).
-  int space_count() const { return static_cast<int>(spaces_.size()); }
+  int space_count() const;
   //! Sign patterns of the fine space's children (bit a of a pattern: sign flips along axis a).
   std::vector<int> fine_patterns() const;
   //! Nonzeros of all matrices over those of the fine one (the cost of a cycle, roughly).
@@ -95,10 +95,11 @@ public:
 
 private:
   using Matrix = Eigen::SparseMatrix<double, Eigen::RowMajor>;
+  struct Space;
   struct Child {
     int pattern = 0;
-    int space = 0;
-    Eigen::VectorXd sign;  //!< S_k over the parent's unknowns: P_k = S_k P0
+    std::unique_ptr<Space> space;  //!< its own subtree: siblings are built in parallel
+    Eigen::VectorXd sign;          //!< S_k over the parent's unknowns: P_k = S_k P0
   };
   struct Space {
     Matrix A;
@@ -115,14 +116,19 @@ private:
     std::vector<std::vector<int>> colours;
   };
 
-  void build(int space);
-  void cycle(int space);
+  //! Builds the subtree below `s` (its matrix, extent and cells set); the children's
+  //! subtrees in parallel (each touches only its own spaces: the result is the serial one).
+  void build(Space& s) const;
+  //! `fine`: the root, whose children combine additively (header).
+  void cycle(Space& s, bool fine);
   void gauss_seidel(Space& s, bool forward) const;
+  template <class Fn>
+  static void for_each_space(const Space& s, Fn&& fn);
 
   Options options_;
   std::array<bool, dim> periodic_{};
   std::vector<std::int64_t> fluid_cells_;  //!< box index of each fine unknown
-  std::deque<Space> spaces_;               //!< a deque: building appends while references are held
+  std::unique_ptr<Space> fine_;            //!< the tree's root
 };
 
 }  // namespace fluid
