@@ -94,7 +94,7 @@ PatternRows multiply_patterns(const Eigen::SparseMatrix<double, Eigen::RowMajor>
                               const std::vector<Eigen::VectorXd>& signs, Eigen::Index columns, const Right& right) {
   const int K = static_cast<int>(signs.size());
   const Eigen::Index rows = left.rows();
-  const Eigen::Index blocks = std::clamp<Eigen::Index>(rows / 4096, 1, 64);
+  const Eigen::Index blocks = std::clamp<Eigen::Index>(rows / 1024, 1, 64);
   std::vector<PatternRows> parts(static_cast<std::size_t>(blocks));
   tbb::parallel_for(Eigen::Index{0}, blocks, [&](Eigen::Index block) {
     PatternRows& out = parts[static_cast<std::size_t>(block)];
@@ -279,22 +279,29 @@ void ModulatedMultigrid<dim>::build(Space& s) const {
   // Pattern k's constant vector is v = S_k P0 1; its median energy ratio decides (header).
   const Eigen::VectorXd diagonal = s.A.diagonal();
   const Eigen::VectorXd interpolated_one = P0 * Eigen::VectorXd::Ones(P0.cols());
-  std::vector<Child> children;
-  std::vector<Eigen::VectorXd> signs;
-  for (int pattern = 0; pattern < (1 << dim); ++pattern) {
-    Eigen::VectorXd sign(P0.rows());
+  // The patterns are tested in parallel (each an operator product), kept in pattern order.
+  std::vector<Eigen::VectorXd> pattern_sign(1 << dim);
+  std::vector<char> near_null(1 << dim, 0);
+  tbb::parallel_for(0, 1 << dim, [&](int pattern) {
+    Eigen::VectorXd& sign = pattern_sign[static_cast<std::size_t>(pattern)];
+    sign.resize(P0.rows());
     for (std::size_t i = 0; i < s.cell.size(); ++i) {
       int parity = 0;
       for (int a = 0; a < dim; ++a) parity += (pattern >> a & 1) * s.cell[i][a];
       sign[static_cast<Eigen::Index>(i)] = parity % 2 == 0 ? 1.0 : -1.0;
     }
-    if (pattern != 0 &&
-        !(median_energy_ratio(s.A, diagonal, sign.cwiseProduct(interpolated_one)) < options_.near_null_ratio))
-      continue;
+    near_null[static_cast<std::size_t>(pattern)] =
+        pattern == 0 ||
+        median_energy_ratio(s.A, diagonal, sign.cwiseProduct(interpolated_one)) < options_.near_null_ratio;
+  });
+  std::vector<Child> children;
+  std::vector<Eigen::VectorXd> signs;
+  for (int pattern = 0; pattern < (1 << dim); ++pattern) {
+    if (!near_null[static_cast<std::size_t>(pattern)]) continue;
     Child child;
     child.pattern = pattern;
     children.push_back(std::move(child));
-    signs.push_back(std::move(sign));
+    signs.push_back(std::move(pattern_sign[static_cast<std::size_t>(pattern)]));
   }
   Matrix R0 = P0.transpose();
   std::vector<Matrix> child_matrices = modulated_galerkin(s.A, P0, R0, signs);
