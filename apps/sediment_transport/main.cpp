@@ -152,7 +152,8 @@ int run(const CommandLine& cl, const Config& scene) {
                                    {"fitted_time_scale", fit.time_scale},
                                    {"fit_rms_error", fit.rms_error},
                                    {"scour_depth_ratio", fit.equilibrium_depth / predicted->scour_depth},
-                                   {"time_scale_ratio", fit.time_scale / predicted->time_scale}});
+                                   {"time_scale_ratio", fit.time_scale / predicted->time_scale},
+                                   {"scour_history_error", coupling::scour_history_error(times, scour, *predicted)}});
   }
   runner.write_summary(results);
   if (!cl.check) return 0;

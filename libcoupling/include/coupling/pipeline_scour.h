@@ -37,4 +37,10 @@ struct ScourFit {
 //! around the best) S_eq is linear and solved exactly. At least two samples with t > 0.
 ScourFit fit_scour_history(const std::vector<double>& time, const std::vector<double>& depth);
 
+//! The root mean square over the samples with t > 0 of S_i - S_eq (1 - exp(-t_i / T)), the
+//! predicted history, over S_eq: how far a run's scour history lies from the experiments' (0:
+//! on it; 1: off by the equilibrium depth throughout). Needs a sample with t > 0.
+double scour_history_error(const std::vector<double>& time, const std::vector<double>& depth,
+                           const PipelineScourPrediction& prediction);
+
 }  // namespace coupling

@@ -80,4 +80,21 @@ ScourFit fit_scour_history(const std::vector<double>& time, const std::vector<do
   return fit;
 }
 
+double scour_history_error(const std::vector<double>& time, const std::vector<double>& depth,
+                           const PipelineScourPrediction& prediction) {
+  mpm::verify<mpm::InputError>(time.size() == depth.size() && prediction.scour_depth > 0.0 &&
+                                   prediction.time_scale > 0.0,
+                               "scour history error: one depth per time and a positive prediction");
+  double sum = 0.0;
+  int samples = 0;
+  for (std::size_t i = 0; i < time.size(); ++i) {
+    if (!(time[i] > 0.0)) continue;
+    const double predicted = prediction.scour_depth * (1.0 - std::exp(-time[i] / prediction.time_scale));
+    sum += (depth[i] - predicted) * (depth[i] - predicted);
+    ++samples;
+  }
+  mpm::verify<mpm::InputError>(samples > 0, "scour history error: no sample after t = 0");
+  return std::sqrt(sum / samples) / prediction.scour_depth;
+}
+
 }  // namespace coupling

@@ -46,3 +46,21 @@ TEST_CASE("scour fit: recovers S_eq and T of an exponential history, and a histo
   CHECK(early.time_scale == doctest::Approx(5000.0).epsilon(1e-3));
   CHECK_THROWS_AS(fit_scour_history({0.0, 1.0}, {0.0, 0.01}), mpm::InputError);
 }
+
+TEST_CASE("scour history error: 0 on the predicted history, the offset over S_eq off it") {
+  PipelineScourPrediction p;
+  p.scour_depth = 0.03;
+  p.time_scale = 100.0;
+  std::vector<double> t, on, above;
+  for (int i = 0; i <= 20; ++i) {
+    t.push_back(i);
+    on.push_back(0.03 * (1.0 - std::exp(-i / 100.0)));
+    above.push_back(on.back() + 0.006);
+  }
+  CHECK(scour_history_error(t, on, p) < 1e-15);
+  CHECK(scour_history_error(t, above, p) == doctest::Approx(0.2).epsilon(1e-12));
+  // The t = 0 sample does not count (a history that starts from its own offset).
+  above[0] = 1.0;
+  CHECK(scour_history_error(t, above, p) == doctest::Approx(0.2).epsilon(1e-12));
+  CHECK_THROWS_AS(scour_history_error({0.0}, {0.0}, p), mpm::InputError);
+}
