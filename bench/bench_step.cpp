@@ -376,7 +376,7 @@ int main(int argc, char** argv) {
   try {
     for (const std::string& name : o.cases)
       ok = (name == "sand" || name == "jello" ? run_case(o, name)
-                                               : bench::run_coupled_case(name, o.cells, o.steps, o.repeat, o.threads)) &&
+                                              : bench::run_coupled_case(name, o.cells, o.steps, o.repeat, o.threads)) &&
            ok;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_step: %s\n", e.what());

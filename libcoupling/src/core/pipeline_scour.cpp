@@ -82,9 +82,9 @@ ScourFit fit_scour_history(const std::vector<double>& time, const std::vector<do
 
 double scour_history_error(const std::vector<double>& time, const std::vector<double>& depth,
                            const PipelineScourPrediction& prediction) {
-  mpm::verify<mpm::InputError>(time.size() == depth.size() && prediction.scour_depth > 0.0 &&
-                                   prediction.time_scale > 0.0,
-                               "scour history error: one depth per time and a positive prediction");
+  mpm::verify<mpm::InputError>(
+      time.size() == depth.size() && prediction.scour_depth > 0.0 && prediction.time_scale > 0.0,
+      "scour history error: one depth per time and a positive prediction");
   double sum = 0.0;
   int samples = 0;
   for (std::size_t i = 0; i < time.size(); ++i) {

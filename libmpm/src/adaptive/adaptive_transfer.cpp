@@ -8,8 +8,8 @@
 
 #include <algorithm>
 #include <array>
-#include <cstdint>
 #include <bit>
+#include <cstdint>
 #include <map>
 
 namespace mpm::adaptive {
