@@ -186,8 +186,13 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
     for (std::size_t i = 0; i < fresh.size(); ++i) {
       FreshStatus& c = computed[i];
       const std::size_t link_offset = status.links.size();
-      BlockStatus block{static_cast<std::uint32_t>(status.ghosts.size()), 0, c.embedded,
-                        static_cast<std::uint32_t>(status.reached.size()), 0};
+      BlockStatus block{static_cast<std::uint32_t>(status.ghosts.size()),
+                        0,
+                        c.embedded,
+                        static_cast<std::uint32_t>(status.reached.size()),
+                        0,
+                        c.depends_lo,
+                        c.depends_hi};
       for (PendingGhost& ghost : c.ghosts) {
         ghost.first_link += link_offset;
         ghost.end_link += link_offset;
@@ -415,6 +420,8 @@ typename AdaptiveGrid<dim>::FreshStatus AdaptiveGrid<dim>::block_status(int n, B
     for (int a = 0; a < dim; ++a) node[a] = origin[a] + ((local >> (a * SparseGrid<dim>::block_bits)) & (B - 1));
     if ((node.array() >= g.node_counts().array()).any()) continue;  // padding beyond the domain
     const IVec<dim> point = node * s;
+    out.depends_lo = out.depends_lo.cwiseMin(point);
+    out.depends_hi = out.depends_hi.cwiseMax(point);
     if (home_level(tree_, point) == n) continue;  // a real node of this level
     const std::size_t first_link = out.links.size();
     embed(tree_, point, 1.0, out.links);
@@ -422,9 +429,14 @@ typename AdaptiveGrid<dim>::FreshStatus AdaptiveGrid<dim>::block_status(int n, B
     if (out.links.size() - first_link > 1 || out.links[first_link].point != point)
       out.embedded |= std::uint64_t{1} << SparseGrid<dim>::local_index(node);
   }
-  // The blocks of the real nodes its ghosts reach, once each.
-  for (const NodeWeight<dim>& link : out.links)
+  // The blocks of the real nodes its ghosts reach, once each. An embedding walks through points
+  // inside the box of its links (each point lies in the box of the corners it is interpolated
+  // from), so the links close the box the statuses depend on.
+  for (const NodeWeight<dim>& link : out.links) {
     out.reached.push_back({link.level, levels_[link.level].block_id(link.point / tree_.scale(link.level))});
+    out.depends_lo = out.depends_lo.cwiseMin(link.point);
+    out.depends_hi = out.depends_hi.cwiseMax(link.point);
+  }
   std::sort(out.reached.begin(), out.reached.end());
   out.reached.erase(std::unique(out.reached.begin(), out.reached.end()), out.reached.end());
   return out;
@@ -438,33 +450,31 @@ void AdaptiveGrid<dim>::forget_changed_statuses() {
     status_.assign(L, LevelStatus{});
     return;
   }
-  // A node's status is read off the cells its embedding walks through: leaves of strictly
-  // decreasing levels chained from the node, each chain within dx_0 (1 + 1/2 + ...) < 2 dx_0
-  // of it, and the cells touching them (constrained_basis.cpp). The statuses of the blocks
-  // farther than that from every changed cell stand; so do only those of the last step's blocks.
-  const int reach = 2 * tree_.scale(0) + 1;  // lattice units, one finest cell to spare
+  // A node's status is read off the leaves whose closure holds a point of its embedding (the
+  // node, then the corners it is interpolated from, recursively: constrained_basis.cpp). A
+  // refinement change alters the leaves in the closure of the changed cell only, so a block's
+  // statuses stand unless some changed cell's closure meets the box of its points
+  // (BlockStatus::depends_lo/hi); only the last step's blocks are kept.
   std::vector<std::pair<IVec<dim>, IVec<dim>>> changed;
   for (const CellId<dim>& c : tree_.refined_difference(status_tree_)) {
     const int s = tree_.scale(c.level);
-    changed.push_back(
-        {c.cell * s - IVec<dim>::Constant(reach), (c.cell + IVec<dim>::Ones()) * s + IVec<dim>::Constant(reach)});
+    changed.push_back({c.cell * s, (c.cell + IVec<dim>::Ones()) * s});
   }
   status_tree_ = tree_;
-  constexpr int B = SparseGrid<dim>::block_size;
   for (int n = 0; n < L; ++n) {
     const LevelStatus old = std::move(status_[n]);
     LevelStatus& kept = status_[n] = LevelStatus{};
     if (static_cast<int>(own_blocks_.size()) != L) continue;
-    const int s = tree_.scale(n);
     const std::vector<BlockKey>& last_blocks = own_blocks_[n];
     std::vector<std::uint8_t> near(last_blocks.size(), 0);  // near a change: in parallel
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, last_blocks.size(), 64), [&](const auto& range) {
       for (std::size_t b = range.begin(); b != range.end(); ++b) {
-        const IVec<dim> first = levels_[n].block_coord(last_blocks[b]) * (B * s);  // lattice span of its nodes
-        const IVec<dim> last = first + IVec<dim>::Constant((B - 1) * s);
+        const int m = old.index.find(last_blocks[b]);
+        if (m < 0) continue;
+        const BlockStatus& block = old.blocks[static_cast<std::size_t>(m)];
         for (std::size_t i = 0; i < changed.size() && !near[b]; ++i)
-          near[b] =
-              (first.array() <= changed[i].second.array()).all() && (last.array() >= changed[i].first.array()).all();
+          near[b] = (block.depends_lo.array() <= changed[i].second.array()).all() &&
+                    (block.depends_hi.array() >= changed[i].first.array()).all();
       }
     });
     for (std::size_t b = 0; b < last_blocks.size(); ++b) {

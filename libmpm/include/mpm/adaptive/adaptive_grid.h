@@ -27,6 +27,7 @@
 
 #include <cstdint>
 #include <tuple>
+#include <limits>
 #include <vector>
 
 namespace mpm::adaptive {
@@ -214,6 +215,9 @@ private:
     std::uint32_t first_ghost, end_ghost;
     std::uint64_t embedded;  // bit l: node l of the block is an embedded ghost
     std::uint32_t first_reached, end_reached;
+    // Lattice box of every point the statuses were read from (the nodes and their links): a
+    // tree change away from it leaves them as they are (forget_changed_statuses).
+    IVec<dim> depends_lo, depends_hi;
   };
   struct LevelStatus {
     BlockTable index;  // block key -> blocks[]
@@ -224,6 +228,8 @@ private:
   };
   struct FreshStatus {  // one block's status before it joins its level's tables
     std::uint64_t embedded = 0;
+    IVec<dim> depends_lo = IVec<dim>::Constant(std::numeric_limits<int>::max()),
+              depends_hi = IVec<dim>::Constant(std::numeric_limits<int>::min());
     std::vector<PendingGhost> ghosts;  // links relative to `links`
     std::vector<NodeWeight<dim>> links;
     std::vector<std::pair<int, BlockKey>> reached;
