@@ -26,8 +26,8 @@
 #include <mpm/core/sparse_grid.h>
 
 #include <cstdint>
-#include <tuple>
 #include <limits>
+#include <tuple>
 #include <vector>
 
 namespace mpm::adaptive {
