@@ -292,23 +292,6 @@ double run_reference(const Case& c, int cells, const std::vector<double>& dt, st
   return seconds;
 }
 
-// The largest difference of the totals relative to the scale of each group (momentum, m x,
-// kinetic energy, F, F - I, plastic).
-double deviation(const std::vector<double>& a, const std::vector<double>& b) {
-  const auto scale = [&](int lo, int hi) {
-    double s = 0;
-    for (int i = lo; i < hi; ++i) s = std::max({s, std::abs(b[i]), std::abs(a[i])});
-    return s;
-  };
-  const int groups[][2] = {{0, 3}, {3, 6}, {6, 7}, {7, 10}, {10, 11}, {11, 12}};
-  double d = 0;
-  for (const auto& g : groups) {
-    const double s = scale(g[0], g[1]);
-    for (int i = g[0]; i < g[1]; ++i) d = std::max(d, s > 0 ? std::abs(a[i] - b[i]) / s : 0.0);
-  }
-  return d;
-}
-
 bool run_case(const Options& o, const std::string& name) {
   const Case c = make_case(name, o.cells);
   const double reference_bytes = std::pow(o.cells + 1.0, 3) * 56.0;  // the dense grid
@@ -326,7 +309,9 @@ bool run_case(const Options& o, const std::string& name) {
   }
   std::vector<double> ref_totals;
   run_reference(c, o.cells, check.dt, &ref_totals);
-  const double d = deviation(check.totals, ref_totals);
+  // Momentum, m x, kinetic energy, F (trace, off-diagonal pairs), |F - I|^2, plastic state.
+  const double d =
+      bench::max_group_difference(check.totals, ref_totals, {{0, 3}, {3, 6}, {6, 7}, {7, 10}, {10, 11}, {11, 12}});
   const double tolerance = 1e-9;
   std::printf(
       "\n%s: %zu particles, dx = 1/%d, %d steps (dt %.3g .. %.3g s); library vs reference totals: max "

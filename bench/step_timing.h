@@ -8,9 +8,11 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace bench {
@@ -23,6 +25,20 @@ inline double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   const std::size_t h = v.size() / 2;
   return v.size() % 2 ? v[h] : 0.5 * (v[h - 1] + v[h]);
+}
+
+//! The largest difference of the totals a and b, each relative to the largest magnitude in its
+//! group (entries [first, end) of each pair of `groups`): how a run's totals and the
+//! reference's are compared.
+inline double max_group_difference(const std::vector<double>& a, const std::vector<double>& b,
+                                   const std::vector<std::pair<int, int>>& groups) {
+  double d = 0;
+  for (const auto& [first, end] : groups) {
+    double scale = 0;
+    for (int i = first; i < end; ++i) scale = std::max({scale, std::abs(a[i]), std::abs(b[i])});
+    for (int i = first; i < end; ++i) d = std::max(d, scale > 0 ? std::abs(a[i] - b[i]) / scale : 0.0);
+  }
+  return d;
 }
 
 //! One timed run of the library: wall seconds of the steps and its stage times.

@@ -255,20 +255,17 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
             corner_bit[a][r] = (offset >= B) << a;
             local_bits[a][r] = (offset & (B - 1)) << (a * SparseGrid<dim>::block_bits);
           }
-        auto bit = [&](int corner, int local) { return static_cast<std::uint32_t>((patch_mask[corner] >> local) & 1); };
         std::uint32_t bits = 0;
-        int j = 0;
-        if constexpr (dim == 2) {
-          for (int r1 = 0; r1 < 3; ++r1)
-            for (int r0 = 0; r0 < 3; ++r0, ++j)
-              bits |= bit(corner_bit[0][r0] | corner_bit[1][r1], local_bits[0][r0] | local_bits[1][r1]) << j;
-        } else {
-          for (int r2 = 0; r2 < 3; ++r2)
-            for (int r1 = 0; r1 < 3; ++r1) {
-              const int corner = corner_bit[1][r1] | corner_bit[2][r2], local = local_bits[1][r1] | local_bits[2][r2];
-              for (int r0 = 0; r0 < 3; ++r0, ++j)
-                bits |= bit(corner_bit[0][r0] | corner, local_bits[0][r0] | local) << j;
-            }
+        for (int j = 0; j < ipow(3, dim); j += 3) {  // a row of three nodes along axis 0
+          int corner = 0, local = 0;
+          for (int a = 1; a < dim; ++a) {
+            corner |= corner_bit[a][stencil_offsets[j][a]];
+            local |= local_bits[a][stencil_offsets[j][a]];
+          }
+          for (int r = 0; r < 3; ++r)
+            bits |=
+                static_cast<std::uint32_t>((patch_mask[corner | corner_bit[0][r]] >> (local | local_bits[0][r])) & 1)
+                << (j + r);
         }
         near[i] = bits;
       }

@@ -104,14 +104,6 @@ RegularStencil<dim> regular_stencil(const AdaptiveGrid<dim>& grid, int n, const 
   return s;
 }
 
-// Bit j of a stencil mask is node (j mod 3, j / 3 mod 3, j / 9) of the stencil.
-constexpr auto kStencilDigits = [] {
-  std::array<std::array<std::int8_t, 3>, 27> digits{};
-  for (int j = 0; j < 27; ++j)
-    digits[j] = {static_cast<std::int8_t>(j % 3), static_cast<std::int8_t>(j / 3 % 3), static_cast<std::int8_t>(j / 9)};
-  return digits;
-}();
-
 // fn(j, w) for the embedded ghosts j of a regular stencil: its nodes flagged in `mask`
 // (AdaptiveGrid::near_embedded_masks), w their weight.
 template <int dim, class Fn>
@@ -122,7 +114,7 @@ void for_each_embedded(const AdaptiveGrid<dim>& grid, int n, const RegularStenci
   BlockKey last_block = ~BlockKey{0};
   Index first_node = 0;  // storage index of node 0 of last_block: one table lookup per block
   for (; mask != 0; mask &= mask - 1) {
-    const std::array<std::int8_t, 3>& digit = kStencilDigits[std::countr_zero(mask)];
+    const auto& digit = AdaptiveGrid<dim>::stencil_offsets[std::countr_zero(mask)];
     IVec<dim> node;
     double w = 1.0;
     for (int a = 0; a < dim; ++a) {

@@ -25,6 +25,7 @@
 #include <mpm/core/particle_buckets.h>
 #include <mpm/core/sparse_grid.h>
 
+#include <array>
 #include <cstdint>
 #include <limits>
 #include <tuple>
@@ -103,9 +104,17 @@ public:
   //! APIC adds the ghosts' affine terms for them beside the uniform loops (adaptive_transfer.h).
   const ParticleBuckets<dim>& near_embedded(int n) const { return near_embedded_[n]; }
   //! Per entry of near_embedded(n).particle: which nodes of its regular stencil are embedded
-  //! ghosts, bit i_0 + 3 i_1 (+ 9 i_2) for node uniform_base() + (i_0, i_1, i_2). The ghosts'
-  //! APIC terms visit only these nodes.
+  //! ghosts, bit i_0 + 3 i_1 (+ 9 i_2) for node uniform_base() + (i_0, i_1, i_2) (the offsets
+  //! of bit j: stencil_offsets[j]). The ghosts' APIC terms visit only these nodes.
   const std::vector<std::uint32_t>& near_embedded_masks(int n) const { return near_masks_[n]; }
+  //! The node offsets (i_0, i_1, i_2) of bit j of a stencil mask.
+  static constexpr auto stencil_offsets = [] {
+    std::array<std::array<std::int8_t, 3>, 27> offsets{};
+    for (int j = 0; j < 27; ++j)
+      offsets[j] = {static_cast<std::int8_t>(j % 3), static_cast<std::int8_t>(j / 3 % 3),
+                    static_cast<std::int8_t>(j / 9)};
+    return offsets;
+  }();
   //! The other particles: they take the general path (for_each_weight). Ordered by transfer
   //! level and block of their first stencil node, in groups of one (level, block).
   const std::vector<std::uint32_t>& irregular() const { return irregular_; }
