@@ -166,18 +166,18 @@ CASES = [
          "funnel whose outlet is 0.08 m wide, solver: implicit", "solid_scene", "data/scenes/stability/funnel.yaml",
          [], "completes", check=True, extra=passed_funnel),
 ] + [
-    # Particle domains (explicit, PIC/FLIP through the corners) and their dynamic enrichment.
-    # The enriched block passes but keeps part of its deformation locked in the enriched
-    # region (no self-contact there: user guide 4.5a, known weakness): it is not asked to recover.
+    # Particle domains (explicit, PIC/FLIP through the corners) and their dynamic enrichment,
+    # whose surfaces' self-contact keeps the folded front from locking in (user guide 4.5a).
     case(f"{name}_funnel_squeeze", f"the funnel squeeze, solver: explicit, {what}, 1.5 s", "solid_scene",
          "data/scenes/stability/funnel.yaml",
          ["solver=explicit", "transfer.scheme=flip", "particle_domains=true", "time.end=1.5"] + sets,
          "completes", check=True, extra=extra)
     for name, what, sets, extra in (
         ("domains", "particle domains", [], passed_funnel),
-        ("enriched", "enriched particle domains (eps = 0.6)", ["domain_enrichment=0.6"], passed_outlet))
+        ("enriched", "enriched particle domains (eps = 0.6)", ["domain_enrichment=0.6"], passed_funnel))
 ] + [
-    # The implicit step with the enriched corners among Newton's unknowns.
+    # The implicit step with the enriched corners among Newton's unknowns (no self-contact: the
+    # block passes but is not asked to recover).
     case("implicit_enriched_funnel_squeeze", "the funnel squeeze, solver: implicit, enriched particle domains "
          "(eps = 0.6), 1.5 s", "solid_scene", "data/scenes/stability/funnel.yaml",
          ["transfer.scheme=flip", "particle_domains=true", "domain_enrichment=0.6", "time.end=1.5"],

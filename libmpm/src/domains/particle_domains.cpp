@@ -31,7 +31,8 @@ std::size_t ParticleDomains<dim>::memory_bytes() const {
          (sharing_begin.capacity() + sharing.capacity()) * sizeof(std::uint32_t) +
          surface.capacity() * sizeof(surface[0]) + buckets.memory_bytes() + mass.capacity() * sizeof(double) +
          (momentum.capacity() + force.capacity()) * sizeof(Vec<dim>) + enriched.capacity() + point.capacity() +
-         velocity_gradient.capacity() * sizeof(Mat<dim>);
+         velocity_gradient.capacity() * sizeof(Mat<dim>) + embedded_domain.capacity() * sizeof(std::uint32_t) +
+         embedded_local.capacity() * sizeof(Vec<dim>) + embedded_triangles.capacity() * sizeof(embedded_triangles[0]);
 }
 
 template <int dim>
@@ -74,6 +75,68 @@ void add_body(ParticleDomains<dim>& domains, std::size_t first, const std::vecto
     }
     domains.corner_of.push_back(own);
     domains.inverse_side.push_back(stretch / spacing);
+  }
+}
+
+template <int dim>
+void embed_mesh(ParticleDomains<dim>& domains, std::size_t first, const std::vector<Vec<dim>>& positions,
+                double spacing, const std::vector<Vec<dim>>& vertices,
+                const std::vector<std::array<std::uint32_t, 3>>& triangles) {
+  MPM_VERIFY(first + positions.size() <= domains.particle_count() && spacing > 0.0, Error,
+             "particle domains: a mesh is embedded in the domains of a body added before");
+  if (positions.empty()) return;
+  // The body's lattice as add_body laid it: particle cell i spans u in [i - 1/2, i + 1/2] of
+  // u = (x - lo) / spacing. Cells are keyed with an offset of `margin`, so that the cells a
+  // vertex outside the body searches (down to -margin) have keys too.
+  constexpr int margin = 4, bits = 63 / dim;
+  Vec<dim> lo = positions.front();
+  for (const Vec<dim>& x : positions) lo = lo.cwiseMin(x);
+  const auto key = [&](const IVec<dim>& cell) {
+    std::uint64_t k = 0;
+    for (int a = dim - 1; a >= 0; --a) k = (k << bits) | static_cast<std::uint64_t>(cell[a] + margin);
+    return k;
+  };
+  std::unordered_map<std::uint64_t, std::uint32_t> particle_at;
+  for (std::size_t p = 0; p < positions.size(); ++p) {
+    IVec<dim> cell;
+    for (int a = 0; a < dim; ++a) cell[a] = static_cast<int>(std::lround((positions[p][a] - lo[a]) / spacing));
+    particle_at.emplace(key(cell), static_cast<std::uint32_t>(first + p));
+  }
+  const std::uint32_t base = static_cast<std::uint32_t>(domains.embedded_domain.size());
+  for (std::size_t v = 0; v < vertices.size(); ++v) {
+    const Vec<dim> u = (vertices[v] - lo) / spacing;
+    IVec<dim> home;
+    for (int a = 0; a < dim; ++a) home[a] = static_cast<int>(std::floor(u[a] + 0.5));
+    // The cell that holds the vertex, else the nearest particle centre within two cells (none
+    // when the vertex is beyond the keyed cells).
+    std::uint32_t particle = 0;
+    IVec<dim> best_cell = home;
+    double best = std::numeric_limits<double>::infinity();
+    bool keyed = true;
+    for (int a = 0; a < dim; ++a)
+      keyed = keyed && home[a] >= 2 - margin && home[a] + 2 + margin < (std::int64_t{1} << bits);
+    constexpr int side = 5, cells = dim == 2 ? side * side : side * side * side;
+    for (int n = 0; keyed && n < cells; ++n) {
+      IVec<dim> cell;
+      for (int a = 0, m = n; a < dim; ++a, m /= side) cell[a] = home[a] + m % side - side / 2;
+      const auto it = particle_at.find(key(cell));
+      if (it == particle_at.end()) continue;
+      const double distance = cell == home ? -1.0 : (u - cell.template cast<double>()).squaredNorm();
+      if (distance < best) best = distance, particle = it->second, best_cell = cell;
+    }
+    if (!(best < std::numeric_limits<double>::infinity()))
+      throw Error("particle domains: mesh vertex " + std::to_string(v) +
+                  " lies more than two particle spacings from the body's particles (embed the mesh the body was "
+                  "seeded from)");
+    domains.embedded_domain.push_back(particle);
+    domains.embedded_local.push_back(u - best_cell.template cast<double>() + Vec<dim>::Constant(0.5));
+  }
+  for (const auto& t : triangles) {
+    for (const std::uint32_t i : t)
+      MPM_VERIFY(i < vertices.size(), Error,
+                 "particle domains: a mesh triangle names vertex " + std::to_string(i) + " of " +
+                     std::to_string(vertices.size()));
+    domains.embedded_triangles.push_back({base + t[0], base + t[1], base + t[2]});
   }
 }
 
@@ -536,6 +599,8 @@ void restore(ParticleDomains<dim>& d, const CarriedData& data) {
   template struct ParticleDomains<dim>;                                                                              \
   template void add_body(ParticleDomains<dim>&, std::size_t, const std::vector<Vec<dim>>&, double, const Vec<dim>&); \
   template void add_points(ParticleDomains<dim>&, std::size_t, const std::vector<Vec<dim>>&);                        \
+  template void embed_mesh(ParticleDomains<dim>&, std::size_t, const std::vector<Vec<dim>>&, double,                 \
+                           const std::vector<Vec<dim>>&, const std::vector<std::array<std::uint32_t, 3>>&);          \
   template void index_sharing(ParticleDomains<dim>&);                                                                \
   template void corners_to_grid(ParticleDomains<dim>&, const Kernel&, SparseGrid<dim>&, const std::string&,          \
                                 const std::vector<Mat<dim>>&);                                                       \

@@ -449,6 +449,11 @@ void Runner<dim, State>::write_frame(State& state, int frame) {
       if (state.domains && !state.domains->surface.empty()) {
         io::write_surface(out_ / io::particle_file_name(frame, "surface"), *state.domains, state.time, frame, run_id_);
         io::write_surface_time_series<dim>(out_, frames_written_);
+        if (!state.domains->embedded_triangles.empty()) {  // a mesh the bodies were seeded from
+          io::write_embedded_mesh(out_ / io::particle_file_name(frame, "mesh"), *state.domains, state.time, frame,
+                                  run_id_);
+          io::write_embedded_mesh_time_series(out_, frames_written_);
+        }
       }
   }
   if (settings_.output.png) {

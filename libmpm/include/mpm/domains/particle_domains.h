@@ -72,9 +72,19 @@ struct ParticleDomains {
   //! (counter-clockwise boundary in 2D). It moves with the corners (Zhu et al.
   //! sec. 4.1 embed a finer mesh in the domains; here the mesh is the domains' own boundary).
   std::vector<std::array<std::uint32_t, corners / 2>> surface;
+  //! A finer surface mesh embedded in the domains (Zhu et al. sec. 4.1; embed_mesh): vertex v
+  //! lies in the reference domain of particle embedded_domain[v] at the local coordinates
+  //! embedded_local[v] (in [0, 1]^dim inside the domain; a vertex just outside the particles'
+  //! domains follows the nearest one's trilinear map extended), and moves with the corners,
+  //! x_v = sum_alpha N_alpha(xi_v) x_alpha. Triangles index the embedded vertices.
+  std::vector<std::uint32_t> embedded_domain;
+  std::vector<Vec<dim>> embedded_local;
+  std::vector<std::array<std::uint32_t, 3>> embedded_triangles;
 
   //! epsilon of the enrichment criterion K(F) <= epsilon, in (0, 1); 0: never enrich.
   double enrichment_threshold = 0.0;
+  //! Thickness h of the enriched surfaces' self-contact (surface_contact.h) [m]; 0: none.
+  double contact_thickness = 0.0;
   // Set by mark_enrichment at the start of each step (never stored: F decides again).
   std::vector<std::uint8_t> enriched;  //!< per corner: 1 when a degree of freedom of its own this step
   std::size_t enriched_particles = 0;  //!< particles with K(F) <= epsilon
@@ -113,6 +123,16 @@ struct ParticleDomains {
   }
   //! F_p = sum_alpha x_alpha grad_X w_alpha_p^T from the current corners.
   Mat<dim> deformation(std::size_t p) const { return gradient(p, x); }
+  //! The current position of embedded vertex v, sum_alpha N_alpha(xi_v) x_alpha [m].
+  Vec<dim> embedded_position(std::size_t v) const {
+    Vec<dim> x_v = Vec<dim>::Zero();
+    for (int alpha = 0; alpha < corners; ++alpha) {
+      double N = 1.0;
+      for (int a = 0; a < dim; ++a) N *= (alpha >> a) & 1 ? embedded_local[v][a] : 1.0 - embedded_local[v][a];
+      x_v += N * x[corner_of[embedded_domain[v]][alpha]];
+    }
+    return x_v;
+  }
   //! x_p = sum_alpha w_alpha_p x_alpha.
   Vec<dim> centre(std::size_t p) const {
     Vec<dim> c = Vec<dim>::Zero();
@@ -131,6 +151,18 @@ struct ParticleDomains {
 template <int dim>
 void add_body(ParticleDomains<dim>& domains, std::size_t first, const std::vector<Vec<dim>>& positions, double spacing,
               const Vec<dim>& stretch);
+
+//! Embeds a triangle mesh (Zhu et al. sec. 4.1) in the domains of the body that add_body seeded
+//! from the same `positions` and `spacing` as particles [first, first + positions.size()): the
+//! mesh's `vertices` [m], in the frame of the seeded positions (the mesh the body was seeded
+//! from), each in the domain whose lattice cell holds it or, outside the particles' cells, in
+//! the domain of the nearest particle within two spacings; `triangles` index `vertices`. The
+//! embedded mesh then moves with the corners (embedded_position). Error naming the first
+//! vertex with no particle within two spacings, or a triangle index out of range.
+template <int dim>
+void embed_mesh(ParticleDomains<dim>& domains, std::size_t first, const std::vector<Vec<dim>>& positions,
+                double spacing, const std::vector<Vec<dim>>& vertices,
+                const std::vector<std::array<std::uint32_t, 3>>& triangles);
 
 //! Gives the particles [first, first + positions.size()) no domain: each is a material point,
 //! a corner of its own at its position (see above). Error when `first` is not the particle

@@ -4,6 +4,7 @@
 // the sums do not depend on the thread count.
 #include <mpm/core/error.h>
 #include <mpm/core/finite_guard.h>
+#include <mpm/domains/surface_contact.h>
 #include <mpm/solid/solid_channels.h>
 #include <mpm/solid/stages/domain_transfer.h>
 #include <mpm/solid/stages/stress_forces.h>
@@ -108,6 +109,8 @@ void DomainsFromGrid<dim>::run(MpmState<dim>& s) {
     domains::integrate_enriched<dim>(d, s.dt, s.gravity, [&](const Vec<dim>& x, Vec<dim>& v) {
       colliders_.project(x, t, v, geometry::ContactPoint::material);
     });
+  // Enriched surfaces meet what the grid no longer keeps them from (surface_contact.h).
+  if (contacts_ >= 0) contacts_ = domains::surface_contact(d, s.dt, d.contact_thickness).contacts;
   domains::advance_corners(d, s.dt);
   constexpr int K = domains::ParticleDomains<dim>::corners;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.size(), 4096), [&](const auto& r) {

@@ -14,6 +14,8 @@
 #include <mpm/solid/stages/domain_transfer.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <random>
 #include <string>
 #include <vector>
@@ -150,7 +152,7 @@ TEST_CASE_TEMPLATE("particle domains: the two-step transfer conserves and reprod
   s.grid.velocity_old = s.grid.velocity;
   std::vector<Vec<dim>> x0 = P.x;
   const std::vector<Mat<dim>> F0 = solid::elastic_F(P);
-  stages::DomainsFromGrid<dim>(scene.colliders, false).run(s);
+  stages::DomainsFromGrid<dim>(scene.colliders, false, false).run(s);
   const std::vector<Mat<dim>>& F = solid::elastic_F(P);
   double v_error = 0.0, x_error = 0.0, F_error = 0.0;
   for (std::size_t p = 0; p < P.size(); ++p) {
@@ -505,6 +507,14 @@ TEST_CASE("particle domains: bad input names the key") {
   CHECK(error({"particle_domains=false", "domain_enrichment=0.6"}).find("needs particle_domains: true") !=
         std::string::npos);
   CHECK(error({"bodies.0.jitter=0.3"}).find("jitter must be 0") != std::string::npos);
+  // The enriched surfaces' self-contact: a fraction in [0, 1), with enrichment, explicit only.
+  CHECK(error({"domain_enrichment=0.6", "domain_contact=0"}).empty());
+  CHECK(error({"domain_enrichment=0.6", "domain_contact=1"}).find("domain_contact") != std::string::npos);
+  CHECK(error({"domain_enrichment=0.6", "domain_contact=-0.1"}).find("[0, 1)") != std::string::npos);
+  CHECK(error({"domain_contact=0.2"}).find("needs domain_enrichment") != std::string::npos);
+  CHECK(error({"domain_enrichment=0.6", "solver=implicit"}).empty());
+  CHECK(error({"domain_enrichment=0.6", "domain_contact=0.2", "solver=implicit"}).find("explicit step only") !=
+        std::string::npos);
   // Material points: any body may be one; a plastic body must be; an implicit step takes none.
   CHECK(error({"bodies.0.domains=false"}).empty());
   CHECK(error({"bodies.0.domains=false", "solver=implicit"}).find("domains on every body") != std::string::npos);
@@ -516,3 +526,75 @@ TEST_CASE("particle domains: bad input names the key") {
   CHECK(error({"periodic=[true, false]", "walls={contact: separate, x_min: open, x_max: open}"})
             .find("no periodic axis") != std::string::npos);
 }
+
+TEST_CASE_TEMPLATE("particle domains: an embedded mesh follows the corners' affine map, outside the particles too", Dim,
+                   std::integral_constant<int, 2>, std::integral_constant<int, 3>) {
+  constexpr int dim = Dim::value;
+  std::mt19937 rng(5);
+  // A box of 4 x 3 (x 5) particles of spacing h, and mesh vertices anywhere within 1.5 spacings
+  // of its domains: inside the particles' cells and beyond them (nearest domain, extrapolated).
+  const double h = 0.1;
+  const Vec<dim> lo = Vec<dim>::Constant(0.3);
+  IVec<dim> n;
+  for (int a = 0; a < dim; ++a) n[a] = 3 + (a == 0) + 2 * (a == 2);
+  std::vector<Vec<dim>> positions;
+  for (int k = 0; k < n.prod(); ++k) {
+    Vec<dim> x;
+    for (int a = 0, m = k; a < dim; m /= n[a], ++a) x[a] = lo[a] + h * (m % n[a]);
+    positions.push_back(x);
+  }
+  std::vector<Vec<dim>> vertices(200);
+  for (Vec<dim>& v : vertices)
+    for (int a = 0; a < dim; ++a) v[a] = uniform(rng, lo[a] - 2.0 * h, lo[a] + (n[a] + 1.0) * h);
+  const std::vector<std::array<std::uint32_t, 3>> triangles{{0, 1, 2}, {2, 3, 199}};
+  domains::ParticleDomains<dim> d;
+  domains::add_body<dim>(d, 0, positions, h, Vec<dim>::Ones());
+  domains::embed_mesh<dim>(d, 0, positions, h, vertices, triangles);
+  domains::index_sharing(d);
+  REQUIRE(d.embedded_domain.size() == vertices.size());
+  CHECK(d.embedded_triangles == triangles);
+  // At seeding the embedded vertices are the mesh's; after x -> A x + b of every corner they are
+  // A X + b (the trilinear map of a domain reproduces affine motion, extended beyond it too).
+  const Mat<dim> A = Mat<dim>::Identity() + 0.4 * Mat<dim>::NullaryExpr([&] { return uniform(rng, -1.0, 1.0); });
+  const Vec<dim> b = Vec<dim>::NullaryExpr([&] { return uniform(rng, -1.0, 1.0); });
+  double seeded = 0.0, moved = 0.0, inside = 0.0;
+  for (std::size_t v = 0; v < vertices.size(); ++v)
+    seeded = std::max(seeded, (d.embedded_position(v) - vertices[v]).norm());
+  for (Vec<dim>& x : d.x) x = A * x + b;
+  for (std::size_t v = 0; v < vertices.size(); ++v) {
+    moved = std::max(moved, (d.embedded_position(v) - (A * vertices[v] + b)).norm());
+    // Within the particles' cells a vertex lies in the cell that holds it: 0 <= xi <= 1.
+    const Vec<dim> u = (vertices[v] - lo) / h;
+    if ((u.array() > -0.5).all() && (u.array() < n.template cast<double>().array() - 0.5).all())
+      inside = std::max(inside, std::max(-d.embedded_local[v].minCoeff(), d.embedded_local[v].maxCoeff() - 1.0));
+  }
+  CHECK(seeded < 1e-13);
+  CHECK(moved < 1e-12);
+  CHECK(inside <= 1e-12);
+  // A vertex beyond two spacings of every particle, and a triangle naming a missing vertex.
+  domains::ParticleDomains<dim> e;
+  domains::add_body<dim>(e, 0, positions, h, Vec<dim>::Ones());
+  CHECK_THROWS_WITH_AS(domains::embed_mesh<dim>(e, 0, positions, h, {lo - Vec<dim>::Constant(3.0 * h)}, {}),
+                       doctest::Contains("mesh vertex 0"), Error);
+  CHECK_THROWS_WITH_AS(domains::embed_mesh<dim>(e, 0, positions, h, {lo}, {{0, 0, 1}}),
+                       doctest::Contains("vertex 1 of 1"), Error);
+}
+
+#ifdef MPM_WITH_OPENVDB
+TEST_CASE("particle domains: a body seeded from a mesh carries that mesh, embedded") {
+  // A closed octahedron of "radius" 0.2 m about (0.5, 0.5, 0.5), seeded through its level set.
+  const std::filesystem::path file = std::filesystem::temp_directory_path() /
+                                     ("mpm_test_octahedron_" + std::to_string(std::random_device{}()) + ".obj");
+  std::ofstream(file) << "v 0.7 0.5 0.5\nv 0.3 0.5 0.5\nv 0.5 0.7 0.5\nv 0.5 0.3 0.5\nv 0.5 0.5 0.7\nv 0.5 0.5 0.3\n"
+                         "f 1 3 5\nf 3 2 5\nf 2 4 5\nf 4 1 5\nf 3 1 6\nf 2 3 6\nf 4 2 6\nf 1 4 6\n";
+  const std::string body = "[{shape: level_set, file: " + file.string() + ", voxel_size: 0.01, material: m}]";
+  const solid::SolidScene<3> scene =
+      solid::load_solid_scene<3>(Config::parse(scene_yaml<3>(), "<string>", {"bodies=" + body}));
+  std::filesystem::remove(file);
+  const domains::ParticleDomains<3>& d = *scene.state.domains;
+  REQUIRE(d.embedded_domain.size() == 6);
+  CHECK(d.embedded_triangles.size() == 8);
+  CHECK((d.embedded_position(0) - Vec<3>(0.7, 0.5, 0.5)).norm() < 1e-12);
+  CHECK((d.embedded_position(5) - Vec<3>(0.5, 0.5, 0.3)).norm() < 1e-12);
+}
+#endif

@@ -208,6 +208,29 @@ TEST_CASE("write_surface stores the domain corners and outward faces, and the se
   CHECK(series.find("surface_0003.h5:/points") != std::string::npos);
 }
 
+TEST_CASE("write_embedded_mesh stores the embedded vertices where the corners put them") {
+  ScratchDir dir("mesh");
+  domains::ParticleDomains<3> d;  // one unit domain about (0.5, 0.5, 0.5), a triangle in it
+  domains::add_body<3>(d, 0, {Vec<3>(0.5, 0.5, 0.5)}, 1.0, Vec<3>::Ones());
+  domains::embed_mesh<3>(d, 0, {Vec<3>(0.5, 0.5, 0.5)}, 1.0,
+                         {Vec<3>(0.25, 0.5, 0.5), Vec<3>(0.75, 0.5, 0.5), Vec<3>(0.5, 0.75, 0.5)}, {{0, 1, 2}});
+  domains::index_sharing(d);
+  for (Vec<3>& x : d.x) x *= 2.0;  // the domain doubled about the origin: the vertices follow
+  io::write_embedded_mesh(dir.path() / "mesh_0002.h5", d, 0.5, 2);
+  io::write_embedded_mesh_time_series(dir.path(), {{2, 0.5}});
+  const hid_t file = H5Fopen((dir.path() / "mesh_0002.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  REQUIRE(file >= 0);
+  CHECK(dataset_shape(file, "points") == std::vector<hsize_t>{3, 3});
+  CHECK(dataset_shape(file, "triangles") == std::vector<hsize_t>{1, 3});
+  const auto points = read_dataset<double>(file, "points", H5T_NATIVE_DOUBLE);
+  CHECK(points == std::vector<double>{0.5, 1.0, 1.0, 1.5, 1.0, 1.0, 1.0, 1.5, 1.0});
+  CHECK(read_dataset<std::int32_t>(file, "triangles", H5T_NATIVE_INT32) == std::vector<std::int32_t>{0, 1, 2});
+  H5Fclose(file);
+  const std::string series = read_text(dir.path() / "mesh.xdmf");
+  CHECK(series.find("TopologyType=\"Triangle\" NumberOfElements=\"1\"") != std::string::npos);
+  CHECK(series.find("mesh_0002.h5:/triangles") != std::string::npos);
+}
+
 TEST_CASE("write_file_atomically replaces the file and leaves no temporary file") {
   const ScratchDir dir("atomic");
   io::write_file_atomically(dir / "a.txt", "first");

@@ -61,23 +61,31 @@ private:
 };
 
 //! Corner velocities from the grid (eq. 9), the enriched corners' own update with the
-//! colliders, the corners moved; then per particle the PIC/FLIP velocity, x_p as the mean of its
+//! colliders, the enriched surfaces' self-contact (domains/surface_contact.h), the corners moved; then per particle the PIC/FLIP velocity, x_p as the mean of its
 //! corners and F_p from them (eq. 7), or for a material point F_p = (I + dt grad v_p) F_p.
 template <int dim>
 class DomainsFromGrid final : public Stage<MpmState<dim>> {
 public:
   //! `enriched_stepped`: the grid update (an implicit step) has left the enriched corners' new
   //! velocities in domains.momentum and their increments in domains.force.
-  DomainsFromGrid(geometry::ColliderSet<dim> colliders, bool enriched_stepped)
-      : colliders_(std::move(colliders)), enriched_stepped_(enriched_stepped) {}
+  //! `self_contact`: the scene's domains have a contact thickness (reported every step).
+  DomainsFromGrid(geometry::ColliderSet<dim> colliders, bool enriched_stepped, bool self_contact)
+      : colliders_(std::move(colliders)), enriched_stepped_(enriched_stepped), contacts_(self_contact ? 0 : -1) {}
   std::string name() const override { return "domains_from_grid"; }
   std::vector<std::string> reads() const override { return {"grid.velocity", "particle.v", "particle.F"}; }
   std::vector<std::string> writes() const override { return {"particle.x", "particle.v", "particle.F"}; }
   void run(MpmState<dim>& s) override;
+  //! surface_contacts (with domains.contact_thickness > 0): the vertex-face pairs of the enriched
+  //! surfaces' self-contact that received an impulse in the step.
+  std::vector<Diagnostic> diagnostics() const override {
+    if (contacts_ < 0) return {};
+    return {{"surface_contacts", static_cast<double>(contacts_)}};
+  }
 
 private:
   geometry::ColliderSet<dim> colliders_;  // act on the enriched corners as the boundary stage on nodes
   bool enriched_stepped_;
+  long contacts_;  // -1: no self-contact in this scene
 };
 
 }  // namespace mpm::stages
