@@ -164,7 +164,8 @@ SurfaceContactResult surface_contact(ParticleDomains<dim>& d, double dt, double 
   constexpr int bits = 63 / dim;
   const auto key = [&](const IVec<dim>& i) {
     std::uint64_t k = 0;
-    for (int a = 0; a < dim; ++a) k = (k << bits) | (static_cast<std::uint64_t>(i[a]) & ((std::uint64_t{1} << bits) - 1));
+    for (int a = 0; a < dim; ++a)
+      k = (k << bits) | (static_cast<std::uint64_t>(i[a]) & ((std::uint64_t{1} << bits) - 1));
     return k;
   };
   const auto cell_of = [&](const Vec<dim>& p) {
@@ -203,8 +204,9 @@ SurfaceContactResult surface_contact(ParticleDomains<dim>& d, double dt, double 
           const Vec<dim> offset = x[c] - closest.point;
           const double gap = offset.norm();
           if (gap >= reach || share_a_domain(d, c, face)) continue;
-          Pair<dim> pair{c, static_cast<std::uint32_t>(f), closest.b,
-                         gap > 1e-12 * thickness ? Vec<dim>(offset / gap) : closest.normal, gap, 1.0 / d.mass[c]};
+          Pair<dim> pair{c,         static_cast<std::uint32_t>(f),
+                         closest.b, gap > 1e-12 * thickness ? Vec<dim>(offset / gap) : closest.normal,
+                         gap,       1.0 / d.mass[c]};
           for (std::size_t j = 0; j < K; ++j) pair.inverse_mass += pair.b[j] * pair.b[j] / d.mass[face[j]];
           found[n].push_back(pair);
         }

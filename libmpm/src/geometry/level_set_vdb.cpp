@@ -114,6 +114,7 @@ std::shared_ptr<const detail::LevelSetGrid> grid_from_mesh(const std::string& fi
   verify<InputError>(std::isfinite(half_width) && half_width >= 3.0,
                      file + ": the narrow band must be >= 3 voxels wide, got " + detail::number_text(half_width));
   const TriangleMesh mesh = read_triangle_mesh(file);
+  check_closed(mesh, file);  // an open surface has no inside to convert
 
   std::vector<openvdb::Vec3s> points;
   points.reserve(mesh.vertices.size());

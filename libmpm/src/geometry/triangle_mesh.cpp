@@ -10,6 +10,7 @@
 #include <iterator>
 #include <map>
 #include <sstream>
+#include <utility>
 
 namespace mpm::geometry {
 
@@ -152,6 +153,28 @@ TriangleMesh read_triangle_mesh(const std::string& file) {
   TriangleMesh mesh = lowercase_extension(file) == ".obj" ? read_obj(file, in) : read_stl(file, in);
   if (mesh.triangles.empty()) fail(file, "the mesh holds no triangle");
   return mesh;
+}
+
+void check_closed(const TriangleMesh& mesh, const std::string& file) {
+  // Each undirected edge, counted over the triangles; a degenerate triangle (a repeated
+  // vertex) encloses nothing and is skipped.
+  std::map<std::pair<std::int32_t, std::int32_t>, int> uses;
+  for (const auto& t : mesh.triangles) {
+    if (t[0] == t[1] || t[1] == t[2] || t[2] == t[0]) continue;
+    for (int k = 0; k < 3; ++k) ++uses[std::minmax(t[k], t[(k + 1) % 3])];
+  }
+  const auto point = [&](std::int32_t v) {
+    std::ostringstream text;
+    text.precision(9);
+    text << "(" << mesh.vertices[v][0] << ", " << mesh.vertices[v][1] << ", " << mesh.vertices[v][2] << ")";
+    return text.str();
+  };
+  for (const auto& [edge, count] : uses)
+    if (count % 2 != 0)
+      fail(file, "the mesh is not closed: its edge from " + point(edge.first) + " to " + point(edge.second) +
+                     " belongs to " + std::to_string(count) + (count == 1 ? " triangle" : " triangles") +
+                     " (a closed surface shares every edge between two triangles); a level set needs the "
+                     "inside of a closed surface");
 }
 
 }  // namespace mpm::geometry

@@ -23,4 +23,8 @@ bool is_triangle_mesh_file(const std::string& file);
 //! file cannot be read, has an unknown extension, is malformed or holds no triangle.
 TriangleMesh read_triangle_mesh(const std::string& file);
 
+//! Throws InputError naming the file and the first edge (by its end points) that an odd number of
+//! the non-degenerate triangles share: the surface has a hole or a dangling sheet, and no inside.
+void check_closed(const TriangleMesh& mesh, const std::string& file);
+
 }  // namespace mpm::geometry

@@ -446,6 +446,16 @@ TEST_CASE("triangle meshes: OBJ and STL") {
   CHECK(error_of("mesh.ply", "ply\n").find("unknown mesh extension") != std::string::npos);
   CHECK(error_of("broken.stl", "not an stl").find("broken.stl") != std::string::npos);
   CHECK_THROWS_WITH_AS(read_triangle_mesh(temp_file("absent.obj")), doctest::Contains("cannot open"), InputError);
+
+  // A closed surface shares every edge between two triangles; the cube without its top does not.
+  CHECK_NOTHROW(check_closed(cube, "cube.obj"));
+  std::string open_box = kUnitCubeObj;
+  open_box.erase(open_box.find("f 5 6 7 8\n"), std::string("f 5 6 7 8\n").size());
+  const TriangleMesh open = read_triangle_mesh(write_file("open_box.obj", open_box));
+  CHECK_THROWS_WITH_AS(check_closed(open, "open_box.obj"),
+                       doctest::Contains("open_box.obj: the mesh is not closed: its edge from (0, 0, 1) to (1, 0, 1) "
+                                         "belongs to 1 triangle"),
+                       InputError);
 }
 
 #ifdef MPM_WITH_OPENVDB
@@ -518,6 +528,22 @@ TEST_CASE("slotted plate mesh and level-set colliders from a scene") {
   // Outside the slit section (z = 0.05) the plate is solid across.
   const LevelSetShape<2> edge(std::get<LevelSetShape<2>>(plate.shape()).level_set(), 0.05);
   CHECK(edge.phi(Vec<2>(0.275, 0.43)) < 0.0);
+}
+
+TEST_CASE("an open mesh is refused as a level set, naming the key and the edge") {
+  std::string open_box = kUnitCubeObj;
+  open_box.erase(open_box.find("f 5 6 7 8\n"), std::string("f 5 6 7 8\n").size());
+  const std::string file = write_file("open_box.obj", open_box);
+  const Config scene =
+      Config::parse("colliders:\n  - {type: level_set, file: " + file + ", voxel_size: 0.05}\n", "scene.yaml");
+  try {
+    parse_colliders<3>(scene, Vec<3>::Zero(), Vec<3>::Constant(2.0), 0.1);
+    FAIL("an open mesh was accepted");
+  } catch (const InputError& e) {
+    const std::string message = e.what();
+    CHECK(message.find("colliders[0].file") != std::string::npos);
+    CHECK(message.find("is not closed") != std::string::npos);
+  }
 }
 
 #else
