@@ -66,25 +66,25 @@ struct Case {
 
 Case make_case(const std::string& name, int cells) {
   const double dx = 1.0 / cells, E = name == "sand" ? 3e6 : 1e5, nu = 0.3;
-  const std::string floor = std::to_string(2 * dx);  // the inner face of the floor's wall layer
+  const std::string floor = bench::yaml_number(2 * dx);  // the inner face of the floor's wall layer
   Case c;
   c.sand = name == "sand";
   c.mu = E / (2 * (1 + nu));
   c.lambda = E * nu / ((1 + nu) * (1 - 2 * nu));
-  c.yaml = "dim: 3\ndomain: {lo: [0, 0, 0], hi: [1, 1, 1]}\ngrid: {dx: " + std::to_string(dx) +
+  c.yaml = "dim: 3\ndomain: {lo: [0, 0, 0], hi: [1, 1, 1]}\ngrid: {dx: " + bench::yaml_number(dx) +
            "}\nwalls: {contact: sticky}\ntime: {end: 1, frame_dt: 1, cfl: 0.4}\ngravity: [0, -9.81, 0]\n";
   if (c.sand)
     c.yaml +=
         "materials: [{name: sand, density: 2650, youngs_modulus: 3.0e6, poisson_ratio: 0.3, elasticity: hencky_stvk,"
         " plasticity: {model: drucker_prager, friction_angle: 32}}]\n"
         "bodies: [{shape: box, material: sand, lo: [0.3, " +
-        floor + ", 0.3], hi: [0.7, " + std::to_string(2 * dx + 0.5) + ", 0.7]}]\n";
+        floor + ", 0.3], hi: [0.7, " + bench::yaml_number(2 * dx + 0.5) + ", 0.7]}]\n";
   else
     c.yaml +=
         "materials: [{name: jello, density: 1000, youngs_modulus: 1.0e5, poisson_ratio: 0.3, "
         "elasticity: fixed_corotated}]\n"
         "bodies: [{shape: box, material: jello, lo: [0.3, " +
-        floor + ", 0.3], hi: [0.7, " + std::to_string(2 * dx + 0.4) + ", 0.7], velocity: [1, -2, 0.5]}]\n";
+        floor + ", 0.3], hi: [0.7, " + bench::yaml_number(2 * dx + 0.4) + ", 0.7], velocity: [1, -2, 0.5]}]\n";
   return c;
 }
 

@@ -27,22 +27,17 @@
 namespace bench {
 namespace {
 
-std::string number(double v) {
-  char s[32];
-  std::snprintf(s, sizeof s, "%.9g", v);
-  return s;
-}
-
 std::string box(const std::string& phase, double lo_x, double lo_y, double lo_z, double hi_x, double hi_y,
                 double hi_z) {
-  return "  - {phase: " + phase + ", shape: box, lo: [" + number(lo_x) + ", " + number(lo_y) + ", " + number(lo_z) +
-         "], hi: [" + number(hi_x) + ", " + number(hi_y) + ", " + number(hi_z) + "]}\n";
+  return "  - {phase: " + phase + ", shape: box, lo: [" + yaml_number(lo_x) + ", " + yaml_number(lo_y) + ", " +
+         yaml_number(lo_z) + "], hi: [" + yaml_number(hi_x) + ", " + yaml_number(hi_y) + ", " + yaml_number(hi_z) +
+         "]}\n";
 }
 
 // The scene file of a case; `solver`: the pressure solver.
 std::string scene_yaml(const std::string& name, int cells, const std::string& solver) {
   const double dx = 1.0 / cells, floor = 2 * dx;  // the inner face of the floor's wall layer
-  std::string y = "dim: 3\ndomain: {lo: [0, 0, 0], hi: [1, 1, 1]}\ngrid: {dx: " + number(dx) +
+  std::string y = "dim: 3\ndomain: {lo: [0, 0, 0], hi: [1, 1, 1]}\ngrid: {dx: " + yaml_number(dx) +
                   "}\nwalls: {contact: sticky}\ntime: {end: 1, frame_dt: 1, cfl: 0.4}\ngravity: [0, -9.81, 0]\n"
                   "fluid: {density: 1000, viscosity: 1.0e-3}\n"
                   "pressure: {solver: " +

@@ -19,6 +19,14 @@ namespace bench {
 
 using Clock = std::chrono::steady_clock;
 
+//! A number for a scene's YAML text that reads back as the same double (17 significant digits):
+//! a reference that computes dx = 1 / cells itself must get the grid the library parses.
+inline std::string yaml_number(double v) {
+  char s[32];
+  std::snprintf(s, sizeof s, "%.17g", v);
+  return s;
+}
+
 inline double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 inline double median(std::vector<double> v) {
