@@ -141,14 +141,27 @@ void stress_to_nodes(const std::vector<Mat<dim>>& weighted_stress, const Particl
   std::array<ChannelView, dim> channels;
   for (int a = 0; a < dim; ++a) channels[a] = component_view<dim>(out, a);
   const double inv_dx = 1.0 / g.dx();
+  // The set-up of a chunk of particles (weights, -S / dx) at once, as in P2G (detail::in_chunks).
   std::visit(
       [&](const auto& k) {
         using K = std::decay_t<decltype(k)>;
-        detail::scatter<dim, dim>(g, buckets, channels, [&](std::uint32_t p, const PatchFrame<dim>& f, double* patch) {
-          Stencil<dim, K::support> st;
-          st.compute(k, f.cells(P.x[p]), f.origin);
-          detail::spread_gradient<dim>(st, Mat<dim>(-inv_dx * weighted_stress[p]), patch, 0);
-        });
+        detail::scatter_buckets<dim, dim>(
+            g, buckets, channels,
+            [&](const std::uint32_t* first, const std::uint32_t* last, const PatchFrame<dim>& f, double* patch) {
+              Stencil<dim, K::support> st[detail::chunk_size];
+              Mat<dim> A[detail::chunk_size];
+              detail::in_chunks(
+                  first, last,
+                  [&](std::uint32_t p) {
+                    detail::prefetch(P.x[p]);
+                    detail::prefetch(weighted_stress[p]);
+                  },
+                  [&](std::uint32_t p, int q) {
+                    st[q].compute(k, f.cells(P.x[p]), f.origin);
+                    A[q] = -inv_dx * weighted_stress[p];
+                  },
+                  [&](std::uint32_t, int q) { detail::spread_gradient<dim>(st[q], A[q], patch, 0); });
+            });
       },
       kernel);
 }
