@@ -12,7 +12,9 @@
 //! used to call twice per particle per step.
 #include <mpm/core/types.h>
 
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <utility>
 
@@ -54,6 +56,21 @@ inline Svd<2> svd2(const Mat<2>& F) {
 }
 
 namespace detail {
+
+//! 2^k for -1022 <= k <= 1023, exact, from the exponent bits (std::ldexp is a library call).
+inline double power_of_two(int k) { return std::bit_cast<double>(static_cast<std::uint64_t>(k + 1023) << 52); }
+
+//! The exponent e of x = m 2^e, m in [1/2, 1), as std::frexp gives it, read from the bits of a
+//! normal x > 0 (std::frexp for a subnormal one).
+inline int binary_exponent(double x) {
+  const int biased = static_cast<int>((std::bit_cast<std::uint64_t>(x) >> 52) & 0x7ff);
+  if (biased == 0) {
+    int e = 0;
+    std::frexp(x, &e);
+    return e;
+  }
+  return biased - 1022;
+}
 
 //! Jacobi sweeps (three rotations each) are repeated until ||off(S)|| <= eps ||diag S||; random
 //! matrices need 3 or 4 (quadratic convergence). The cap only bounds the loop.
@@ -165,9 +182,8 @@ inline Svd<3> svd3(const Mat<3>& F) {
   // Scaling by a power of two (exact) to a largest entry in [1/2, 1) keeps S = A^T A and the
   // squares below far from overflow and underflow for any finite F. Two factors keep 2^-exponent
   // representable also for subnormal and huge entries.
-  int exponent = 0;
-  std::frexp(largest, &exponent);
-  const Mat<3> A = F * std::ldexp(1.0, -exponent / 2) * std::ldexp(1.0, exponent / 2 - exponent);
+  const int exponent = detail::binary_exponent(largest);
+  const Mat<3> A = F * detail::power_of_two(-exponent / 2) * detail::power_of_two(exponent / 2 - exponent);
 
   Mat<3> S = A.transpose() * A;
   const double squared_tolerance = std::numeric_limits<double>::epsilon() * std::numeric_limits<double>::epsilon();
@@ -208,7 +224,7 @@ inline Svd<3> svd3(const Mat<3>& F) {
   detail::order_first(f);
   detail::order_last(f);
   detail::order_first(f);
-  f.sigma = f.sigma * std::ldexp(1.0, exponent - exponent / 2) * std::ldexp(1.0, exponent / 2);
+  f.sigma = f.sigma * detail::power_of_two(exponent - exponent / 2) * detail::power_of_two(exponent / 2);
   return f;
 }
 
