@@ -150,14 +150,18 @@ SurfaceContactResult surface_contact(ParticleDomains<dim>& d, double dt, double 
   // A pair can close from at most `reach` to contact within the step.
   const double reach = thickness + 2.0 * dt * speed;
 
-  // Broad phase: the vertices in the cells of a lattice of spacing `cell` (twice the mean face size,
-  // at least the reach), as (cell key, vertex) sorted by key; each face then visits the cells
-  // that its box, widened by the reach, overlaps.
+  // Broad phase: the vertices in the cells of a lattice of spacing `cell` (twice the mean face
+  // size, at least the reach), as (cell key, vertex) sorted by key; each face then visits the
+  // cells that its box, widened by the reach, overlaps.
   if (faces.empty()) return result;
+  const auto box_of = [&](const auto& face) {
+    std::pair<Vec<dim>, Vec<dim>> box{x[face[0]], x[face[0]]};
+    for (const std::uint32_t c : face) box.first = box.first.cwiseMin(x[c]), box.second = box.second.cwiseMax(x[c]);
+    return box;
+  };
   double extent = 0.0;
   for (const auto& face : faces) {
-    Vec<dim> lo = x[face[0]], hi = lo;
-    for (const std::uint32_t c : face) lo = lo.cwiseMin(x[c]), hi = hi.cwiseMax(x[c]);
+    const auto [lo, hi] = box_of(face);
     extent += (hi - lo).maxCoeff();
   }
   const double cell = std::max(reach, 2.0 * extent / faces.size());
@@ -187,8 +191,7 @@ SurfaceContactResult surface_contact(ParticleDomains<dim>& d, double dt, double 
       const auto& face = faces[f];
       const bool enriched_face =
           std::any_of(face.begin(), face.end(), [&](std::uint32_t c) { return d.enriched[c] != 0; });
-      Vec<dim> lo = x[face[0]], hi = lo;
-      for (const std::uint32_t c : face) lo = lo.cwiseMin(x[c]), hi = hi.cwiseMax(x[c]);
+      auto [lo, hi] = box_of(face);
       lo.array() -= reach;
       hi.array() += reach;
       const IVec<dim> first = cell_of(lo), last = cell_of(hi);
