@@ -80,6 +80,12 @@ struct Particles {
     material[p] = mat;
   }
 
+  //! Room for n particles in every channel without reallocation.
+  void reserve(std::size_t n) {
+    visit_channels(*this, [n](const ChannelInfo&, auto& values, const auto&) { values.reserve(n); });
+  }
+  std::size_t capacity() const { return x.capacity(); }
+
   //! Sets the number of particles to n, keeping the first min(n, size()). New particles get zero
   //! in the kinematic channels and each extra channel's initial value.
   void resize(std::size_t n) {

@@ -63,6 +63,11 @@ void ParticleSource<dim>::run(MpmState<dim>& s) {
     emitted_ = layers_by(s.time);  // 0 at the start; after a restart, the layers in the particles
   }
   if (target == emitted_) return;
+  // Room grows by a quarter, not by std::vector's doubling: against an outflow the count
+  // levels off, and doubling would hold up to twice the particles for the rest of the run.
+  const std::size_t needed = s.particles.size() + static_cast<std::size_t>(target - emitted_) * face_points_.size();
+  if (needed > s.particles.capacity())
+    s.particles.reserve(std::max(needed, s.particles.size() + s.particles.size() / 4));
   const double moved = std::abs(settings_.velocity[axis_]) * (s.time - settings_.start);
   for (std::int64_t n = emitted_ + 1; n <= target; ++n) {
     const double along = first_plane_ - sign_ * double(n) * h_ + sign_ * moved;
