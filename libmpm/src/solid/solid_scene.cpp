@@ -89,7 +89,8 @@ void make_adaptive(SolidScene<dim>& scene, const adaptive::RefinementSettings<di
 namespace {
 //! A 3D body seeded from a triangle mesh (shape: level_set, file .obj/.stl) carries that mesh
 //! embedded in its domains (Zhu et al. sec. 4.1), written per frame as mesh_NNNN.h5: a smooth
-//! surface where the domains' own boundary is stepped at the particle spacing.
+//! surface where the domains' own boundary is stepped at the particle spacing. The file is read
+//! a second time here (the level-set loader, which checked it closed, keeps only the grid).
 template <int dim>
 void embed_seeding_mesh(domains::ParticleDomains<dim>& d, std::size_t first, const std::vector<Vec<dim>>& x,
                         double spacing, const Config& body) {
@@ -133,8 +134,9 @@ void seed_body(SolidScene<dim>& scene, const Config& body) {
                                "' is plastic): set domains: false to run it as material points");
     if (body.number("jitter", 0.0, Range::any()) != 0.0)
       body.fail("jitter", "particle_domains need particles on the seeding lattice: jitter must be 0");
-    domains::add_body(*scene.state.domains, first, x, std::pow(body_particles.volume, 1.0 / dim), stretch);
-    embed_seeding_mesh(*scene.state.domains, first, x, std::pow(body_particles.volume, 1.0 / dim), body);
+    const double spacing = std::pow(body_particles.volume, 1.0 / dim);  // of the seeding lattice
+    domains::add_body(*scene.state.domains, first, x, spacing, stretch);
+    embed_seeding_mesh(*scene.state.domains, first, x, spacing, body);
   } else if (scene.state.domains) {
     domains::add_points(*scene.state.domains, first, x);
   }

@@ -69,8 +69,8 @@ struct ParticleDomains {
   std::vector<std::uint32_t> sharing_begin, sharing;
   //! The bodies' surface: the domain faces no other domain shares (edges in 2D, quadrilaterals in
   //! 3D), as corner indices ordered so that the normal points out of the body as it was seeded
-  //! (counter-clockwise boundary in 2D). It moves with the corners (Zhu et al.
-  //! sec. 4.1 embed a finer mesh in the domains; here the mesh is the domains' own boundary).
+  //! (counter-clockwise boundary in 2D). It moves with the corners; the finer mesh of Zhu et al.
+  //! sec. 4.1, where a body has one, is the embedded mesh below.
   std::vector<std::array<std::uint32_t, corners / 2>> surface;
   //! A finer surface mesh embedded in the domains (Zhu et al. sec. 4.1; embed_mesh): vertex v
   //! lies in the reference domain of particle embedded_domain[v] at the local coordinates

@@ -61,8 +61,9 @@ private:
 };
 
 //! Corner velocities from the grid (eq. 9), the enriched corners' own update with the
-//! colliders, the enriched surfaces' self-contact (domains/surface_contact.h), the corners moved; then per particle the PIC/FLIP velocity, x_p as the mean of its
-//! corners and F_p from them (eq. 7), or for a material point F_p = (I + dt grad v_p) F_p.
+//! colliders, the enriched surfaces' self-contact (domains/surface_contact.h), the corners
+//! moved; then per particle the PIC/FLIP velocity, x_p as the mean of its corners and F_p from
+//! them (eq. 7), or for a material point F_p = (I + dt grad v_p) F_p.
 template <int dim>
 class DomainsFromGrid final : public Stage<MpmState<dim>> {
 public:
