@@ -183,7 +183,12 @@ public:
   //! The same with dilatancy (`rest_packing` phi_r, see above, is read and updated; nullptr:
   //! K = 0) and the rate dependence over a step dt [s] (0: rate independent).
   bool project(Mat<dim>& Fe, double& plastic, double* rest_packing, double dt, math::Svd<dim>* result = nullptr) const {
-    math::Svd<dim> f = math::svd(Fe);
+    return project(Fe, math::svd(Fe), plastic, rest_packing, dt, result);
+  }
+
+  //! The same given f = math::svd(Fe) (stages::ReturnMap takes the SVDs of several at once).
+  bool project(Mat<dim>& Fe, math::Svd<dim> f, double& plastic, double* rest_packing, double dt,
+               math::Svd<dim>* result = nullptr) const {
     const Vec<dim> strain = Hencky::principal_strain(f.sigma);
     const Vec<dim> eps = strain + Vec<dim>::Constant(plastic / dim);
     const double trace = eps.sum();

@@ -43,7 +43,11 @@ public:
 
   //! Clamps the singular values of Fe and moves the removed volume into log J^P (`plastic`).
   bool project(Mat<dim>& Fe, double& plastic, math::Svd<dim>* result = nullptr) const {
-    math::Svd<dim> f = math::svd(Fe);
+    return project(Fe, math::svd(Fe), plastic, result);
+  }
+
+  //! The same given f = math::svd(Fe) (stages::ReturnMap takes the SVDs of several at once).
+  bool project(Mat<dim>& Fe, const math::Svd<dim>& f, double& plastic, math::Svd<dim>* result = nullptr) const {
     const Vec<dim> clamped = f.sigma.cwiseMax(lo_).cwiseMin(hi_);
     if (result) *result = math::Svd<dim>{f.U, clamped, f.V};
     if (clamped == f.sigma) return false;

@@ -45,8 +45,12 @@ public:
 
   //! Projects Fe onto the yield surface; returns whether Fe changed (then its singular values
   //! are positive). The model is perfectly plastic and keeps no state: `plastic` is unchanged.
-  bool project(Mat<dim>& Fe, double& /*plastic*/, math::Svd<dim>* result = nullptr) const {
-    math::Svd<dim> f = math::svd(Fe);
+  bool project(Mat<dim>& Fe, double& plastic, math::Svd<dim>* result = nullptr) const {
+    return project(Fe, math::svd(Fe), plastic, result);
+  }
+
+  //! The same given f = math::svd(Fe) (stages::ReturnMap takes the SVDs of several at once).
+  bool project(Mat<dim>& Fe, math::Svd<dim> f, double& /*plastic*/, math::Svd<dim>* result = nullptr) const {
     const Vec<dim> eps = Hencky::principal_strain(f.sigma);
     const Vec<dim> dev = deviator(eps);
     const double y = yield(dev);

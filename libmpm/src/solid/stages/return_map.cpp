@@ -1,7 +1,8 @@
 // Return mapping in principal (SVD) space (paper sec. 4.2): F^E_trial = U Sigma V^T,
 // project log(Sigma) onto the Drucker-Prager cone (Klar et al. 2016, with the volume
 // correction of Tampubolon et al. 2017, and dilatancy where the material has it) or the von Mises cylinder (paper sec. 4.2.2),
-// F^E = U exp(H) V^T. Elastic materials are skipped; the model is chosen outside the loop.
+// F^E = U exp(H) V^T. Elastic materials are skipped; the model is chosen outside the loop. In 3D
+// the trial SVDs are taken four at a time (math::for_each_svd).
 // Where the particles carry a stress cache (solid_channels.h), the Kirchhoff stress of the
 // F^E left is computed from the same SVD, U diag(p_i sigma_i) U^T, for the next step's forces.
 #include <mpm/core/finite_guard.h>
@@ -31,17 +32,21 @@ namespace {
 //! One particle's return map: a dilatant Drucker-Prager material reads and updates the rest
 //! packing (a particle of unknown packing starts at the critical one), a rate-dependent one
 //! uses the step dt, every other model its plain map.
+//! `trial` is the SVD of F.
 template <int dim, class Model>
-void project(const Model& model, Mat<dim>& F, double& plastic, double* packing, double dt, math::Svd<dim>* result) {
+void project(const Model& model, Mat<dim>& F, const math::Svd<dim>& trial, double& plastic, double* packing, double dt,
+             math::Svd<dim>* result) {
   if constexpr (std::is_same_v<Model, plasticity::DruckerPrager<dim>>) {
     if (model.dilatant() || model.rate_dependent()) {
       if (!model.dilatant()) packing = nullptr;
       if (packing && std::isnan(*packing)) *packing = model.flow().critical_packing * F.determinant();
-      model.project(F, plastic, packing, dt, result);
+      model.project(F, trial, plastic, packing, dt, result);
       return;
     }
+    model.project(F, trial, plastic, nullptr, 0.0, result);
+  } else {
+    model.project(F, trial, plastic, result);
   }
-  model.project(F, plastic, result);
 }
 }  // namespace
 
@@ -59,11 +64,14 @@ void ReturnMap<dim>::run(MpmState<dim>& s) {
           if constexpr (!std::is_same_v<Model, plasticity::NoPlasticity>) {
             tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.size(), 4096), [&](const auto& r) {
               math::Svd<dim> f;
-              for (std::size_t p = r.begin(); p != r.end(); ++p) {
-                if (P.material[p] != m) continue;
-                project(model, F[p], plastic[p], packing ? &(*packing)[p] : nullptr, s.dt, cache ? &f : nullptr);
-                if (cache) (*cache)[p] = constitutive::isotropic_kirchhoff(elastic, f);
-              }
+              math::for_each_svd<dim>(
+                  r.begin(), r.end(), [&](std::size_t p) -> const Mat<dim>& { return F[p]; },
+                  [&](std::size_t p) { return P.material[p] == m; },
+                  [&](std::size_t p, const math::Svd<dim>& trial) {
+                    project(model, F[p], trial, plastic[p], packing ? &(*packing)[p] : nullptr, s.dt,
+                            cache ? &f : nullptr);
+                    if (cache) (*cache)[p] = constitutive::isotropic_kirchhoff(elastic, f);
+                  });
             });
           }
         },

@@ -6,7 +6,8 @@
 // A plastic material's tau is the one the last return map left in the stress cache
 // (solid_channels.h), computed from its SVD of F^E: one SVD per particle and step instead of
 // two. Particles whose cached stress is unknown (the first step, after a merge or a switch of
-// a grain) take it from F^E here.
+// a grain) take it from F^E here, as do elastic materials: tau = U diag(p_i sigma_i) U^T from
+// the SVD of F^E, four particles' SVDs at a time in 3D (math::for_each_svd).
 #include <mpm/adaptive/adaptive_transfer.h>
 #include <mpm/core/finite_guard.h>
 #include <mpm/core/transfer.h>
@@ -36,10 +37,19 @@ void StressForces<dim>::run(MpmState<dim>& s) {
           using Plasticity = std::decay_t<decltype(plasticity)>;
           const bool cached = cache && !std::is_same_v<Plasticity, plasticity::NoPlasticity>;
           tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.size(), 4096), [&](const auto& r) {
-            for (std::size_t p = r.begin(); p != r.end(); ++p)
-              if (P.material[p] == m)
-                weighted_stress_[p] = weighted_kirchhoff(model, plasticity, P.volume0[p], F[p], plastic[p],
-                                                         cached ? &(*cache)[p] : nullptr);
+            // One pass: a known cached stress is taken where it is met, the others wait for
+            // their SVD.
+            const auto needs_svd = [&](std::size_t p) {
+              if (P.material[p] != m) return false;
+              if (!cached || !solid::known_stress((*cache)[p])) return true;
+              weighted_stress_[p] = P.volume0[p] * plasticity.modulus_scale(plastic[p]) * (*cache)[p];
+              return false;
+            };
+            math::for_each_svd<dim>(
+                r.begin(), r.end(), [&](std::size_t p) -> const Mat<dim>& { return F[p]; }, needs_svd,
+                [&](std::size_t p, const math::Svd<dim>& f) {
+                  weighted_stress_[p] = weighted_kirchhoff(model, plasticity, P.volume0[p], f, plastic[p]);
+                });
           });
         },
         materials_[m].elastic, materials_[m].plasticity);

@@ -138,28 +138,96 @@ TEST_CASE("svd3: degenerate cases one by one") {
                                                                      << worst.singular_values);
 }
 
-TEST_CASE("svd3: random matrices and random rotations times random diagonals") {
+// Random entries in [-2, 2], then rotation diag rotation with magnitudes log-uniform in
+// [1e-12, 1] (half of them) or uniform in [0, 2] and random signs; `count` of each.
+std::vector<Sample> random_samples(int count) {
   std::mt19937_64 rng(2011);
   std::uniform_real_distribution<double> entry(-2.0, 2.0), exponent(-12.0, 0.0), unit(0.0, 1.0);
-  WorstErrors worst;
-  constexpr int kCount = 10000;
-  for (int n = 0; n < kCount; ++n) {
-    const Mat<3> F = Mat<3>::NullaryExpr([&] { return entry(rng); });
-    check_svd({"random entries in [-2, 2], #" + std::to_string(n), F}, worst);
-  }
-  for (int n = 0; n < kCount; ++n) {
-    // Magnitudes log-uniform in [1e-12, 1] (half of them) or uniform in [0, 2], random signs.
+  std::vector<Sample> samples;
+  for (int n = 0; n < count; ++n)
+    samples.push_back(
+        {"random entries in [-2, 2], #" + std::to_string(n), Mat<3>::NullaryExpr([&] { return entry(rng); })});
+  for (int n = 0; n < count; ++n) {
     const bool log_uniform = n % 2 == 0;
     const Vec<3> diagonal = Vec<3>::NullaryExpr([&] {
       const double magnitude = log_uniform ? std::pow(10.0, exponent(rng)) : 2.0 * unit(rng);
       return unit(rng) < 0.5 ? -magnitude : magnitude;
     });
-    const Mat<3> F = random_rotation(rng) * diagonal.asDiagonal() * random_rotation(rng).transpose();
-    check_svd({"rotation diag rotation, #" + std::to_string(n), F}, worst);
+    samples.push_back({"rotation diag rotation, #" + std::to_string(n),
+                       random_rotation(rng) * diagonal.asDiagonal() * random_rotation(rng).transpose()});
   }
+  return samples;
+}
+
+TEST_CASE("svd3: random matrices and random rotations times random diagonals") {
+  WorstErrors worst;
+  for (const Sample& sample : random_samples(10000)) check_svd(sample, worst);
   MESSAGE("random cases, worst relative errors: reconstruction " << worst.reconstruction << ", orthogonality "
                                                                  << worst.orthogonality << ", singular values "
                                                                  << worst.singular_values);
+}
+
+// The svd3 of four matrices runs svd3's operations in four lanes: each lane must give svd3 of
+// its matrix bit for bit (where the compiler fuses multiply-adds, it may fuse them differently
+// in the two forms: then to round-off), wherever the matrix falls among the lanes and whatever
+// its neighbours are (a NaN or a zero matrix next to it included).
+TEST_CASE("svd3 of four matrices: each lane is svd3 of its own matrix") {
+#if defined(__FMA__)
+  constexpr double kLaneTolerance = 1e-14;
+#else
+  constexpr double kLaneTolerance = 0.0;
+#endif
+  std::vector<Sample> samples = degenerate_samples();
+  for (Sample& sample : random_samples(2000)) samples.push_back(std::move(sample));
+  Mat<3> nan_matrix = Mat<3>::Identity();
+  nan_matrix(0, 1) = std::numeric_limits<double>::quiet_NaN();
+  samples.insert(samples.begin() + 3, {"NaN entry", nan_matrix});
+  for (int skip = 2; skip <= 7; ++skip) {  // every skip-th sample left out: lanes shift
+    CAPTURE(skip);
+    std::vector<bool> visited(samples.size(), false);
+    double worst = 0.0;
+    math::for_each_svd<3>(
+        0, samples.size(), [&](std::size_t i) -> const Mat<3>& { return samples[i].F; },
+        [&](std::size_t i) { return i % skip != 1; },
+        [&](std::size_t i, const math::Svd<3>& f) {
+          visited[i] = true;
+          const math::Svd<3> expected = math::svd3(samples[i].F);
+          if (std::isnan(samples[i].F(0, 1))) {
+            CHECK(f.sigma.hasNaN());
+            return;
+          }
+          const double difference =
+              std::max({(f.U - expected.U).cwiseAbs().maxCoeff(), (f.V - expected.V).cwiseAbs().maxCoeff(),
+                        ((f.sigma - expected.sigma).cwiseAbs() / std::max(expected.sigma.cwiseAbs().maxCoeff(), 1e-300))
+                            .maxCoeff()});
+          if (difference > kLaneTolerance) {
+            CAPTURE(samples[i].name);
+            CHECK(difference <= kLaneTolerance);
+          }
+          worst = std::max(worst, difference);
+        });
+    for (std::size_t i = 0; i < samples.size(); ++i) CHECK(visited[i] == (i % skip != 1));
+    CHECK(worst <= kLaneTolerance);
+  }
+}
+
+TEST_CASE("for_each_svd in 2D is svd2 of each kept matrix, in order") {
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> entry(-2.0, 2.0);
+  std::vector<Mat<2>> matrices(9);
+  for (Mat<2>& F : matrices) F = Mat<2>::NullaryExpr([&] { return entry(rng); });
+  std::vector<std::size_t> order;
+  math::for_each_svd<2>(
+      1, matrices.size(), [&](std::size_t i) -> const Mat<2>& { return matrices[i]; },
+      [](std::size_t i) { return i != 4; },
+      [&](std::size_t i, const math::Svd<2>& f) {
+        order.push_back(i);
+        const math::Svd<2> expected = math::svd2(matrices[i]);
+        CHECK(f.U == expected.U);
+        CHECK(f.sigma == expected.sigma);
+        CHECK(f.V == expected.V);
+      });
+  CHECK(order == std::vector<std::size_t>{1, 2, 3, 5, 6, 7, 8});
 }
 
 TEST_CASE("svd<3> and polar<3> use svd3") {

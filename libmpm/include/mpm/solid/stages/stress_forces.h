@@ -6,15 +6,22 @@
 
 namespace mpm::stages {
 
-//! V^0 tau of one particle of a material (model, plasticity): tau = P(F^E) F^E^T, scaled by the
-//! plasticity's hardening of the particle's plastic state; the return map's cached tau instead
-//! where `cached` points at a known one (solid_channels.h).
+//! V^0 tau of one particle of a material (model, plasticity) from the SVD f of its F^E:
+//! tau = P(F^E) F^E^T = U diag(p_i sigma_i) U^T, scaled by the plasticity's hardening of the
+//! particle's plastic state.
+template <int dim, class Elastic, class Plasticity>
+Mat<dim> weighted_kirchhoff(const Elastic& model, const Plasticity& plasticity, double volume0, const math::Svd<dim>& f,
+                            double plastic) {
+  return volume0 * plasticity.modulus_scale(plastic) * constitutive::isotropic_kirchhoff(model, f);
+}
+
+//! The same from F^E; the return map's cached tau instead where `cached` points at a known one
+//! (solid_channels.h).
 template <int dim, class Elastic, class Plasticity>
 Mat<dim> weighted_kirchhoff(const Elastic& model, const Plasticity& plasticity, double volume0, const Mat<dim>& F,
                             double plastic, const Mat<dim>* cached) {
-  const double scale = volume0 * plasticity.modulus_scale(plastic);
-  if (cached && solid::known_stress(*cached)) return scale * *cached;
-  return scale * model.first_piola(F) * F.transpose();
+  if (cached && solid::known_stress(*cached)) return volume0 * plasticity.modulus_scale(plastic) * *cached;
+  return weighted_kirchhoff(model, plasticity, volume0, math::svd(F), plastic);
 }
 
 //! Internal elastic forces on grid nodes from the particles' Kirchhoff stress. A scene whose
