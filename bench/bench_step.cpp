@@ -54,6 +54,7 @@ struct Options {
   int steps = 10;
   int repeat = 3;
   std::vector<int> threads = {1, 2};
+  int setup_reuse = 20;  //!< fluid, coupled: pressure.setup_reuse of the library's scene
 };
 
 // 1. The scenes, as scene files would state them.
@@ -353,6 +354,9 @@ int main(int argc, char** argv) {
   app.add_option("--repeat", o.repeat, "runs per configuration; the median is reported")->check(CLI::Range(1, 100));
   app.add_option("--threads", o.threads, "thread counts to time (default 1 2); 1 is added first when missing")
       ->check(CLI::Range(1, cores, "thread count in [1, cores of this machine = " + std::to_string(cores) + "]"));
+  app.add_option("--setup-reuse", o.setup_reuse,
+                 "fluid, coupled: the library's pressure.setup_reuse (default 20, the scenes' default)")
+      ->check(CLI::Range(1, 1000));
   CLI11_PARSE(app, argc, argv);
   o.threads.erase(std::remove(o.threads.begin(), o.threads.end(), 1), o.threads.end());
   o.threads.insert(o.threads.begin(), 1);  // the baseline of every speed-up
@@ -360,8 +364,9 @@ int main(int argc, char** argv) {
   bool ok = true;
   try {
     for (const std::string& name : o.cases)
-      ok = (name == "sand" || name == "jello" ? run_case(o, name)
-                                              : bench::run_coupled_case(name, o.cells, o.steps, o.repeat, o.threads)) &&
+      ok = (name == "sand" || name == "jello"
+                ? run_case(o, name)
+                : bench::run_coupled_case(name, o.cells, o.steps, o.repeat, o.threads, o.setup_reuse)) &&
            ok;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_step: %s\n", e.what());

@@ -34,7 +34,7 @@ std::string box(const std::string& phase, double lo_x, double lo_y, double lo_z,
          "]}\n";
 }
 
-// The scene file of a case; `solver`: the pressure solver.
+// The scene file of a case; `solver`: the pressure solver, with its own keys after the name.
 std::string scene_yaml(const std::string& name, int cells, const std::string& solver) {
   const double dx = 1.0 / cells, floor = 2 * dx;  // the inner face of the floor's wall layer
   std::string y = "dim: 3\ndomain: {lo: [0, 0, 0], hi: [1, 1, 1]}\ngrid: {dx: " + yaml_number(dx) +
@@ -87,8 +87,10 @@ Run run(const std::string& yaml, int steps) {
 
 }  // namespace
 
-bool run_coupled_case(const std::string& name, int cells, int steps, int repeat, const std::vector<int>& threads) {
-  const std::string library = scene_yaml(name, cells, "mgpcg"), reference = scene_yaml(name, cells, "cg");
+bool run_coupled_case(const std::string& name, int cells, int steps, int repeat, const std::vector<int>& threads,
+                      int setup_reuse) {
+  const std::string library = scene_yaml(name, cells, "mgpcg, setup_reuse: " + std::to_string(setup_reuse));
+  const std::string reference = scene_yaml(name, cells, "cg");
   Run check;
   {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads.back());

@@ -90,7 +90,9 @@ inline void time_and_report(const std::vector<int>& threads, int repeat, double 
 }
 
 //! The fluid and coupled cases (bench_step_coupled.cpp; only in builds with libcoupling):
-//! returns false when the library's run and the reference's disagree.
-bool run_coupled_case(const std::string& name, int cells, int steps, int repeat, const std::vector<int>& threads);
+//! returns false when the library's run and the reference's disagree. `setup_reuse`: the
+//! library's pressure.setup_reuse.
+bool run_coupled_case(const std::string& name, int cells, int steps, int repeat, const std::vector<int>& threads,
+                      int setup_reuse);
 
 }  // namespace bench

@@ -19,21 +19,29 @@ CASES = [
     ("time.cfl", "1.5", ["1.5", "(0, 1]"]),
     ("pressure.solver", "magic", ["magic", "'cg'"]),
     ("pressure.on_failure", "ignore", ["ignore", "'stop'", "'warn'"]),
+    ("pressure.setup_reuse", "0", ["0", "[1, 1000]"]),
 ]
 
 
 def with_value(text, path, value):
-    """The scene text with the value of `section.key` replaced, and the 1-based line of it."""
+    """The scene text with the value of `section.key` replaced (or the key added first in its
+    section where the scene leaves it out), and the 1-based line of it."""
     section, key = path.split(".")
     lines = text.splitlines()
     in_section = False
+    header = None
     for i, line in enumerate(lines):
         if re.match(r"^\w", line):
             in_section = line.startswith(section + ":")
+            if in_section:
+                header = i
         elif in_section and re.match(rf"^\s+{key}:", line):
             lines[i] = re.sub(rf"^(\s+{key}:)\s*[^#]*", rf"\g<1> {value}  ", line)
             return "\n".join(lines) + "\n", i + 1
-    raise KeyError(path)
+    if header is None:
+        raise KeyError(path)
+    lines.insert(header + 1, f"  {key}: {value}")
+    return "\n".join(lines) + "\n", header + 2
 
 
 def main():

@@ -2,7 +2,8 @@
 // interrupted, for a solid app (column collapse, one phase), a solid on an adaptive grid (the
 // adaptive jello: the tree is rebuilt from the particles' levels every step; the adaptive
 // column collapse: particles split and merge every step) and a coupled one
-// (settling: fluid and sediment, one checkpoint holding both). The run writes 10 frames with checkpoint_every
+// (settling: fluid and sediment, one checkpoint holding both; the 3D pier scour, whose
+// pressure multigrid is kept between solves within a frame). The run writes 10 frames with checkpoint_every
 // = 4; a copy of its output folder loses every file written after frame 4 (as if the run had
 // died there) and is continued with --restart checkpoint_0004.h5. Then every particle channel
 // of every phase of the later checkpoints (mpm::io::load_checkpoint into particles that declare
@@ -49,6 +50,7 @@ struct RestartCase {
   bool plastic = false;        //!< solid particles carry the stress cache (a plastic material)
   bool dilatant = false;       //!< solid particles carry the rest packing (a dilatant sand)
   bool rest_position = false;  //!< solid particles carry their rest position (solid_scene rest_state)
+  int dim = 2;                 //!< of the scene
 };
 
 const RestartCase kColumnCollapse{COLUMN_COLLAPSE_APP,
@@ -123,6 +125,24 @@ const RestartCase kSubmergedCollapse{SUBMERGED_COLLAPSE_APP,
                                      true};
 #endif
 
+#ifdef SEDIMENT_TRANSPORT_APP
+// 3D, fluid and sediment: the 3D pressure multigrid keeps its hierarchy from solve to solve
+// within a frame (pressure.setup_reuse) and drops it at frame ends, where restarts begin.
+const RestartCase kPierScour{SEDIMENT_TRANSPORT_APP,
+                             "sediment_transport_3d.yaml",
+                             "",
+                             0.006,
+                             {"fluid", "sediment"},
+                             {"sediment"},
+                             {"fluid", "sediment"},
+                             {},
+                             false,
+                             true,
+                             false,
+                             false,
+                             3};
+#endif
+
 //! Runs the case's app; its stderr goes to <out>.log. Returns the exit status.
 int run_app(const RestartCase& c, const fs::path& out, const std::string& extra) {
   const std::string command =
@@ -147,12 +167,13 @@ std::vector<std::string> split(const std::string& line) {
   return fields;
 }
 
+template <int dim>
 void check_checkpoints_equal(const fs::path& a, const fs::path& b, const std::string& phase, bool solid,
                              const RestartCase& app) {
   const bool adaptive = app.adaptive, plastic = app.plastic;
   INFO(a.filename().string() << " phase '" << phase << "'");
   mpm::io::CheckpointHeader ha, hb;
-  mpm::Particles<2> pa, pb;
+  mpm::Particles<dim> pa, pb;
   if (solid) {
     mpm::solid::add_solid_channels(pa);
     mpm::solid::add_solid_channels(pb);
@@ -165,13 +186,14 @@ void check_checkpoints_equal(const fs::path& a, const fs::path& b, const std::st
       mpm::solid::add_rest_packing(pb);
     }
     if (app.rest_position)
-      for (mpm::Particles<2>* p : {&pa, &pb})
-        p->add_channel<mpm::Vec<2>>("rest_position", mpm::Vec<2>::Zero(), mpm::ChannelUse{false, true});
+      for (mpm::Particles<dim>* p : {&pa, &pb})
+        p->template add_channel<mpm::Vec<dim>>("rest_position", mpm::Vec<dim>::Zero(), mpm::ChannelUse{false, true});
   }
   if (adaptive)
-    for (mpm::Particles<2>* p : {&pa, &pb}) p->add_channel<std::uint16_t>("level", 0, mpm::ChannelUse{true, true, ""});
-  mpm::io::load_checkpoint<2>(a, ha, pa, phase);
-  mpm::io::load_checkpoint<2>(b, hb, pb, phase);
+    for (mpm::Particles<dim>* p : {&pa, &pb})
+      p->template add_channel<std::uint16_t>("level", 0, mpm::ChannelUse{true, true, ""});
+  mpm::io::load_checkpoint<dim>(a, ha, pa, phase);
+  mpm::io::load_checkpoint<dim>(b, hb, pb, phase);
   CHECK(ha.frame == hb.frame);
   CHECK(ha.step == hb.step);
   CHECK(std::memcmp(&ha.time, &hb.time, sizeof(double)) == 0);
@@ -262,8 +284,9 @@ void check_particle_state(const RestartCase& c, const fs::path& full, const fs::
   for (const int frame : {2 * kCheckpointEvery, kFrames})
     for (const std::string& phase : c.phases) {
       const bool solid = std::find(c.solid_phases.begin(), c.solid_phases.end(), phase) != c.solid_phases.end();
-      check_checkpoints_equal(full / numbered("checkpoint", frame, ".h5"),
-                              restarted / numbered("checkpoint", frame, ".h5"), phase, solid, c);
+      (c.dim == 2 ? check_checkpoints_equal<2>
+                  : check_checkpoints_equal<3>)(full / numbered("checkpoint", frame, ".h5"),
+                                                restarted / numbered("checkpoint", frame, ".h5"), phase, solid, c);
     }
   for (const std::string& series : c.series) {
     for (int frame = kCheckpointEvery + 1; frame <= kFrames; ++frame) {
@@ -345,6 +368,11 @@ TEST_CASE("a run continued from a checkpoint is bit-identical to the uninterrupt
 #endif
 #ifdef SETTLING_APP
   SUBCASE("coupled: settling column (fluid and sediment)") { check_restart(kSettling, "settling"); }
+#endif
+#ifdef SEDIMENT_TRANSPORT_APP
+  SUBCASE("coupled 3D: pier scour (the pressure multigrid kept within frames)") {
+    check_restart(kPierScour, "pier_scour");
+  }
 #endif
 #ifdef SUBMERGED_COLLAPSE_APP
   SUBCASE("coupled: dilatant sediment, continuum and discrete, under a liquid") {

@@ -11,6 +11,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <optional>
 #include <utility>
 
 namespace fluid {
@@ -178,6 +179,34 @@ double median_energy_ratio(const Eigen::SparseMatrix<double, Eigen::RowMajor>& A
   return *middle;
 }
 
+//! S_k = diag((-1)^(k . q)) over the cells q (bit a of `pattern`: a sign flip along axis a).
+template <int dim>
+Eigen::VectorXd sign_of_pattern(const std::vector<IVec<dim>>& cell, int pattern) {
+  Eigen::VectorXd sign(static_cast<Eigen::Index>(cell.size()));
+  for (std::size_t i = 0; i < cell.size(); ++i) {
+    int parity = 0;
+    for (int a = 0; a < dim; ++a) parity += (pattern >> a & 1) * cell[i][a];
+    sign[static_cast<Eigen::Index>(i)] = parity % 2 == 0 ? 1.0 : -1.0;
+  }
+  return sign;
+}
+
+//! Box coordinates of the cells with the given indices (x fastest) in a box of `extent`.
+template <int dim>
+std::vector<IVec<dim>> box_cells(const std::vector<std::int64_t>& index, const IVec<dim>& extent) {
+  std::vector<IVec<dim>> cells;
+  cells.reserve(index.size());
+  for (std::int64_t c : index) {
+    IVec<dim> q;
+    for (int a = 0; a < dim; ++a) {
+      q[a] = static_cast<int>(c % extent[a]);
+      c /= extent[a];
+    }
+    cells.push_back(q);
+  }
+  return cells;
+}
+
 }  // namespace
 
 template <int dim>
@@ -189,51 +218,66 @@ ModulatedMultigrid<dim>::ModulatedMultigrid(const CellOperator<dim>& op, const O
   fine_ = std::make_unique<Space>();
   Space& fine = *fine_;
   fine.extent = op.cells;
-  fine.cell.reserve(fluid_cells_.size());
-  for (std::int64_t c : fluid_cells_) {
-    IVec<dim> q;
-    std::int64_t rest = c;
-    for (int a = 0; a < dim; ++a) {
-      q[a] = static_cast<int>(rest % op.cells[a]);
-      rest /= op.cells[a];
-    }
-    fine.cell.push_back(q);
-  }
+  fine.cell = box_cells<dim>(fluid_cells_, op.cells);
+  fine.A = fine_matrix(op, compact);
+  built_trace_ = fine.A.diagonal().sum() / static_cast<double>(std::max<std::size_t>(fluid_cells_.size(), 1));
+  build(fine);
+}
+
+template <int dim>
+typename ModulatedMultigrid<dim>::Matrix ModulatedMultigrid<dim>::fine_matrix(
+    const CellOperator<dim>& op, const std::vector<std::int64_t>& compact) {
   const auto n = static_cast<Eigen::Index>(fluid_cells_.size());
   std::vector<Triplet> entries;
   op.for_each_entry([&](std::int64_t row, std::int64_t col, double v) {
     entries.emplace_back(static_cast<int>(compact[row]), static_cast<int>(compact[col]), v);
   });
-  fine.A.resize(n, n);
-  fine.A.setFromTriplets(entries.begin(), entries.end());
-  build(fine);
+  Matrix A(n, n);
+  A.setFromTriplets(entries.begin(), entries.end());
+  return A;
 }
 
 template <int dim>
-void ModulatedMultigrid<dim>::build(Space& s) const {
-  {
-    s.A.makeCompressed();  // gauss_seidel reads the raw CSR arrays
-    const Eigen::Index n = s.A.rows();
-    s.b = s.x = s.residual = Eigen::VectorXd::Zero(n);
-    const Eigen::VectorXd diagonal = s.A.diagonal();
-    s.inverse_diagonal = (diagonal.array() > 0.0).select(diagonal.cwiseInverse(), 0.0);
-    if (n == 0) return;
-    if (n >= kParallelRows && n > options_.max_bottom_unknowns) s.colours = colour_rows<dim>(s.A, s.cell);
-    if (n <= options_.max_bottom_unknowns) {
-      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(Eigen::MatrixXd(s.A));
-      const Eigen::VectorXd& lambda = eigen.eigenvalues();
-      const double cutoff = 1e-10 * lambda.cwiseAbs().maxCoeff();
-      const Eigen::VectorXd inverse = (lambda.array() > cutoff).select(lambda.cwiseInverse(), 0.0);
-      s.bottom = eigen.eigenvectors() * inverse.asDiagonal() * eigen.eigenvectors().transpose();
-      return;
-    }
-    if (!detail::can_halve<dim>(s.extent, periodic_)) return;  // smoothed only
+bool ModulatedMultigrid<dim>::refresh(const CellOperator<dim>& op) {
+  Space& fine = *fine_;
+  if (op.cells != fine.extent || op.periodic != periodic_) return false;
+  std::vector<std::int64_t> compact, cells;
+  detail::number_fluid_cells(op, compact, cells);
+  const bool same_cells = cells == fluid_cells_;
+  // New cells interpolate from the coarse cells there are; a tree without coarse spaces, or a
+  // fine space small enough for a bottom inverse, is cheap to build anew.
+  if (!same_cells && (fine.children.empty() || static_cast<std::int64_t>(cells.size()) <= options_.max_bottom_unknowns))
+    return false;
+  fluid_cells_ = std::move(cells);
+  fine.A = fine_matrix(op, compact);
+  // The coarse operators keep the scale of the operator they were built from; the step dt
+  // scales the whole operator (a frame's last step is often much shorter), so the coarse
+  // corrections are rescaled by the ratio of the traces (per cell: the cells may differ).
+  const double trace = fine.A.diagonal().sum() / static_cast<double>(std::max<std::size_t>(fluid_cells_.size(), 1));
+  coarse_scale_ = trace > 0.0 ? built_trace_ / trace : 1.0;
+  if (same_cells) {
+    if (!prepare(fine)) fine.children.clear();  // a bottom space: inverted again
+    return true;
   }
-  // P0: the coarse cells that own a cell of this space, and the interpolation weights.
-  const IVec<dim> coarse_extent = (s.extent.array() + 1) / 2;
+  fine.cell = box_cells<dim>(fluid_cells_, op.cells);
+  prepare(fine);                                       // coarsens: it did with children, and the box is the same
+  const Space& coarse = *fine.children.front().space;  // the children share their cells
+  std::vector<IVec<dim>> coarse_cell = coarse.cell;
+  std::optional<Matrix> P0 = interpolation(fine, coarse.extent, coarse_cell, false);
+  if (!P0) return false;
+  fine.P0 = std::move(*P0);
+  fine.R0 = fine.P0.transpose();
+  for (Child& child : fine.children) child.sign = sign_of_pattern<dim>(fine.cell, child.pattern);
+  return true;
+}
+
+template <int dim>
+std::optional<typename ModulatedMultigrid<dim>::Matrix> ModulatedMultigrid<dim>::interpolation(
+    const Space& s, const IVec<dim>& coarse_extent, std::vector<IVec<dim>>& coarse_cell, bool add_parents) const {
   std::vector<std::int64_t> coarse_index(static_cast<std::size_t>(coarse_extent.template cast<std::int64_t>().prod()),
                                          -1);
-  std::vector<IVec<dim>> coarse_cell;
+  for (std::size_t c = 0; c < coarse_cell.size(); ++c)
+    coarse_index[box_index<dim>(coarse_cell[c], coarse_extent)] = static_cast<std::int64_t>(c);
   // A cell without off-diagonal entries (a droplet: no neighbour shares a movable node) is
   // solved exactly by the smoother; in a coarse space it would only add its energy to the
   // coarse functions of the liquid beside it. It gets no interpolation.
@@ -241,14 +285,21 @@ void ModulatedMultigrid<dim>::build(Space& s) const {
   for (Eigen::Index i = 0; i < s.A.outerSize(); ++i)
     for (Matrix::InnerIterator a(s.A, i); a; ++a)
       coupled[static_cast<std::size_t>(i)] |= a.col() != i && a.value() != 0.0;
+  std::size_t orphans = 0;  // coupled cells whose own coarse cell is missing (refresh)
   for (std::size_t i = 0; i < s.cell.size(); ++i) {
     if (!coupled[i]) continue;
     const IVec<dim>& q = s.cell[i];
     std::int64_t& slot = coarse_index[box_index<dim>(q / 2, coarse_extent)];
     if (slot >= 0) continue;
+    if (!add_parents) {
+      ++orphans;
+      continue;
+    }
     slot = static_cast<std::int64_t>(coarse_cell.size());
     coarse_cell.push_back(q / 2);
   }
+  if (static_cast<double>(orphans) > options_.max_orphan_share * static_cast<double>(s.cell.size()))
+    return std::nullopt;
   std::vector<Triplet> weights;
   for (std::size_t i = 0; i < s.cell.size(); ++i) {
     if (!coupled[i]) continue;
@@ -275,6 +326,38 @@ void ModulatedMultigrid<dim>::build(Space& s) const {
   }
   Matrix P0(static_cast<Eigen::Index>(s.cell.size()), static_cast<Eigen::Index>(coarse_cell.size()));
   P0.setFromTriplets(weights.begin(), weights.end());
+  return P0;
+}
+
+template <int dim>
+bool ModulatedMultigrid<dim>::prepare(Space& s) const {
+  s.A.makeCompressed();  // gauss_seidel reads the raw CSR arrays
+  const Eigen::Index n = s.A.rows();
+  s.b = s.x = s.residual = Eigen::VectorXd::Zero(n);
+  const Eigen::VectorXd diagonal = s.A.diagonal();
+  s.inverse_diagonal = (diagonal.array() > 0.0).select(diagonal.cwiseInverse(), 0.0);
+  s.colours.clear();
+  s.bottom.resize(0, 0);
+  if (n == 0) return false;
+  if (n >= kParallelRows && n > options_.max_bottom_unknowns) s.colours = colour_rows<dim>(s.A, s.cell);
+  if (n <= options_.max_bottom_unknowns) {
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(Eigen::MatrixXd(s.A));
+    const Eigen::VectorXd& lambda = eigen.eigenvalues();
+    const double cutoff = 1e-10 * lambda.cwiseAbs().maxCoeff();
+    const Eigen::VectorXd inverse = (lambda.array() > cutoff).select(lambda.cwiseInverse(), 0.0);
+    s.bottom = eigen.eigenvectors() * inverse.asDiagonal() * eigen.eigenvectors().transpose();
+    return false;
+  }
+  return detail::can_halve<dim>(s.extent, periodic_);  // else smoothed only
+}
+
+template <int dim>
+void ModulatedMultigrid<dim>::build(Space& s) const {
+  if (!prepare(s)) return;
+  // P0: the coarse cells that own a cell of this space, and the interpolation weights.
+  const IVec<dim> coarse_extent = (s.extent.array() + 1) / 2;
+  std::vector<IVec<dim>> coarse_cell;
+  Matrix P0 = *interpolation(s, coarse_extent, coarse_cell, true);
 
   // Pattern k's constant vector is v = S_k P0 1; its median energy ratio decides (header).
   const Eigen::VectorXd diagonal = s.A.diagonal();
@@ -284,12 +367,7 @@ void ModulatedMultigrid<dim>::build(Space& s) const {
   std::vector<char> near_null(1 << dim, 0);
   tbb::parallel_for(0, 1 << dim, [&](int pattern) {
     Eigen::VectorXd& sign = pattern_sign[static_cast<std::size_t>(pattern)];
-    sign.resize(P0.rows());
-    for (std::size_t i = 0; i < s.cell.size(); ++i) {
-      int parity = 0;
-      for (int a = 0; a < dim; ++a) parity += (pattern >> a & 1) * s.cell[i][a];
-      sign[static_cast<Eigen::Index>(i)] = parity % 2 == 0 ? 1.0 : -1.0;
-    }
+    sign = sign_of_pattern<dim>(s.cell, pattern);
     near_null[static_cast<std::size_t>(pattern)] =
         pattern == 0 ||
         median_energy_ratio(s.A, diagonal, sign.cwiseProduct(interpolated_one)) < options_.near_null_ratio;
@@ -371,9 +449,11 @@ void ModulatedMultigrid<dim>::cycle(Space& s, bool fine) {
     s.scratch = child.sign.cwiseProduct(s.residual);
     parallel_multiply(s.R0, s.scratch, child.space->b);
   };
+  // The fine level's corrections are scaled by coarse_scale_ (1 unless refreshed).
+  const double scale = fine ? coarse_scale_ : 1.0;
   auto add_correction = [&](const Child& child) {
     parallel_multiply(s.P0, child.space->x, s.scratch);
-    s.x += child.sign.cwiseProduct(s.scratch);
+    s.x += scale * child.sign.cwiseProduct(s.scratch);
   };
   auto update_residual = [&s] {
     parallel_multiply(s.A, s.x, s.residual);

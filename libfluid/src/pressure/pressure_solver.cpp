@@ -16,8 +16,8 @@ std::vector<std::string> pressure_solver_names() {
 }
 
 template <int dim>
-std::unique_ptr<PressureSolver<dim>> make_pressure_solver(const std::string& name) {
-  if (name == "mgpcg") return std::make_unique<MgpcgSolver<dim>>();
+std::unique_ptr<PressureSolver<dim>> make_pressure_solver(const std::string& name, int setup_reuse) {
+  if (name == "mgpcg") return std::make_unique<MgpcgSolver<dim>>(setup_reuse);
   if (name == "cg") return std::make_unique<CgSolver<dim>>();
   if (name == "jacobi_pcg") return std::make_unique<JacobiPcgSolver<dim>>();
 #if FLUID_WITH_CHOLMOD
@@ -39,7 +39,7 @@ std::unique_ptr<PressureSolver<dim>> make_pressure_solver(const std::string& nam
   throw mpm::InputError("unknown pressure solver '" + name + "' (accepted: " + accepted + ")");
 }
 
-template std::unique_ptr<PressureSolver<2>> make_pressure_solver<2>(const std::string&);
-template std::unique_ptr<PressureSolver<3>> make_pressure_solver<3>(const std::string&);
+template std::unique_ptr<PressureSolver<2>> make_pressure_solver<2>(const std::string&, int);
+template std::unique_ptr<PressureSolver<3>> make_pressure_solver<3>(const std::string&, int);
 
 }  // namespace fluid

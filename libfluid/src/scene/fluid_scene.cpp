@@ -48,6 +48,7 @@ stages::PressureSettings parse_pressure_settings(const Config& scene) {
   if (const std::string fallback = p->choice("fallback", "none", fallbacks); fallback != "none") s.fallback = fallback;
   s.control.relative_tolerance = p->number("tolerance", s.control.relative_tolerance, Range::open(0.0, 1.0));
   s.control.max_iterations = p->integer("max_iterations", s.control.max_iterations, 1, 1000000);
+  s.setup_reuse = p->integer("setup_reuse", s.setup_reuse, 1, 1000);
   s.on_failure =
       p->choice("on_failure", "stop", {"stop", "warn"}) == "stop" ? stages::OnFailure::stop : stages::OnFailure::warn;
   s.surface_extension = p->flag("surface_extension", s.surface_extension);

@@ -47,8 +47,9 @@ PressureProjection<dim>::PressureProjection(double density, mpm::geometry::Colli
       colliders_(std::move(colliders)),
       settings_(std::move(settings)),
       name_(std::move(name)),
-      solver_(make_pressure_solver<dim>(settings_.solver)),
-      fallback_(settings_.fallback.empty() ? nullptr : make_pressure_solver<dim>(settings_.fallback)) {}
+      solver_(make_pressure_solver<dim>(settings_.solver, settings_.setup_reuse)),
+      fallback_(settings_.fallback.empty() ? nullptr
+                                           : make_pressure_solver<dim>(settings_.fallback, settings_.setup_reuse)) {}
 
 namespace {
 //! Calls f(local coordinate, local index) for every point of a box with `n` points per axis

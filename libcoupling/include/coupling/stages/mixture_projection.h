@@ -42,6 +42,7 @@ public:
   void run(CoupledState<dim>& s) override;
   mpm::CarriedData carried() const override { return projection_.carried(); }
   void restore(const mpm::CarriedData& data) override { projection_.restore(data); }
+  void synchronize(CoupledState<dim>& /*state*/) override { projection_.forget(); }
   std::vector<mpm::Diagnostic> diagnostics() const override { return projection_.diagnostics(); }
 
   const fluid::stages::PressureProjection<dim>& projection() const { return projection_; }

@@ -33,6 +33,7 @@ public:
   void run(CoupledState<dim>& s) override { stage_->run(phase_state(s, phase_)); }
   mpm::CarriedData carried() const override { return stage_->carried(); }
   void restore(const mpm::CarriedData& data) override { stage_->restore(data); }
+  void synchronize(CoupledState<dim>& s) override { stage_->synchronize(phase_state(s, phase_)); }
   //! The stage's columns; a per-phase quantity gets the phase appended ("inflow_mass_fluid").
   std::vector<mpm::Diagnostic> diagnostics() const override {
     std::vector<mpm::Diagnostic> all = stage_->diagnostics();

@@ -66,6 +66,7 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <vector>
 
 namespace fluid {
@@ -77,11 +78,27 @@ public:
     double near_null_ratio = 0.3;           //!< a pattern is a child when its median energy ratio is below this
     std::int64_t max_bottom_unknowns = 64;  //!< invert spaces of at most this many unknowns
     int smoothing_sweeps = 1;               //!< Gauss-Seidel sweeps before and after the coarse corrections
+    //! refresh(): the share of the fine cells that may lack their own coarse cell
+    double max_orphan_share = 0.02;
   };
 
   //! Assembles A over the fluid cells of `op` and builds the tree.
   ModulatedMultigrid(const CellOperator<dim>& op, const Options& options);
   explicit ModulatedMultigrid(const CellOperator<dim>& op) : ModulatedMultigrid(op, Options{}) {}
+
+  //! Takes the fine space of `op` (its fluid cells, matrix and smoother) and keeps the coarse
+  //! spaces built for an earlier operator on the same box (and periodic axes). Where the fluid
+  //! cells changed, P0 interpolates from the coarse cells there are and the sign vectors
+  //! follow the cells. The coarse corrections then come from the earlier operator's Galerkin
+  //! products, scaled by the ratio of the mean diagonals (the step dt scales the whole
+  //! operator: a frame's last, shorter step took 46-68 iterations against 15 without): the
+  //! cycle stays symmetric positive definite (adjoint smoothers on the exact
+  //! fine matrix around any symmetric positive semi-definite coarse correction), so CG stays
+  //! valid and only its rate depends on how far the operator moved. Returns false, and the
+  //! tree is then to be built anew, for another box, for changed cells where the tree has no
+  //! coarse spaces, or where a coupled cell's own coarse cell is not among them (a cell with a
+  //! quarter weight at most converges slowly: 57 CG iterations against 19 in test_pressure).
+  bool refresh(const CellOperator<dim>& op);
 
   //! z = M r for vectors over all cells of the box (empty cells: read as 0, written 0).
   void apply(const std::vector<double>& r, std::vector<double>& z);
@@ -116,6 +133,16 @@ private:
     std::vector<std::vector<int>> colours;
   };
 
+  //! P0 from the cells of `s` onto the coarse cells `coarse_cell` of a box of `coarse_extent`
+  //! (weights 3/4, 1/4 per axis; header). The parent of a coupled cell that is missing is
+  //! appended with `add_parents` (a new tree), else there is no P0 (refresh: nullopt).
+  std::optional<Matrix> interpolation(const Space& s, const IVec<dim>& coarse_extent,
+                                      std::vector<IVec<dim>>& coarse_cell, bool add_parents) const;
+  //! A over the fluid cells numbered by `compact` (fluid_cells_ set).
+  Matrix fine_matrix(const CellOperator<dim>& op, const std::vector<std::int64_t>& compact);
+  //! The smoother's data of `s` (its matrix, extent and cells set), or its bottom inverse;
+  //! returns whether `s` gets coarse children.
+  bool prepare(Space& s) const;
   //! Builds the subtree below `s` (its matrix, extent and cells set); the children's
   //! subtrees in parallel (each touches only its own spaces: the result is the serial one).
   void build(Space& s) const;
@@ -129,6 +156,8 @@ private:
   std::array<bool, dim> periodic_{};
   std::vector<std::int64_t> fluid_cells_;  //!< box index of each fine unknown
   std::unique_ptr<Space> fine_;            //!< the tree's root
+  double built_trace_ = 0.0;               //!< mean diagonal of the fine matrix the tree was built from
+  double coarse_scale_ = 1.0;              //!< built_trace_ over that of the refreshed fine matrix
 };
 
 }  // namespace fluid

@@ -26,6 +26,8 @@ struct PressureSettings {
   //! the same control); the retry is reported, and on_failure applies when it fails too.
   std::string fallback;
   SolveControl control;  //!< tolerance and iteration cap of every solve
+  //! Solves one MGPCG hierarchy may serve within a frame (mgpcg.h; 1: a new one every solve).
+  int setup_reuse = 20;
   OnFailure on_failure = OnFailure::stop;
   //! Extend the projected velocity to the loose surface nodes after the solve
   //! (surface_velocity_extension.h); off: they keep their free fall (the spurious currents).
@@ -72,6 +74,14 @@ public:
           op_.cells[a] = static_cast<int>(values[dim + a]);
         }
     }
+  }
+
+  //! A frame end, where a restart can begin: the solvers drop what they keep between solves
+  //! (MGPCG's hierarchy), so that a restarted run solves as the continuous one, bit for bit.
+  void synchronize(mpm::MpmState<dim>& /*state*/) override { forget(); }
+  void forget() {
+    solver_->forget();
+    if (fallback_) fallback_->forget();
   }
 
   //! Couples the projection to a second phase (nullptr: single phase). The pointer must stay
