@@ -65,7 +65,7 @@ SolveResult MgpcgSolver<dim>::solve(const CellOperator<dim>& op, const std::vect
     served_ = 0;
   }
   result = solve_with(op, rhs, p, control, start, *kept_);
-  int spent = 0;  // iterations of a kept hierarchy's failed try
+  int spent = 0;                         // iterations of a kept hierarchy's failed try
   if (refreshed && !result.converged) {  // a kept hierarchy never fails a solve: built anew
     spent = result.iterations;
     p = guess;
