@@ -191,6 +191,11 @@ Eigen::VectorXd sign_of_pattern(const std::vector<IVec<dim>>& cell, int pattern)
   return sign;
 }
 
+//! The mean of A's diagonal (0 for an empty A): the scale of an operator (refresh).
+double mean_diagonal(const Eigen::SparseMatrix<double, Eigen::RowMajor>& A) {
+  return A.rows() > 0 ? A.diagonal().sum() / static_cast<double>(A.rows()) : 0.0;
+}
+
 //! Box coordinates of the cells with the given indices (x fastest) in a box of `extent`.
 template <int dim>
 std::vector<IVec<dim>> box_cells(const std::vector<std::int64_t>& index, const IVec<dim>& extent) {
@@ -220,7 +225,7 @@ ModulatedMultigrid<dim>::ModulatedMultigrid(const CellOperator<dim>& op, const O
   fine.extent = op.cells;
   fine.cell = box_cells<dim>(fluid_cells_, op.cells);
   fine.A = fine_matrix(op, compact);
-  built_trace_ = fine.A.diagonal().sum() / static_cast<double>(std::max<std::size_t>(fluid_cells_.size(), 1));
+  built_trace_ = mean_diagonal(fine.A);
   build(fine);
 }
 
@@ -253,7 +258,7 @@ bool ModulatedMultigrid<dim>::refresh(const CellOperator<dim>& op) {
   // The coarse operators keep the scale of the operator they were built from; the step dt
   // scales the whole operator (a frame's last step is often much shorter), so the coarse
   // corrections are rescaled by the ratio of the traces (per cell: the cells may differ).
-  const double trace = fine.A.diagonal().sum() / static_cast<double>(std::max<std::size_t>(fluid_cells_.size(), 1));
+  const double trace = mean_diagonal(fine.A);
   coarse_scale_ = trace > 0.0 ? built_trace_ / trace : 1.0;
   if (same_cells) {
     if (!prepare(fine)) fine.children.clear();  // a bottom space: inverted again

@@ -319,6 +319,7 @@ inline std::array<Svd<3>, kSvdLanes> svd3(const std::array<const Mat<3>*, kSvdLa
   detail::svd3_factors(A, U, V, R);
   std::array<Svd<3>, kSvdLanes> result;
   for (int lane = 0; lane < kSvdLanes; ++lane) {
+    if (!F[lane]) continue;  // unused: left as constructed
     Mat<3> u, v, r;
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j) {

@@ -29,21 +29,17 @@ bool any_dilatant(const std::vector<Material<dim>>& materials) {
 }
 
 namespace {
-//! One particle's return map: a dilatant Drucker-Prager material reads and updates the rest
-//! packing (a particle of unknown packing starts at the critical one), a rate-dependent one
-//! uses the step dt, every other model its plain map.
-//! `trial` is the SVD of F.
+//! One particle's return map from `trial`, the SVD of F: a dilatant Drucker-Prager material
+//! reads and updates the rest packing (a particle of unknown packing starts at the critical
+//! one), and the step dt reaches a rate-dependent one (the others do not read it); every other
+//! model has its plain map.
 template <int dim, class Model>
 void project(const Model& model, Mat<dim>& F, const math::Svd<dim>& trial, double& plastic, double* packing, double dt,
              math::Svd<dim>* result) {
   if constexpr (std::is_same_v<Model, plasticity::DruckerPrager<dim>>) {
-    if (model.dilatant() || model.rate_dependent()) {
-      if (!model.dilatant()) packing = nullptr;
-      if (packing && std::isnan(*packing)) *packing = model.flow().critical_packing * F.determinant();
-      model.project(F, trial, plastic, packing, dt, result);
-      return;
-    }
-    model.project(F, trial, plastic, nullptr, 0.0, result);
+    if (!model.dilatant()) packing = nullptr;
+    if (packing && std::isnan(*packing)) *packing = model.flow().critical_packing * F.determinant();
+    model.project(F, trial, plastic, packing, dt, result);
   } else {
     model.project(F, trial, plastic, result);
   }

@@ -42,7 +42,7 @@ void StressForces<dim>::run(MpmState<dim>& s) {
             const auto needs_svd = [&](std::size_t p) {
               if (P.material[p] != m) return false;
               if (!cached || !solid::known_stress((*cache)[p])) return true;
-              weighted_stress_[p] = P.volume0[p] * plasticity.modulus_scale(plastic[p]) * (*cache)[p];
+              weighted_stress_[p] = weighted_kirchhoff(plasticity, P.volume0[p], (*cache)[p], plastic[p]);
               return false;
             };
             math::for_each_svd<dim>(

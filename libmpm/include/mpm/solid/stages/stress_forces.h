@@ -6,13 +6,19 @@
 
 namespace mpm::stages {
 
-//! V^0 tau of one particle of a material (model, plasticity) from the SVD f of its F^E:
-//! tau = P(F^E) F^E^T = U diag(p_i sigma_i) U^T, scaled by the plasticity's hardening of the
-//! particle's plastic state.
+//! V^0 tau of one particle from its Kirchhoff stress tau, scaled by the plasticity's hardening
+//! of the particle's plastic state.
+template <int dim, class Plasticity>
+Mat<dim> weighted_kirchhoff(const Plasticity& plasticity, double volume0, const Mat<dim>& tau, double plastic) {
+  return volume0 * plasticity.modulus_scale(plastic) * tau;
+}
+
+//! The same for a material (model, plasticity) from the SVD f of F^E:
+//! tau = P(F^E) F^E^T = U diag(p_i sigma_i) U^T.
 template <int dim, class Elastic, class Plasticity>
 Mat<dim> weighted_kirchhoff(const Elastic& model, const Plasticity& plasticity, double volume0, const math::Svd<dim>& f,
                             double plastic) {
-  return volume0 * plasticity.modulus_scale(plastic) * constitutive::isotropic_kirchhoff(model, f);
+  return weighted_kirchhoff(plasticity, volume0, constitutive::isotropic_kirchhoff(model, f), plastic);
 }
 
 //! The same from F^E; the return map's cached tau instead where `cached` points at a known one
@@ -20,7 +26,7 @@ Mat<dim> weighted_kirchhoff(const Elastic& model, const Plasticity& plasticity, 
 template <int dim, class Elastic, class Plasticity>
 Mat<dim> weighted_kirchhoff(const Elastic& model, const Plasticity& plasticity, double volume0, const Mat<dim>& F,
                             double plastic, const Mat<dim>* cached) {
-  if (cached && solid::known_stress(*cached)) return volume0 * plasticity.modulus_scale(plastic) * *cached;
+  if (cached && solid::known_stress(*cached)) return weighted_kirchhoff(plasticity, volume0, *cached, plastic);
   return weighted_kirchhoff(model, plasticity, volume0, math::svd(F), plastic);
 }
 
