@@ -361,7 +361,7 @@ sediment: {solver: )" + solid + ", density: 2650" +
       }
       auto pipeline = make_coupled_pipeline(scene);
       const auto names = pipeline.stage_names();
-      const bool has_stress = std::find(names.begin(), names.end(), "sediment.stress_forces") != names.end();
+      const bool has_stress = std::find(names.begin(), names.end(), "sediment.p2g_stress") != names.end();
       CHECK(has_stress == (solid == "explicit"));
 
       CoupledState<2>& s = scene.state;

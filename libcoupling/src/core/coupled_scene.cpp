@@ -130,7 +130,9 @@ mpm::Pipeline<CoupledState<dim>> make_coupled_pipeline(const CoupledScene<dim>& 
   for (const auto& source : scene.sediment_sources)
     on(Phase::sediment, std::make_unique<ms::ParticleSource<dim>>(source));
   both([] { return std::make_unique<ms::SortParticles<dim>>(); });
-  both([] { return std::make_unique<ms::ParticlesToGrid<dim>>(); });
+  if (wet) on(Phase::fluid, std::make_unique<ms::ParticlesToGrid<dim>>());
+  if (sandy)  // p2g, with the stress forces in the same scatter where the solver has them
+    for (auto& stage : scene.solid_solver->to_grid()) on(Phase::sediment, std::move(stage));
   if (wet && sandy)
     p.add(std::make_unique<stages::VolumeFractionStage<dim>>(scene.fluid->density, scene.sediment->density,
                                                              scene.sediment->min_fluid_fraction));

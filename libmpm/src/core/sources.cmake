@@ -18,6 +18,7 @@ list(APPEND MPM_CORE_SOURCES
   src/core/stages/refine_grid.cpp
   src/core/stages/resample_particles.cpp
   src/core/stages/grid_to_particles.cpp
+  src/core/stages/particle_stage.cpp
   src/core/stages/time_step_control.cpp
   src/core/stages/particle_source.cpp
   src/core/stages/particle_sink.cpp

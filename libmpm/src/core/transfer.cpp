@@ -19,21 +19,37 @@ std::array<ChannelView, dim> vector_views(const std::vector<Vec<dim>>& v) {
 
 template <int dim>
 void particles_to_grid(const Particles<dim>& particles, const ParticleBuckets<dim>& buckets, const Kernel& kernel,
-                       const TransferScheme& scheme, SparseGrid<dim>& grid) {
+                       const TransferScheme& scheme, SparseGrid<dim>& grid,
+                       const std::vector<Mat<dim>>* weighted_stress) {
+  MPM_VERIFY(!weighted_stress || weighted_stress->size() == particles.size(), Error,
+             "particles_to_grid: the stresses need one entry per particle");
   std::fill(grid.mass.begin(), grid.mass.end(), 0.0);
   std::fill(grid.velocity.begin(), grid.velocity.end(), Vec<dim>::Zero());
-  std::array<ChannelView, dim + 1> channels;
-  channels[0] = scalar_view(grid.mass);
-  for (int a = 0; a < dim; ++a) channels[a + 1] = component_view<dim>(grid.velocity, a);
-  std::visit(
-      [&](const auto& k) {
-        using K = std::decay_t<decltype(k)>;
-        if (scheme.type == TransferScheme::Type::apic)
-          detail::p2g<dim, K, true>(particles, buckets, k, grid, channels);
-        else
-          detail::p2g<dim, K, false>(particles, buckets, k, grid, channels);
-      },
-      kernel);
+  const auto run = [&](auto channel_count) {
+    constexpr std::size_t Ch = decltype(channel_count)::value;
+    std::array<ChannelView, Ch> channels;
+    channels[0] = scalar_view(grid.mass);
+    for (int a = 0; a < dim; ++a) channels[a + 1] = component_view<dim>(grid.velocity, a);
+    const Mat<dim>* S = nullptr;
+    if constexpr (Ch > dim + 1) {
+      grid.force.assign(grid.node_storage(), Vec<dim>::Zero());
+      for (int a = 0; a < dim; ++a) channels[dim + 1 + a] = component_view<dim>(grid.force, a);
+      S = weighted_stress->data();
+    }
+    std::visit(
+        [&](const auto& k) {
+          using K = std::decay_t<decltype(k)>;
+          if (scheme.type == TransferScheme::Type::apic)
+            detail::p2g<dim, K, true>(particles, buckets, k, grid, channels, S);
+          else
+            detail::p2g<dim, K, false>(particles, buckets, k, grid, channels, S);
+        },
+        kernel);
+  };
+  if (weighted_stress)
+    run(std::integral_constant<std::size_t, 2 * dim + 1>{});
+  else
+    run(std::integral_constant<std::size_t, dim + 1>{});
 }
 
 template <int dim>
@@ -51,7 +67,8 @@ void momentum_to_velocity(SparseGrid<dim>& grid, const TransferScheme& scheme) {
 
 template <int dim>
 void grid_to_particles(Particles<dim>& particles, const ParticleBuckets<dim>& buckets, const Kernel& kernel,
-                       const TransferScheme& scheme, const SparseGrid<dim>& grid, double dt, std::vector<Mat<dim>>* F) {
+                       const TransferScheme& scheme, const SparseGrid<dim>& grid, double dt, std::vector<Mat<dim>>* F,
+                       const ParticleGroupUpdate* then) {
   MPM_VERIFY(!F || F->size() == particles.size(), Error, "grid_to_particles: F needs one entry per particle");
   const std::array<ChannelView, dim> velocity = vector_views<dim>(grid.velocity);
   const auto run = [&](auto deform) {
@@ -61,13 +78,13 @@ void grid_to_particles(Particles<dim>& particles, const ParticleBuckets<dim>& bu
         [&](const auto& k) {
           using K = std::decay_t<decltype(k)>;
           if (scheme.type == TransferScheme::Type::apic) {
-            detail::g2p<dim, K, false, fused>(particles, buckets, k, grid, velocity, 0.0, dt, f);
+            detail::g2p<dim, K, false, fused>(particles, buckets, k, grid, velocity, 0.0, dt, f, then);
           } else {
             std::array<ChannelView, 2 * dim> both;
             const std::array<ChannelView, dim> old = vector_views<dim>(grid.velocity_old);
             std::copy(velocity.begin(), velocity.end(), both.begin());
             std::copy(old.begin(), old.end(), both.begin() + dim);
-            detail::g2p<dim, K, true, fused>(particles, buckets, k, grid, both, scheme.flip_ratio, dt, f);
+            detail::g2p<dim, K, true, fused>(particles, buckets, k, grid, both, scheme.flip_ratio, dt, f, then);
           }
         },
         kernel);
@@ -166,21 +183,21 @@ void stress_to_nodes(const std::vector<Mat<dim>>& weighted_stress, const Particl
       kernel);
 }
 
-#define MPM_INSTANTIATE(dim)                                                                                          \
-  template void particles_to_grid(const Particles<dim>&, const ParticleBuckets<dim>&, const Kernel&,                  \
-                                  const TransferScheme&, SparseGrid<dim>&);                                           \
-  template void momentum_to_velocity(SparseGrid<dim>&, const TransferScheme&);                                        \
-  template void grid_to_particles(Particles<dim>&, const ParticleBuckets<dim>&, const Kernel&, const TransferScheme&, \
-                                  const SparseGrid<dim>&, double, std::vector<Mat<dim>>*);                            \
-  template void scalar_to_grid(const std::vector<double>&, const Particles<dim>&, const ParticleBuckets<dim>&,        \
-                               const Kernel&, const SparseGrid<dim>&, std::vector<double>&);                          \
-  template void stress_to_grid_forces(const std::vector<Mat<dim>>&, const Particles<dim>&,                            \
-                                      const ParticleBuckets<dim>&, const Kernel&, SparseGrid<dim>&);                  \
-  template void velocity_gradient(const Particles<dim>&, const ParticleBuckets<dim>&, const Kernel&,                  \
-                                  const SparseGrid<dim>&, std::vector<Mat<dim>>&);                                    \
-  template void stress_to_nodes(const std::vector<Mat<dim>>&, const Particles<dim>&, const ParticleBuckets<dim>&,     \
-                                const Kernel&, const SparseGrid<dim>&, std::vector<Vec<dim>>&);                       \
-  template void node_field_gradient(const Particles<dim>&, const ParticleBuckets<dim>&, const Kernel&,                \
+#define MPM_INSTANTIATE(dim)                                                                                           \
+  template void particles_to_grid(const Particles<dim>&, const ParticleBuckets<dim>&, const Kernel&,                   \
+                                  const TransferScheme&, SparseGrid<dim>&, const std::vector<Mat<dim>>*);              \
+  template void momentum_to_velocity(SparseGrid<dim>&, const TransferScheme&);                                         \
+  template void grid_to_particles(Particles<dim>&, const ParticleBuckets<dim>&, const Kernel&, const TransferScheme&,  \
+                                  const SparseGrid<dim>&, double, std::vector<Mat<dim>>*, const ParticleGroupUpdate*); \
+  template void scalar_to_grid(const std::vector<double>&, const Particles<dim>&, const ParticleBuckets<dim>&,         \
+                               const Kernel&, const SparseGrid<dim>&, std::vector<double>&);                           \
+  template void stress_to_grid_forces(const std::vector<Mat<dim>>&, const Particles<dim>&,                             \
+                                      const ParticleBuckets<dim>&, const Kernel&, SparseGrid<dim>&);                   \
+  template void velocity_gradient(const Particles<dim>&, const ParticleBuckets<dim>&, const Kernel&,                   \
+                                  const SparseGrid<dim>&, std::vector<Mat<dim>>&);                                     \
+  template void stress_to_nodes(const std::vector<Mat<dim>>&, const Particles<dim>&, const ParticleBuckets<dim>&,      \
+                                const Kernel&, const SparseGrid<dim>&, std::vector<Vec<dim>>&);                        \
+  template void node_field_gradient(const Particles<dim>&, const ParticleBuckets<dim>&, const Kernel&,                 \
                                     const SparseGrid<dim>&, const std::vector<Vec<dim>>&, std::vector<Mat<dim>>&);
 MPM_INSTANTIATE(2)
 MPM_INSTANTIATE(3)

@@ -4,7 +4,6 @@
 #include <mpm/core/stages/ghost_velocities.h>
 #include <mpm/core/stages/grid_boundary.h>
 #include <mpm/core/stages/grid_velocity_update.h>
-#include <mpm/core/stages/particles_to_grid.h>
 #include <mpm/core/stages/refine_grid.h>
 #include <mpm/core/stages/resample_particles.h>
 #include <mpm/core/stages/sort_particles.h>
@@ -309,7 +308,7 @@ Pipeline<MpmState<dim>> make_solid_pipeline(const SolidScene<dim>& scene) {
       p.add(std::make_unique<stages::GridVelocityUpdate<dim>>(true));
   } else {
     p.add(std::make_unique<stages::SortParticles<dim>>());
-    p.add(std::make_unique<stages::ParticlesToGrid<dim>>());
+    for (auto& stage : scene.solver->to_grid()) p.add(std::move(stage));
     for (auto& stage : scene.solver->grid_update()) p.add(std::move(stage));
   }
   p.add(std::make_unique<stages::GridBoundary<dim>>(scene.colliders));

@@ -5,6 +5,7 @@
 #include <mpm/core/error.h>
 #include <mpm/core/stages/grid_to_particles.h>
 #include <mpm/core/stages/grid_velocity_update.h>
+#include <mpm/core/stages/particles_to_grid.h>
 #include <mpm/solid/stages/return_map.h>
 #include <mpm/solid/stages/stress_forces.h>
 
@@ -48,14 +49,22 @@ stages::ImplicitSettings parse_implicit_settings(const Config& parent, const std
   return s;
 }
 
+template <int dim>
+typename SolidSolver<dim>::Stages SolidSolver<dim>::to_grid() const {
+  Stages s;
+  s.push_back(std::make_unique<stages::ParticlesToGrid<dim>>());
+  return s;
+}
+
 namespace {
-//! g2p with the deformation update -> plasticity (only when a material is plastic): the
-//! particle update of both elastoplastic solvers.
+//! g2p with the deformation update and, where a material is plastic, the return map of each
+//! bucket right after its gather: the particle update of both elastoplastic solvers.
 template <int dim>
 typename SolidSolver<dim>::Stages elastoplastic_particle_update(const std::vector<Material<dim>>& materials) {
   typename SolidSolver<dim>::Stages s;
-  s.push_back(std::make_unique<stages::GridToParticles<dim>>(kElasticF));
-  if (stages::any_plastic(materials)) s.push_back(std::make_unique<stages::ReturnMap<dim>>(materials));
+  std::unique_ptr<stages::ParticleStage<dim>> plasticity;
+  if (stages::any_plastic(materials)) plasticity = std::make_unique<stages::ReturnMap<dim>>(materials);
+  s.push_back(std::make_unique<stages::GridToParticles<dim>>(kElasticF, std::move(plasticity)));
   return s;
 }
 }  // namespace
@@ -79,9 +88,16 @@ double ExplicitSolver<dim>::wave_speed() const {
 }
 
 template <int dim>
+typename ExplicitSolver<dim>::Stages ExplicitSolver<dim>::to_grid() const {
+  Stages s;
+  s.push_back(std::make_unique<stages::StressForces<dim>>(materials_, stress_free_particles_,
+                                                          stages::StressForces<dim>::Scatter::with_momentum));
+  return s;
+}
+
+template <int dim>
 typename ExplicitSolver<dim>::Stages ExplicitSolver<dim>::grid_update() const {
   Stages s;
-  s.push_back(std::make_unique<stages::StressForces<dim>>(materials_, stress_free_particles_));
   s.push_back(std::make_unique<stages::GridVelocityUpdate<dim>>(true));
   return s;
 }
@@ -128,6 +144,8 @@ template std::shared_ptr<const SolidSolver<2>> make_solid_solver(const std::stri
 template std::shared_ptr<const SolidSolver<3>> make_solid_solver(const std::string&, std::vector<Material<3>>, bool,
                                                                  geometry::ColliderSet<3>,
                                                                  const stages::ImplicitSettings&);
+template class SolidSolver<2>;
+template class SolidSolver<3>;
 template class ExplicitSolver<2>;
 template class ExplicitSolver<3>;
 template class ImplicitSolver<2>;

@@ -11,9 +11,15 @@
 #include <mpm/core/kernels.h>
 #include <mpm/core/particle_buckets.h>
 
+#include <cstdint>
+#include <functional>
 #include <string>
 
 namespace mpm {
+
+//! An update of the particles with indices [first, last) (one bucket) that a transfer runs
+//! right after it has visited them; called in parallel on disjoint lists.
+using ParticleGroupUpdate = std::function<void(const std::uint32_t* first, const std::uint32_t* last)>;
 
 struct TransferScheme {
   enum class Type { apic, flip };
@@ -22,10 +28,14 @@ struct TransferScheme {
   bool uses_old_velocity() const { return type == Type::flip; }
 };
 
-//! Accumulates node mass and momentum (into grid.velocity); zeroes both first.
+//! Accumulates node mass and momentum (into grid.velocity); zeroes both first. With
+//! `weighted_stress` (S_p per particle, as in stress_to_grid_forces) the same pass also forms
+//! grid.force = - sum_p S_p grad w_ip: one scatter instead of two, with the sums of the two,
+//! bit for bit.
 template <int dim>
 void particles_to_grid(const Particles<dim>& particles, const ParticleBuckets<dim>& buckets, const Kernel& kernel,
-                       const TransferScheme& scheme, SparseGrid<dim>& grid);
+                       const TransferScheme& scheme, SparseGrid<dim>& grid,
+                       const std::vector<Mat<dim>>* weighted_stress = nullptr);
 
 //! Divides momentum by mass (nodes without mass get zero velocity); keeps a copy in
 //! grid.velocity_old when the scheme needs it.
@@ -34,11 +44,12 @@ void momentum_to_velocity(SparseGrid<dim>& grid, const TransferScheme& scheme);
 
 //! Updates v_p, C_p from grid.velocity (and velocity_old for FLIP) and advects x_p by dt. With
 //! `F` (a deformation gradient per particle) the same gather also updates
-//! F_p = (I + dt grad v_p) F_p, grad v_p = sum_i v_i (grad w_ip)^T before the advection.
+//! F_p = (I + dt grad v_p) F_p, grad v_p = sum_i v_i (grad w_ip)^T before the advection. With
+//! `then`, each bucket's particles go through it right after their gather.
 template <int dim>
 void grid_to_particles(Particles<dim>& particles, const ParticleBuckets<dim>& buckets, const Kernel& kernel,
                        const TransferScheme& scheme, const SparseGrid<dim>& grid, double dt,
-                       std::vector<Mat<dim>>* F = nullptr);
+                       std::vector<Mat<dim>>* F = nullptr, const ParticleGroupUpdate* then = nullptr);
 
 //! out_i = sum_p w_ip values[p] on every node (out sized to the grid's node storage, zeroed
 //! first): a per-particle quantity carried to the grid with the P2G weights (a volume fraction).

@@ -1,8 +1,8 @@
 #pragma once
 //! The explicit symplectic-Euler elastoplastic step (docs/architecture.md, "The explicit solid
-//! step"): grid_update() = stress_forces -> grid_update (forces and gravity);
-//! particle_update() = g2p with the deformation update -> plasticity (only when a material is
-//! plastic). Stable for
+//! step"): to_grid() = p2g with the stress forces in the same scatter (p2g_stress);
+//! grid_update() = grid_update (forces and gravity); particle_update() = g2p with the
+//! deformation update -> plasticity (only when a material is plastic). Stable for
 //! dt < dx / c, c the fastest elastic wave of the materials.
 #include <mpm/solid/solid_channels.h>
 #include <mpm/solid/solid_solver.h>
@@ -18,6 +18,7 @@ public:
   //! F and plastic; the stress cache too when a material is plastic.
   void add_channels(Particles<dim>& particles) const override;
   double wave_speed() const override;
+  Stages to_grid() const override;
   Stages grid_update() const override;
   Stages particle_update() const override;
 

@@ -2,8 +2,9 @@
 //! The solid-step interface: what a solid solver adds to a step, so that a solid scene and the
 //! sediment of a coupled scene assemble their pipelines from the same solver and a scene can
 //! swap it (`solver:` in a solid scene, `sediment.solver:` in a coupled one). A pipeline runs
-//!   time_step -> sort -> p2g -> grid_update() -> boundary -> particle_update()
-//! (particle_update() begins with g2p) and a coupled step puts the exchange and the mixture
+//!   time_step -> sort -> to_grid() -> grid_update() -> boundary -> particle_update()
+//! (to_grid() is p2g, or p2g with what the solver scatters in the same pass; particle_update()
+//! begins with g2p) and a coupled step puts the exchange and the mixture
 //! projection between grid_update() and particle_update() (libcoupling). The implicit solver enforces walls and colliders inside its
 //! grid update as well; the boundary stage after it then leaves its velocities unchanged.
 #include <mpm/core/config.h>
@@ -31,6 +32,9 @@ public:
   //! The fastest wave the update must resolve [m/s] (the time step keeps dt <= wave_cfl dx / c);
   //! 0 when the update is stable at any step.
   virtual double wave_speed() const = 0;
+  //! From the particles to the grid mass and momentum: p2g, unless the solver scatters more
+  //! in the same pass (the explicit solver's stress forces).
+  virtual Stages to_grid() const;
   //! From the transferred grid momentum to the grid velocity before the boundary conditions.
   virtual Stages grid_update() const = 0;
   //! From the final grid velocity to the new particle state: g2p (with the deformation update

@@ -5,7 +5,8 @@
 // and, for a solid, the deformation update (sec. 3.2)  F_p <- (I + dt grad v_p) F_p,
 // grad v_p = sum_i v_i (grad w_ip)^T, with the grid velocities after boundary conditions. On a
 // uniform grid (and for the regular particles of an adaptive one) both come from one gather
-// (transfer.h); the trial F^E of a plastic material is projected afterwards by stage 'plasticity'.
+// (transfer.h); the trial F^E of a plastic material is projected by the return map, right after
+// each bucket's gather when the solver hands it over (stage 'g2p_plasticity').
 #include <mpm/adaptive/adaptive_transfer.h>
 #include <mpm/core/finite_guard.h>
 #include <mpm/core/stages/grid_to_particles.h>
@@ -17,6 +18,8 @@ template <int dim>
 std::vector<std::string> GridToParticles<dim>::reads() const {
   std::vector<std::string> r{"grid.velocity", "particle.order"};
   if (!deformation_.empty()) r.push_back("particle." + deformation_);
+  if (then_)
+    for (const std::string& field : then_->reads()) r.push_back(field);
   return r;
 }
 
@@ -24,6 +27,8 @@ template <int dim>
 std::vector<std::string> GridToParticles<dim>::writes() const {
   std::vector<std::string> w{"particle.v", "particle.C", "particle.x"};
   if (!deformation_.empty()) w.push_back("particle." + deformation_);
+  if (then_)
+    for (const std::string& field : then_->writes()) w.push_back(field);
   return w;
 }
 
@@ -31,12 +36,16 @@ template <int dim>
 void GridToParticles<dim>::run(MpmState<dim>& s) {
   Particles<dim>& P = s.particles;
   std::vector<Mat<dim>>* F = deformation_.empty() ? nullptr : &P.template channel<Mat<dim>>(deformation_);
-  if (s.adaptive)
+  if (s.adaptive) {
     adaptive::grid_to_particles(P, s.transfer, *s.adaptive, s.dt, F);
-  else
-    grid_to_particles(P, s.buckets, s.kernel, s.transfer, s.grid, s.dt, F);
+    if (then_) then_->run(s);
+  } else {
+    const ParticleGroupUpdate then = then_ ? then_->bind(s) : ParticleGroupUpdate{};
+    grid_to_particles(P, s.buckets, s.kernel, s.transfer, s.grid, s.dt, F, then_ ? &then : nullptr);
+  }
   if (F) check_finite(*F, name(), "particle", "deformation gradient F");
   check_finite(P.v, name(), "particle", "velocity");
+  if (then_ && !s.adaptive) then_->finish(s);
 }
 
 template class GridToParticles<2>;

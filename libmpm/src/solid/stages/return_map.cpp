@@ -2,14 +2,15 @@
 // project log(Sigma) onto the Drucker-Prager cone (Klar et al. 2016, with the volume
 // correction of Tampubolon et al. 2017, and dilatancy where the material has it) or the von Mises cylinder (paper sec. 4.2.2),
 // F^E = U exp(H) V^T. Elastic materials are skipped; the model is chosen outside the loop. In 3D
-// the trial SVDs are taken four at a time (math::for_each_svd).
+// the trial SVDs are taken four at a time (math::for_each_svd). A particle stage: the solvers'
+// g2p calls the map on each bucket right after its gather (core/stages/particle_stage.h).
 // Where the particles carry a stress cache (solid_channels.h), the Kirchhoff stress of the
 // F^E left is computed from the same SVD, U diag(p_i sigma_i) U^T, for the next step's forces.
 #include <mpm/core/finite_guard.h>
 #include <mpm/solid/solid_channels.h>
 #include <mpm/solid/stages/return_map.h>
 
-#include <tbb/parallel_for.h>
+#include <utility>
 
 namespace mpm::stages {
 
@@ -47,33 +48,40 @@ void project(const Model& model, Mat<dim>& F, const math::Svd<dim>& trial, doubl
 }  // namespace
 
 template <int dim>
-void ReturnMap<dim>::run(MpmState<dim>& s) {
+ParticleGroupUpdate ReturnMap<dim>::bind(MpmState<dim>& s) {
   Particles<dim>& P = s.particles;
   std::vector<Mat<dim>>& F = solid::elastic_F(P);
   std::vector<double>& plastic = solid::plastic_state(P);
   std::vector<Mat<dim>>* cache = solid::stress_cache(P);
   std::vector<double>* packing = solid::rest_packing(P);
-  for (std::size_t m = 0; m < materials_.size(); ++m) {
-    std::visit(
-        [&](const auto& elastic, const auto& model) {
-          using Model = std::decay_t<decltype(model)>;
-          if constexpr (!std::is_same_v<Model, plasticity::NoPlasticity>) {
-            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.size(), 4096), [&](const auto& r) {
+  const double dt = s.dt;
+  return [this, &P, &F, &plastic, cache, packing, dt](const std::uint32_t* first, const std::uint32_t* last) {
+    const std::size_t n = static_cast<std::size_t>(last - first);
+    for (std::size_t m = 0; m < materials_.size(); ++m) {
+      std::visit(
+          [&](const auto& elastic, const auto& model) {
+            using Model = std::decay_t<decltype(model)>;
+            if constexpr (!std::is_same_v<Model, plasticity::NoPlasticity>) {
               math::Svd<dim> f;
               math::for_each_svd<dim>(
-                  r.begin(), r.end(), [&](std::size_t p) -> const Mat<dim>& { return F[p]; },
-                  [&](std::size_t p) { return P.material[p] == m; },
-                  [&](std::size_t p, const math::Svd<dim>& trial) {
-                    project(model, F[p], trial, plastic[p], packing ? &(*packing)[p] : nullptr, s.dt,
+                  0, n, [&](std::size_t i) -> const Mat<dim>& { return F[first[i]]; },
+                  [&](std::size_t i) { return P.material[first[i]] == m; },
+                  [&](std::size_t i, const math::Svd<dim>& trial) {
+                    const std::uint32_t p = first[i];
+                    project(model, F[p], trial, plastic[p], packing ? &(*packing)[p] : nullptr, dt,
                             cache ? &f : nullptr);
                     if (cache) (*cache)[p] = constitutive::isotropic_kirchhoff(elastic, f);
                   });
-            });
-          }
-        },
-        materials_[m].elastic, materials_[m].plasticity);
-  }
-  check_finite(F, name(), "particle", "elastic deformation gradient F^E");
+            }
+          },
+          materials_[m].elastic, materials_[m].plasticity);
+    }
+  };
+}
+
+template <int dim>
+void ReturnMap<dim>::finish(MpmState<dim>& s) {
+  check_finite(solid::elastic_F(std::as_const(s.particles)), name(), "particle", "elastic deformation gradient F^E");
 }
 
 template bool any_plastic(const std::vector<Material<2>>&);

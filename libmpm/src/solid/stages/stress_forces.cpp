@@ -1,4 +1,4 @@
-// Grid forces of the explicit step (paper sec. 3.2, eq. 1-2):
+// Grid forces of the explicit step (paper sec. 3.2, eq. 1-2), by default in the p2g scatter:
 //   f_i = - sum_p V_p^0 P(F_p^E) (F_p^E)^T grad w_ip = - sum_p V_p^0 tau_p grad w_ip,
 // with tau = P F^T the Kirchhoff stress of the elastic part (multiplicative plasticity keeps
 // all stress in F^E). The constitutive model is chosen per material by std::visit outside
@@ -56,10 +56,14 @@ void StressForces<dim>::run(MpmState<dim>& s) {
   }
   check_finite(weighted_stress_, name(), "particle", "Kirchhoff stress");
 
-  if (s.adaptive)
+  if (s.adaptive) {
+    if (fused()) adaptive::particles_to_grid(P, s.transfer, *s.adaptive);
     adaptive::stress_to_grid_forces(weighted_stress_, P, *s.adaptive);
-  else
+  } else if (fused()) {
+    particles_to_grid(P, s.buckets, s.kernel, s.transfer, s.grid, &weighted_stress_);
+  } else {
     stress_to_grid_forces(weighted_stress_, P, s.buckets, s.kernel, s.grid);
+  }
 }
 
 template class StressForces<2>;

@@ -17,6 +17,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <type_traits>
 
 namespace mpm::detail {
 
@@ -109,13 +110,15 @@ template <class Fn, class... Args>
   fn(args...);
 }
 
-//! Adds w (c[0] + sum_a rel_a c[a+1]) for every stencil node into the patch (Ch values per
-//! node); the rel terms only when `affine`. With the integer node offsets n_a = rel_a -
-//! rel_a[0] the value is c0 + sum_a n_a c[a+1], c0 = c[0] + sum_a rel_a[0] c[a+1]: along a
-//! row it grows by c[1] from node to node, so a node costs one multiply-add.
-template <bool affine, int dim, int S, class T, class Node>
+//! Adds w (c[0] + sum_a rel_a c[a+1]) for every stencil node into the first channels of the
+//! patch (Ch values per node; 0: as many as Node has); the rel terms only when `affine`. With
+//! the integer node offsets n_a = rel_a - rel_a[0] the value is c0 + sum_a n_a c[a+1],
+//! c0 = c[0] + sum_a rel_a[0] c[a+1]: along a row it grows by c[1] from node to node, so a node
+//! costs one multiply-add.
+template <bool affine, int stride = 0, int dim, int S, class T, class Node>
 [[gnu::always_inline]] inline void spread(const Stencil<dim, S, T>& st, const Node (&c)[dim + 1], T* patch) {
-  constexpr int Ch = Node::RowsAtCompileTime;
+  constexpr int Ch = stride ? stride : Node::RowsAtCompileTime;
+  static_assert(Ch >= Node::RowsAtCompileTime);
   constexpr int W = patch_width<dim>;
   Node c0 = c[0];
   if constexpr (affine)
@@ -249,17 +252,25 @@ template <int Ch, bool gradient = false, int dim, int S, class T, class Lanes>
 }
 
 //! Adds (w m_p, w m_p (v_p + C_p (x_i - x_p))) into channels {mass, momentum_0..dim-1}
-//! (C_p term only when `affine`).
-template <int dim, class K, bool affine, class PS, class T>
+//! (C_p term only when `affine`). With 2 dim + 1 channels, the next dim channels also take the
+//! stress forces -S_p grad w_ip of `weighted_stress` (indexed like the particles) in the same
+//! pass: the sums of each channel are those of a separate scatter, bit for bit.
+template <int dim, class K, bool affine, class PS, class T, std::size_t Ch>
 void p2g(const PS& P, const ParticleBuckets<dim>& buckets, const K& kernel, const SparseGrid<dim>& grid,
-         const std::array<BasicChannelView<T>, dim + 1>& channels) {
+         const std::array<BasicChannelView<T>, Ch>& channels,
+         [[maybe_unused]] const Eigen::Matrix<T, dim, dim>* weighted_stress = nullptr) {
+  constexpr bool stress = Ch == 2 * dim + 1;
+  static_assert(stress || Ch == dim + 1);
   using Node = Eigen::Matrix<T, dim + 1, 1>;
+  using MatT = Eigen::Matrix<T, dim, dim>;
   const T dx = static_cast<T>(grid.dx());
-  scatter_buckets<dim, dim + 1>(
+  const T inv_dx = 1 / dx;
+  scatter_buckets<dim, int(Ch)>(
       grid, buckets, channels,
       [&](const std::uint32_t* first, const std::uint32_t* last, const PatchFrame<dim>& f, T* patch) {
         Stencil<dim, K::support, T> st[chunk_size];
         Node c[chunk_size][dim + 1];
+        [[maybe_unused]] MatT A[stress ? chunk_size : 1];  // -S_p / dx
         in_chunks(
             first, last,
             [&](std::uint32_t p) {
@@ -267,14 +278,19 @@ void p2g(const PS& P, const ParticleBuckets<dim>& buckets, const K& kernel, cons
               prefetch(P.v[p]);
               prefetch(P.C[p]);
               prefetch(P.mass[p]);
+              if constexpr (stress) prefetch(weighted_stress[p]);
             },
             [&](std::uint32_t p, int q) {
-              st[q].template compute<false>(kernel, f.cells(P.x[p]), f.origin);
+              st[q].template compute<stress>(kernel, f.cells(P.x[p]), f.origin);
               const T m = P.mass[p];
               c[q][0] << m, m * P.v[p];
               for (int a = 0; a < dim; ++a) c[q][a + 1] << T(0), (m * dx) * P.C[p].col(a);
+              if constexpr (stress) A[q] = -inv_dx * weighted_stress[p];
             },
-            [&](std::uint32_t, int q) { spread<affine>(st[q], c[q], patch); });
+            [&](std::uint32_t, int q) {
+              spread<affine, int(Ch)>(st[q], c[q], patch);
+              if constexpr (stress) spread_gradient<int(Ch)>(st[q], A[q], patch, dim + 1);
+            });
       });
 }
 
@@ -283,11 +299,12 @@ void p2g(const PS& P, const ParticleBuckets<dim>& buckets, const K& kernel, cons
 //! followed by `velocity_old` channels (2 dim of them). Both advect x_p += dt v^PIC.
 //! With `deform`, the same gather also updates F_p = (I + dt grad v_p) F_p in `F` (indexed like
 //! the particles), grad v_p = sum_i v_i (grad w_ip)^T at x_p before the advection: the
-//! deformation update without a second pass over particles and grid.
-template <int dim, class K, bool flip, bool deform = false, class PS, class T, std::size_t Ch>
+//! deformation update without a second pass over particles and grid. `then`, when given, is
+//! called with each bucket's particles after their gather (Then: a ParticleGroupUpdate).
+template <int dim, class K, bool flip, bool deform = false, class PS, class T, std::size_t Ch, class Then = void>
 void g2p(PS& P, const ParticleBuckets<dim>& buckets, const K& kernel, const SparseGrid<dim>& grid,
          const std::array<BasicChannelView<T>, Ch>& channels, T flip_ratio, T dt,
-         Eigen::Matrix<T, dim, dim>* F = nullptr) {
+         Eigen::Matrix<T, dim, dim>* F = nullptr, const Then* then = nullptr) {
   static_assert(Ch == (flip ? 2 * dim : dim));
   using VecT = Eigen::Matrix<T, dim, 1>;
   using MatT = Eigen::Matrix<T, dim, dim>;
@@ -352,6 +369,8 @@ void g2p(PS& P, const ParticleBuckets<dim>& buckets, const K& kernel, const Spar
             }
           }
         });
+    if constexpr (!std::is_void_v<Then>)
+      if (then) (*then)(first, last);
   };
   const bool avx2 = cpu_has_avx2();
   gather_buckets<dim, lanes>(grid, buckets, read,

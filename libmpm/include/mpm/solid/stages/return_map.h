@@ -1,22 +1,23 @@
 #pragma once
-#include <mpm/core/stage.h>
-#include <mpm/core/state.h>
+#include <mpm/core/stages/particle_stage.h>
 #include <mpm/solid/material.h>
 
 namespace mpm::stages {
 
 //! Projects the trial elastic deformation of plastic materials back onto their yield surface.
 //! A scene whose materials are all elastic does not add this stage. Particles of an index
-//! outside the list (stress_free_material) are left alone.
+//! outside the list (stress_free_material) are left alone. A particle stage: the solvers hand
+//! it to g2p, which projects each bucket right after its gather (stage "g2p_plasticity").
 template <int dim>
-class ReturnMap final : public Stage<MpmState<dim>> {
+class ReturnMap final : public ParticleStage<dim> {
 public:
   explicit ReturnMap(std::vector<Material<dim>> materials) : materials_(std::move(materials)) {}
   std::string name() const override { return "plasticity"; }
   std::vector<std::string> reads() const override { return {"particle.F", "particle.plastic", "particle.material"}; }
   std::vector<std::string> writes() const override { return {"particle.F", "particle.plastic"}; }
   // (and particle.rest_packing of dilatant materials: a channel only they carry)
-  void run(MpmState<dim>& s) override;
+  ParticleGroupUpdate bind(MpmState<dim>& s) override;
+  void finish(MpmState<dim>& s) override;
 
 private:
   std::vector<Material<dim>> materials_;

@@ -34,22 +34,34 @@ Mat<dim> weighted_kirchhoff(const Elastic& model, const Plasticity& plasticity, 
 //! particles may carry an index outside the material list (stress_free_material: discrete
 //! grains) says so with `stress_free_particles`; those particles then add no force. Without it
 //! every particle must hold a listed material and the loop is that of a plain solid.
+//! With Scatter::with_momentum the stage is also the step's p2g: node mass, momentum and
+//! forces in one pass over particles and grid (stage "p2g_stress"; on an adaptive grid the two
+//! transfers still run one after the other).
 template <int dim>
 class StressForces final : public Stage<MpmState<dim>> {
 public:
-  explicit StressForces(std::vector<Material<dim>> materials, bool stress_free_particles = false)
-      : materials_(std::move(materials)), stress_free_particles_(stress_free_particles) {}
-  std::string name() const override { return "stress_forces"; }
+  enum class Scatter { forces, with_momentum };
+  explicit StressForces(std::vector<Material<dim>> materials, bool stress_free_particles = false,
+                        Scatter scatter = Scatter::forces)
+      : materials_(std::move(materials)), stress_free_particles_(stress_free_particles), scatter_(scatter) {}
+  std::string name() const override { return fused() ? "p2g_stress" : "stress_forces"; }
   std::vector<std::string> reads() const override {
-    return {"particle.order",    "grid.blocks", "particle.x",      "particle.volume0",
-            "particle.material", "particle.F",  "particle.plastic"};
+    std::vector<std::string> r{"particle.order",    "grid.blocks", "particle.x",      "particle.volume0",
+                               "particle.material", "particle.F",  "particle.plastic"};
+    if (fused()) r.insert(r.end(), {"particle.v", "particle.C", "particle.mass"});
+    return r;
   }
-  std::vector<std::string> writes() const override { return {"grid.force"}; }
+  std::vector<std::string> writes() const override {
+    if (fused()) return {"grid.mass", "grid.momentum", "grid.force"};
+    return {"grid.force"};
+  }
   void run(MpmState<dim>& s) override;
 
 private:
+  bool fused() const { return scatter_ == Scatter::with_momentum; }
   std::vector<Material<dim>> materials_;
   bool stress_free_particles_;
+  Scatter scatter_;
   std::vector<Mat<dim>> weighted_stress_;  // V_p^0 tau_p per particle [N m]
 };
 
