@@ -4,6 +4,7 @@ list(APPEND MPM_CORE_SOURCES
   src/core/sparse_grid.cpp
   src/core/particle_buckets.cpp
   src/core/transfer.cpp
+  src/core/finite_guard.cpp
   src/core/app.cpp
   src/core/pipeline.cpp
   src/core/scene_settings.cpp

@@ -119,3 +119,28 @@ TEST_CASE("a non-finite grid velocity stops 'g2p' naming the particle that gathe
   CHECK(numerical_error([&] { stages::GridToParticles<2>().run(s); }) ==
         "stage 'g2p': particle " + std::to_string(scene.lone) + " has non-finite velocity");
 }
+
+TEST_CASE("all_finite finds one NaN or infinity anywhere in short and long arrays (the parallel blocks)") {
+  constexpr double kLargest = std::numeric_limits<double>::max();
+  constexpr double kSubnormal = std::numeric_limits<double>::denorm_min();
+  for (const std::size_t n : {std::size_t{1}, std::size_t{7}, std::size_t{1000}, std::size_t{300001}}) {
+    std::vector<double> v(n);
+    for (std::size_t i = 0; i < n; ++i) v[i] = (i % 3 == 0 ? kLargest : i % 3 == 1 ? -kSubnormal : -0.0);
+    CHECK(all_finite(v.data(), n));
+    for (const std::size_t at : {std::size_t{0}, n / 2, n - 1})
+      for (const double bad : {kNaN, kInf, -kInf}) {
+        CAPTURE(n);
+        CAPTURE(at);
+        const double kept = v[at];
+        v[at] = bad;
+        CHECK_FALSE(all_finite(v.data(), n));
+        v[at] = kept;
+      }
+  }
+  CHECK(all_finite(nullptr, 0));
+  // Through check_finite: vectors of Eigen matrices are checked as their doubles.
+  std::vector<Mat<3>> F(50000, Mat<3>::Identity());
+  F[49999](2, 1) = kNaN;
+  CHECK(numerical_error([&] { check_finite(F, "g2p", "particle", "F"); }) ==
+        "stage 'g2p': particle 49999 has non-finite F");
+}
