@@ -110,31 +110,63 @@ template <class Fn, class... Args>
   fn(args...);
 }
 
+//! The terms of the stress scatter along the row (j, k) of axis 0 (k unused in 2D): with
+//! A = -S / dx and the gradient factored per axis, grad w = (dw_0 w_1 w_2, w_0 dw_1 w_2,
+//! w_0 w_1 dw_2), the node i of the row takes w_0[i] P + dw_0[i] Q with P = A_1 dw_1 w_2 +
+//! A_2 w_1 dw_2 and Q = A_0 w_1 w_2 (A_a the columns of A): two multiply-adds per node and
+//! component where the per-node gradient and matrix product take a dozen.
+template <int dim, int S, class T>
+[[gnu::always_inline]] inline void gradient_row(const Stencil<dim, S, T>& st, const Eigen::Matrix<T, dim, dim>& A,
+                                                int j, int k, Eigen::Matrix<T, dim, 1>& P,
+                                                Eigen::Matrix<T, dim, 1>& Q) {
+  if constexpr (dim == 2) {
+    (void)k;
+    P = st.dw[1][j] * A.col(1);
+    Q = st.w[1][j] * A.col(0);
+  } else {
+    P = (st.dw[1][j] * st.w[2][k]) * A.col(1) + (st.w[1][j] * st.dw[2][k]) * A.col(2);
+    Q = (st.w[1][j] * st.w[2][k]) * A.col(0);
+  }
+}
+
 //! Adds w (c[0] + sum_a rel_a c[a+1]) for every stencil node into the first channels of the
 //! patch (Ch values per node; 0: as many as Node has); the rel terms only when `affine`. With
 //! the integer node offsets n_a = rel_a - rel_a[0] the value is c0 + sum_a n_a c[a+1],
 //! c0 = c[0] + sum_a rel_a[0] c[a+1]: along a row it grows by c[1] from node to node, so a node
-//! costs one multiply-add.
+//! costs one multiply-add. With `A` (= -S / dx; the stencil computed with dw) the same node
+//! visit also adds A grad w_i [1/cell] into the dim channels after Node's (gradient_row).
 template <bool affine, int stride = 0, int dim, int S, class T, class Node>
-[[gnu::always_inline]] inline void spread(const Stencil<dim, S, T>& st, const Node (&c)[dim + 1], T* patch) {
-  constexpr int Ch = stride ? stride : Node::RowsAtCompileTime;
-  static_assert(Ch >= Node::RowsAtCompileTime);
+[[gnu::always_inline]] inline void spread(const Stencil<dim, S, T>& st, const Node (&c)[dim + 1], T* patch,
+                                          const Eigen::Matrix<T, dim, dim>* A = nullptr) {
+  using VecT = Eigen::Matrix<T, dim, 1>;
+  constexpr int N = Node::RowsAtCompileTime;
+  constexpr int Ch = stride ? stride : N;
+  constexpr bool gradient = Ch >= N + dim;
+  static_assert(Ch >= N);
   constexpr int W = patch_width<dim>;
   Node c0 = c[0];
   if constexpr (affine)
     for (int a = 0; a < dim; ++a) c0.noalias() += st.rel[a][0] * c[a + 1];
-  const auto row = [&](int offset, T w_outer, const Node& q) {  // q: value at the row's first node
+  // q: the value at the row's first node; P, Q: the stress terms of the row (gradient)
+  const auto row = [&](int offset, T w_outer, const Node& q, [[maybe_unused]] int j, [[maybe_unused]] int k) {
     Node v = w_outer * q;
     const Node step = w_outer * c[1];
+    [[maybe_unused]] VecT P, Q;
+    if constexpr (gradient) gradient_row(st, *A, j, k, P, Q);
     for (int i = 0; i < S; ++i) {
-      Eigen::Map<Node>(patch + (offset + i) * Ch).noalias() += st.w[0][i] * v;
+      T* node = patch + (offset + i) * Ch;
+      Eigen::Map<Node>(node).noalias() += st.w[0][i] * v;
       if constexpr (affine) v += step;
+      if constexpr (gradient) {
+        const VecT f = st.w[0][i] * P + st.dw[0][i] * Q;
+        for (int a = 0; a < dim; ++a) node[N + a] += f[a];
+      }
     }
   };
   if constexpr (dim == 2) {
     Node q = c0;
     for (int j = 0; j < S; ++j) {
-      row(st.patch_offset + W * j, st.w[1][j], q);
+      row(st.patch_offset + W * j, st.w[1][j], q, j, 0);
       if constexpr (affine) q += c[2];
     }
   } else {
@@ -142,7 +174,7 @@ template <bool affine, int stride = 0, int dim, int S, class T, class Node>
     for (int k = 0; k < S; ++k) {
       Node q = qk;
       for (int j = 0; j < S; ++j) {
-        row(st.patch_offset + W * (j + W * k), st.w[1][j] * st.w[2][k], q);
+        row(st.patch_offset + W * (j + W * k), st.w[1][j] * st.w[2][k], q, j, k);
         if constexpr (affine) q += c[2];
       }
       if constexpr (affine) qk += c[3];
@@ -151,31 +183,22 @@ template <bool affine, int stride = 0, int dim, int S, class T, class Node>
 }
 
 //! Adds A grad w_i [1/cell] to the Ch-channel patch entries at channel `first` (dim values) of
-//! every stencil node: the stress scatter f_i -= S grad w_i with A = -S / dx. The gradient
-//! factors per axis, grad w = (dw_0 w_1 w_2, w_0 dw_1 w_2, w_0 w_1 dw_2), so along a row of
-//! axis 0 the value is w_0[i] P + dw_0[i] Q with P = A_1 dw_1 w_2 + A_2 w_1 dw_2 and
-//! Q = A_0 w_1 w_2 (A_a the columns of A) formed once per row: two multiply-adds per node and
-//! component where the per-node gradient and matrix product take a dozen.
+//! every stencil node: the stress scatter f_i -= S grad w_i with A = -S / dx (gradient_row).
 template <int Ch, int dim, int S, class T>
 [[gnu::always_inline]] inline void spread_gradient(const Stencil<dim, S, T>& st, const Eigen::Matrix<T, dim, dim>& A,
                                                    T* patch, int first) {
   using VecT = Eigen::Matrix<T, dim, 1>;
   constexpr int W = patch_width<dim>;
-  const auto row = [&](int offset, const VecT& P, const VecT& Q) {
+  const auto row = [&](int offset, int j, int k) {
+    VecT P, Q;
+    gradient_row(st, A, j, k, P, Q);
     for (int i = 0; i < S; ++i) {
       const VecT f = st.w[0][i] * P + st.dw[0][i] * Q;
       for (int a = 0; a < dim; ++a) patch[(offset + i) * Ch + first + a] += f[a];
     }
   };
-  if constexpr (dim == 2) {
-    for (int j = 0; j < S; ++j) row(st.patch_offset + W * j, st.dw[1][j] * A.col(1), st.w[1][j] * A.col(0));
-  } else {
-    for (int k = 0; k < S; ++k)
-      for (int j = 0; j < S; ++j) {
-        const VecT P = (st.dw[1][j] * st.w[2][k]) * A.col(1) + (st.w[1][j] * st.dw[2][k]) * A.col(2);
-        row(st.patch_offset + W * (j + W * k), P, (st.w[1][j] * st.w[2][k]) * A.col(0));
-      }
-  }
+  for (int k = 0; k < (dim == 3 ? S : 1); ++k)
+    for (int j = 0; j < S; ++j) row(st.patch_offset + W * (j + W * k), j, k);
 }
 
 //! acc = x for the first term of a sum, acc += x after: starting from zero is not free
@@ -287,10 +310,7 @@ void p2g(const PS& P, const ParticleBuckets<dim>& buckets, const K& kernel, cons
               for (int a = 0; a < dim; ++a) c[q][a + 1] << T(0), (m * dx) * P.C[p].col(a);
               if constexpr (stress) A[q] = -inv_dx * weighted_stress[p];
             },
-            [&](std::uint32_t, int q) {
-              spread<affine, int(Ch)>(st[q], c[q], patch);
-              if constexpr (stress) spread_gradient<int(Ch)>(st[q], A[q], patch, dim + 1);
-            });
+            [&](std::uint32_t, int q) { spread<affine, int(Ch)>(st[q], c[q], patch, stress ? &A[q] : nullptr); });
       });
 }
 
