@@ -5,6 +5,7 @@
 #include "fluid_cells.h"
 
 #include <mpm/core/error.h>
+#include <mpm/core/solve/vector_space.h>
 
 #include <Eigen/Eigenvalues>
 
@@ -18,6 +19,7 @@ namespace fluid {
 
 namespace {
 
+using mpm::solve::for_each_entry;
 using Triplet = Eigen::Triplet<double>;
 
 //! Spaces with fewer unknowns are smoothed and multiplied in one thread: below this size the
@@ -447,22 +449,34 @@ void ModulatedMultigrid<dim>::cycle(Space& s, bool fine) {
     s.x.noalias() = s.bottom * s.b;
     return;
   }
-  s.x.setZero();
+  // The vector updates entry by entry in parallel (the same bits as Eigen's loops).
+  const auto entries = [&s](auto&& f) { for_each_entry(static_cast<std::size_t>(s.x.size()), f); };
+  entries([&](std::size_t i) { s.x[static_cast<Eigen::Index>(i)] = 0.0; });
   for (int sweep = 0; sweep < options_.smoothing_sweeps; ++sweep) gauss_seidel(s, true);
   // Child k solves for the correction S_k P0 e from the right-hand side (S_k P0)^T residual.
   auto restrict_residual = [&](const Child& child) {
-    s.scratch = child.sign.cwiseProduct(s.residual);
+    s.scratch.resize(s.x.size());
+    entries([&](std::size_t i) {
+      const auto k = static_cast<Eigen::Index>(i);
+      s.scratch[k] = child.sign[k] * s.residual[k];
+    });
     parallel_multiply(s.R0, s.scratch, child.space->b);
   };
   // The fine level's corrections are scaled by coarse_scale_ (1 unless refreshed).
   const double scale = fine ? coarse_scale_ : 1.0;
   auto add_correction = [&](const Child& child) {
     parallel_multiply(s.P0, child.space->x, s.scratch);
-    s.x += scale * child.sign.cwiseProduct(s.scratch);
+    entries([&](std::size_t i) {
+      const auto k = static_cast<Eigen::Index>(i);
+      s.x[k] += scale * (child.sign[k] * s.scratch[k]);
+    });
   };
-  auto update_residual = [&s] {
+  auto update_residual = [&] {
     parallel_multiply(s.A, s.x, s.residual);
-    s.residual = s.b - s.residual;
+    entries([&](std::size_t i) {
+      const auto k = static_cast<Eigen::Index>(i);
+      s.residual[k] = s.b[k] - s.residual[k];
+    });
   };
   const int K = static_cast<int>(s.children.size());
   if (fine) {
@@ -487,12 +501,15 @@ void ModulatedMultigrid<dim>::cycle(Space& s, bool fine) {
 
 template <int dim>
 void ModulatedMultigrid<dim>::apply(const std::vector<double>& r, std::vector<double>& z) {
-  z.assign(r.size(), 0.0);
+  z.resize(r.size());
+  for_each_entry(z.size(), [&](std::size_t i) { z[i] = 0.0; });
   Space& fine = *fine_;
   if (fine.A.rows() == 0) return;
-  for (std::size_t i = 0; i < fluid_cells_.size(); ++i) fine.b[static_cast<Eigen::Index>(i)] = r[fluid_cells_[i]];
+  for_each_entry(fluid_cells_.size(),
+                 [&](std::size_t i) { fine.b[static_cast<Eigen::Index>(i)] = r[fluid_cells_[i]]; });
   cycle(fine, true);
-  for (std::size_t i = 0; i < fluid_cells_.size(); ++i) z[fluid_cells_[i]] = fine.x[static_cast<Eigen::Index>(i)];
+  for_each_entry(fluid_cells_.size(),
+                 [&](std::size_t i) { z[fluid_cells_[i]] = fine.x[static_cast<Eigen::Index>(i)]; });
 }
 
 template <int dim>

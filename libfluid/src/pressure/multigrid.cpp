@@ -4,6 +4,7 @@
 #include "cell_kernels.h"
 
 #include <mpm/core/error.h>
+#include <mpm/core/solve/vector_space.h>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -14,6 +15,15 @@
 namespace fluid {
 
 namespace {
+
+using mpm::solve::for_each_entry;
+
+//! out = in, entry by entry in parallel (a fine level is tens of megabytes: a serial copy
+//! would be the cycle's serial section).
+void copy_entries(const std::vector<double>& in, std::vector<double>& out) {
+  out.resize(in.size());
+  for_each_entry(in.size(), [&](std::size_t i) { out[i] = in[i]; });
+}
 
 //! Per axis, the two coarse cells a fine cell interpolates from, with weights 3/4 and 1/4;
 //! the 1/4 neighbour wraps on a periodic axis and is mirrored at a box face otherwise.
@@ -39,7 +49,9 @@ void transfer_axis(const std::vector<double>& in, const IVec<dim>& in_extent, st
   for (int d = a + 1; d < dim; ++d) outer *= in_extent[d];
   const int n_in = in_extent[a], n_out = out_extent[a];
   const int n_fine = prolong ? n_out : n_in, n_coarse = prolong ? n_in : n_out;
-  out.assign(static_cast<std::size_t>(out_extent.template cast<std::int64_t>().prod()), 0.0);
+  // Prolongation writes every entry of out; restriction adds into it.
+  out.resize(static_cast<std::size_t>(out_extent.template cast<std::int64_t>().prod()));
+  if (!prolong) for_each_entry(out.size(), [&](std::size_t k) { out[k] = 0.0; });
   // Tasks of (outer index, chunk of the inner range): each writes its own entries of out, for
   // every i in the same order, so the result does not depend on the threads. Chunks of the
   // inner range give the last axis (outer = 1) its parallelism.
@@ -303,17 +315,19 @@ void Multigrid<dim>::restrict_to_coarse(int l, const std::vector<double>& fine) 
   IVec<dim> extent = op(l).cells;
   std::vector<double>& in = transfer_in_;
   std::vector<double>& out = transfer_out_;
-  in = fine;
+  const std::vector<double>* from = &fine;  // the first axis reads `fine` itself
   for (int a = 0; a < dim; ++a) {
     IVec<dim> next = extent;
     next[a] = c.cells[a];
-    transfer_axis<dim>(in, extent, out, next, a, false, c.kind == CellOperator<dim>::Kind::poisson, c.periodic[a]);
+    transfer_axis<dim>(*from, extent, out, next, a, false, c.kind == CellOperator<dim>::Kind::poisson, c.periodic[a]);
     in.swap(out);
+    from = &in;
     extent = next;
   }
   std::vector<double>& coarse_b = levels_[l + 1].b;
   const double scale = 1.0 / (1 << dim);
-  for (std::size_t i = 0; i < coarse_b.size(); ++i) coarse_b[i] = c.type[i] == CellType::fluid ? scale * in[i] : 0.0;
+  for_each_entry(coarse_b.size(),
+                 [&](std::size_t i) { coarse_b[i] = c.type[i] == CellType::fluid ? scale * in[i] : 0.0; });
 }
 
 template <int dim>
@@ -322,17 +336,19 @@ void Multigrid<dim>::prolong_add(int coarse_level) {
   IVec<dim> extent = op(coarse_level).cells;
   std::vector<double>& in = transfer_in_;
   std::vector<double>& out = transfer_out_;
-  in = levels_[coarse_level].x;
+  const std::vector<double>* from = &levels_[coarse_level].x;  // the first axis reads it itself
   for (int a = 0; a < dim; ++a) {
     IVec<dim> next = extent;
     next[a] = f.cells[a];
-    transfer_axis<dim>(in, extent, out, next, a, true, f.kind == CellOperator<dim>::Kind::poisson, f.periodic[a]);
+    transfer_axis<dim>(*from, extent, out, next, a, true, f.kind == CellOperator<dim>::Kind::poisson, f.periodic[a]);
     in.swap(out);
+    from = &in;
     extent = next;
   }
   std::vector<double>& xf = levels_[coarse_level - 1].x;
-  for (std::size_t i = 0; i < xf.size(); ++i)
+  for_each_entry(xf.size(), [&](std::size_t i) {
     if (f.type[i] == CellType::fluid) xf[i] += in[i];
+  });
 }
 
 template <int dim>
@@ -342,7 +358,7 @@ void Multigrid<dim>::smooth(int l, bool before) {
   Level& level = levels_[l];
   void (Multigrid::*colour_sweep)(int, int) =
       op(l).kind == CellOperator<dim>::Kind::poisson ? &Multigrid::gauss_seidel : &Multigrid::rotated_gauss_seidel;
-  if (before) std::fill(level.x.begin(), level.x.end(), 0.0);
+  if (before) for_each_entry(level.x.size(), [&](std::size_t i) { level.x[i] = 0.0; });
   for (int s = 0; s < options_.smoothing_sweeps; ++s) {
     (this->*colour_sweep)(l, before ? 0 : 1);
     (this->*colour_sweep)(l, before ? 1 : 0);
@@ -372,14 +388,14 @@ void Multigrid<dim>::vcycle(int l) {
 template <int dim>
 void Multigrid<dim>::apply(const std::vector<double>& r, std::vector<double>& z) {
   Level& top = levels_[0];
-  top.b = r;
+  copy_entries(r, top.b);
   if (checkerboard_.empty() || level_count() == 1) {
     vcycle(0);
-    z = top.x;
+    copy_entries(top.x, z);
     if (checkerboard_.empty()) return;
-    for (std::size_t i = 0; i < r.size(); ++i) top.b[i] = checkerboard_[i] * r[i];
+    for_each_entry(r.size(), [&](std::size_t i) { top.b[i] = checkerboard_[i] * r[i]; });
     vcycle(0);
-    for (std::size_t i = 0; i < z.size(); ++i) z[i] += checkerboard_[i] * top.x[i];
+    for_each_entry(z.size(), [&](std::size_t i) { z[i] += checkerboard_[i] * top.x[i]; });
     return;
   }
   // M = V + S V S (multigrid.h) in one pass over the fine level: S commutes with A and with
@@ -390,17 +406,17 @@ void Multigrid<dim>::apply(const std::vector<double>& r, std::vector<double>& z)
   smooth(0, true);
   restrict_residual(0);
   vcycle(1);
-  for (double& x : top.x) x *= 2.0;
+  for_each_entry(top.x.size(), [&](std::size_t i) { top.x[i] *= 2.0; });
   prolong_add(1);  // 2 x + P c1
-  for (std::size_t i = 0; i < r.size(); ++i) top.r[i] *= checkerboard_[i];
+  for_each_entry(r.size(), [&](std::size_t i) { top.r[i] *= checkerboard_[i]; });
   restrict_to_coarse(0, top.r);
   vcycle(1);
-  for (std::size_t i = 0; i < r.size(); ++i) top.x[i] *= checkerboard_[i];
+  for_each_entry(r.size(), [&](std::size_t i) { top.x[i] *= checkerboard_[i]; });
   prolong_add(1);
-  for (std::size_t i = 0; i < r.size(); ++i) top.x[i] *= checkerboard_[i];  // 2 x + P c1 + S P c2
-  for (double& b : top.b) b *= 2.0;
+  for_each_entry(r.size(), [&](std::size_t i) { top.x[i] *= checkerboard_[i]; });  // 2 x + P c1 + S P c2
+  for_each_entry(top.b.size(), [&](std::size_t i) { top.b[i] *= 2.0; });
   smooth(0, false);
-  z = top.x;
+  copy_entries(top.x, z);
 }
 
 template class Multigrid<2>;

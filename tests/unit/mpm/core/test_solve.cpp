@@ -5,6 +5,7 @@
 #include <mpm/core/solve/preconditioners.h>
 
 #include <doctest/doctest.h>
+#include <tbb/task_arena.h>
 #include <Eigen/Dense>
 
 #include <cmath>
@@ -178,4 +179,38 @@ TEST_CASE("The initial guess is used: starting from the solution takes no iterat
   const auto result = conjugate_gradient(A, IdentityPreconditioner{}, b, x, SolveControl{1e-8, 0.0, 100});
   CHECK(result.converged);
   CHECK(result.iterations == 0);
+}
+
+TEST_CASE("vector operations: block sums give the same bits on one thread and on two") {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (const std::size_t n : {std::size_t{1000}, mpm::solve::kVectorBlock, 5 * mpm::solve::kVectorBlock + 17}) {
+    CAPTURE(n);
+    std::vector<double> a(n), b(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      a[i] = u(rng) * std::pow(10.0, 8.0 * u(rng));  // magnitudes over 16 decades: the order shows
+      b[i] = u(rng);
+    }
+    // The definition: each block in index order, then the blocks' sums in block order.
+    double expected = 0.0;
+    for (std::size_t first = 0; first < n; first += mpm::solve::kVectorBlock) {
+      double block = 0.0;
+      for (std::size_t i = first; i < std::min(n, first + mpm::solve::kVectorBlock); ++i) block += a[i] * b[i];
+      expected += block;
+    }
+    double one = 0.0, two = 0.0;
+    tbb::task_arena(1).execute([&] { one = mpm::solve::dot(a, b); });
+    tbb::task_arena(2).execute([&] { two = mpm::solve::dot(a, b); });
+    CHECK(one == expected);
+    CHECK(two == expected);
+    std::vector<double> c(n, 0.0);
+    tbb::task_arena(2).execute(
+        [&] { mpm::solve::for_each_entry(n, [&](std::size_t i) { c[i] = a[i] + 2.0 * b[i]; }); });
+    for (std::size_t i = 0; i < n; ++i) REQUIRE(c[i] == a[i] + 2.0 * b[i]);
+  }
+  // Blocks whose sums cancel: 1e16 + 1 - 1e16 + 1 is 1 in block order and 0 in reverse.
+  constexpr std::size_t block = mpm::solve::kVectorBlock;
+  std::vector<double> a(4 * block, 0.0), ones(4 * block, 1.0);
+  a[0] = 1e16, a[block] = 1.0, a[2 * block] = -1e16, a[3 * block] = 1.0;
+  CHECK(mpm::solve::dot(a, ones) == 1.0);
 }

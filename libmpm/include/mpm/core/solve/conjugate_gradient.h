@@ -51,12 +51,12 @@ SolveResult conjugate_gradient(Operator&& A, Preconditioner&& M, const Vector& b
   MPM_ASSERT(std::isfinite(b_norm));
   if (b_norm == 0.0) std::fill(x.begin(), x.end(), zero<T>());  // the exact solution; no relative target exists
   apply(A, x, Ad);
-  for (std::size_t i = 0; i < n; ++i) r[i] = b[i] - Ad[i];
+  for_each_entry(n, [&](std::size_t i) { r[i] = b[i] - Ad[i]; });
   const double target = std::max(control.relative_tolerance * b_norm, control.absolute_tolerance);
   SolveResult result;
   if (std::sqrt(dot(r, r)) > target) {
     apply(M, r, z);
-    d = z;
+    for_each_entry(n, [&](std::size_t i) { d[i] = z[i]; });
     double rz = dot(r, z);
     while (result.iterations < control.max_iterations) {
       apply(A, d, Ad);
@@ -66,21 +66,21 @@ SolveResult conjugate_gradient(Operator&& A, Preconditioner&& M, const Vector& b
         break;
       }
       const double alpha = rz / dAd;
-      for (std::size_t i = 0; i < n; ++i) {
+      for_each_entry(n, [&](std::size_t i) {
         x[i] += alpha * d[i];
         r[i] -= alpha * Ad[i];
-      }
+      });
       ++result.iterations;
       if (std::sqrt(dot(r, r)) <= target) break;
       apply(M, r, z);
       const double rz_new = dot(r, z);
       const double beta = rz_new / rz;
       rz = rz_new;
-      for (std::size_t i = 0; i < n; ++i) d[i] = z[i] + beta * d[i];
+      for_each_entry(n, [&](std::size_t i) { d[i] = z[i] + beta * d[i]; });
     }
   }
   apply(A, x, Ad);
-  for (std::size_t i = 0; i < n; ++i) r[i] = b[i] - Ad[i];
+  for_each_entry(n, [&](std::size_t i) { r[i] = b[i] - Ad[i]; });
   result.absolute_residual = std::sqrt(dot(r, r));
   result.relative_residual = b_norm > 0.0 ? result.absolute_residual / b_norm : 0.0;
   result.converged = std::isfinite(result.absolute_residual) && result.absolute_residual <= 10.0 * target;

@@ -1,10 +1,16 @@
 #pragma once
 //! The vector operations the Krylov solvers need, for std::vector of scalars (one unknown per
 //! cell) and of fixed-size Eigen vectors (all components of a node velocity solved at once
-//! with the same operator). Reductions run in index order, so a solve gives the same bits on
-//! every run and thread count.
+//! with the same operator). They run in parallel over blocks of kVectorBlock entries; a
+//! reduction sums each block in index order and then the blocks' sums in block order, so a
+//! solve gives the same bits on every run and thread count (and a vector of one block the
+//! bits of the plain loop).
 #include <Eigen/Core>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
 #include <cstddef>
 #include <type_traits>
 #include <vector>
@@ -29,11 +35,36 @@ double inner(const T& a, const T& b) {
     return a.dot(b);
 }
 
-//! The Euclidean inner product of two vectors of equal size.
+//! Entries per block of the parallel vector operations: large enough that a block's work
+//! outweighs its task, small enough that a 2D pressure system of one block stays serial.
+inline constexpr std::size_t kVectorBlock = std::size_t{1} << 14;
+
+//! f(i) for every i in [0, n), in parallel over blocks (f must touch entry i only).
+template <class F>
+void for_each_entry(std::size_t n, F&& f) {
+  const auto block = [&](std::size_t first, std::size_t last) {
+    for (std::size_t i = first; i < last; ++i) f(i);
+  };
+  if (n <= kVectorBlock) return block(0, n);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kVectorBlock),
+                    [&](const tbb::blocked_range<std::size_t>& r) { block(r.begin(), r.end()); });
+}
+
+//! The Euclidean inner product of two vectors of equal size (summed by blocks, see above).
 template <class T>
 double dot(const std::vector<T>& a, const std::vector<T>& b) {
+  const auto sum = [&](std::size_t first, std::size_t last) {
+    double s = 0.0;
+    for (std::size_t i = first; i < last; ++i) s += inner(a[i], b[i]);
+    return s;
+  };
+  const std::size_t n = a.size();
+  if (n <= kVectorBlock) return sum(0, n);
+  std::vector<double> partial((n + kVectorBlock - 1) / kVectorBlock);
+  tbb::parallel_for(std::size_t{0}, partial.size(),
+                    [&](std::size_t k) { partial[k] = sum(k * kVectorBlock, std::min(n, (k + 1) * kVectorBlock)); });
   double s = 0.0;
-  for (std::size_t i = 0; i < a.size(); ++i) s += inner(a[i], b[i]);
+  for (const double p : partial) s += p;
   return s;
 }
 
