@@ -4,13 +4,14 @@
 //! pressure solver, a clear-fluid scene no sediment stages.
 //!
 //! The coupled step, one Stage<CoupledState> each (OnPhase runs a phase's own stage):
-//!   time_step -> sort (both) -> p2g (both) -> volume_fraction -> the fluid solver's grid
-//!   update (projection: grid_update (gravity) -> viscosity, mu > 0) -> the sediment solver's
-//!   grid update (explicit: stress_forces -> grid_update; grains: grid_update) -> exchange
-//!   -> boundary (both) -> mixture_pressure (a clear fluid: the fluid solver's projection)
-//!   -> boundary (sediment) -> the particle updates of both solvers (explicit: deformation +
-//!   plasticity) -> g2p (both) -> reclassify (a continuum sediment with `switching`:
-//!   stages/reclassify_sediment.h)
+//!   time_step -> sort (both) -> p2g (fluid; the sediment solver's to_grid: explicit
+//!   p2g_stress, grains p2g) -> volume_fraction -> the fluid solver's grid update (projection:
+//!   grid_update (gravity) -> viscosity, mu > 0) -> the sediment solver's grid update
+//!   (grid_update) -> exchange -> boundary (both) -> mixture_pressure (a clear fluid: the fluid
+//!   solver's projection) -> boundary (sediment) -> the particle updates of both solvers (fluid:
+//!   its particle update, then g2p; sediment: g2p, explicit with the deformation update and,
+//!   when plastic, the return map: g2p_plasticity) -> reclassify (a continuum sediment with
+//!   `switching`: stages/reclassify_sediment.h)
 #include <coupling/coupled_state.h>
 #include <coupling/drag/drag_law.h>
 #include <coupling/stages/reclassify_sediment.h>

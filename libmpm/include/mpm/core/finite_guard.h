@@ -4,6 +4,8 @@
 
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
+#include <cstring>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -23,11 +25,39 @@ bool is_finite_value(const T& value) {
 //! step when done value by value on one thread).
 bool all_finite(const double* values, std::size_t n);
 
+//! Whether the entries `indices` [first, last) of `values` (doubles, or fixed-size Eigen
+//! matrices of doubles) are finite: the exponent test of all_finite, for a pass that checks
+//! what it has just written while it is in cache (a bucket of particles).
+template <class T>
+bool all_finite_at(const std::vector<T>& values, const std::uint32_t* first, const std::uint32_t* last) {
+  constexpr std::uint64_t exponent = 0x7ff0000000000000ull;
+  std::uint64_t any = 0;
+  for (const std::uint32_t* i = first; i != last; ++i) {
+    const double* d;
+    int n;
+    if constexpr (std::is_same_v<T, double>) {
+      d = &values[*i];
+      n = 1;
+    } else {
+      static_assert(std::is_same_v<typename T::Scalar, double> && T::SizeAtCompileTime > 0);
+      d = values[*i].data();
+      n = T::SizeAtCompileTime;
+    }
+    for (int k = 0; k < n; ++k) {
+      std::uint64_t bits;
+      std::memcpy(&bits, d + k, sizeof bits);
+      any |= static_cast<std::uint64_t>((bits & exponent) == exponent);
+    }
+  }
+  return any == 0;
+}
+
 //! Throws NumericalError "stage 'g2p': particle 17 has non-finite velocity" for the first
 //! non-finite entry of `values`; `item` is "particle" or "node".
 template <class T>
 void check_finite(const std::vector<T>& values, const std::string& stage, const std::string& item,
                   const std::string& quantity) {
+  if (values.empty()) return;
   if constexpr (std::is_same_v<T, double>) {
     if (all_finite(values.data(), values.size())) return;
   } else if constexpr (!std::is_arithmetic_v<T>) {

@@ -2,8 +2,9 @@
 //! The explicit symplectic-Euler elastoplastic step (docs/architecture.md, "The explicit solid
 //! step"): to_grid() = p2g with the stress forces in the same scatter (p2g_stress);
 //! grid_update() = grid_update (forces and gravity); particle_update() = g2p with the
-//! deformation update -> plasticity (only when a material is plastic). Stable for
-//! dt < dx / c, c the fastest elastic wave of the materials.
+//! deformation update and, when a material is plastic, the return map of each bucket right
+//! after its gather (g2p_plasticity). Stable for dt < dx / c, c the fastest elastic wave of the
+//! materials.
 #include <mpm/solid/solid_channels.h>
 #include <mpm/solid/solid_solver.h>
 

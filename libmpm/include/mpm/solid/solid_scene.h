@@ -1,10 +1,11 @@
 #pragma once
 //! Assembles an elastoplastic MPM scene from a scene file: materials, bodies (seeded
 //! particles), colliders, the solid solver (`solver:`, solid_solver.h) and the staged pipeline:
-//!   time_step -> sort -> p2g -> [solver grid update] -> boundary -> [solver particle update]
-//!   -> g2p (and advection)
-//! which for the default explicit solver reads time_step -> sort -> p2g -> stress_forces ->
-//! grid_update -> boundary -> deformation -> plasticity (only when a material is plastic) -> g2p.
+//!   time_step -> sort -> [solver to_grid] -> [solver grid update] -> boundary
+//!   -> [solver particle update: g2p and what follows]
+//! which for the default explicit solver reads time_step -> sort -> p2g_stress (p2g with the
+//! stress forces) -> grid_update -> boundary -> g2p_plasticity (g2p with the deformation update
+//! and, each bucket right after its gather, the return map; g2p when every material is elastic).
 //! A scene with the key `adaptive` runs on an adaptive grid (mpm/adaptive/): stage 'refine'
 //! before the sort (when the grid follows the particles) and 'ghost_velocities' after the
 //! boundary.

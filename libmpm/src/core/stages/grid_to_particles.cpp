@@ -12,6 +12,8 @@
 #include <mpm/core/stages/grid_to_particles.h>
 #include <mpm/core/transfer.h>
 
+#include <atomic>
+
 namespace mpm::stages {
 
 template <int dim>
@@ -38,14 +40,29 @@ void GridToParticles<dim>::run(MpmState<dim>& s) {
   std::vector<Mat<dim>>* F = deformation_.empty() ? nullptr : &P.template channel<Mat<dim>>(deformation_);
   if (s.adaptive) {
     adaptive::grid_to_particles(P, s.transfer, *s.adaptive, s.dt, F);
+    check_results(P, F);
     if (then_) then_->run(s);
-  } else {
-    const ParticleGroupUpdate then = then_ ? then_->bind(s) : ParticleGroupUpdate{};
-    grid_to_particles(P, s.buckets, s.kernel, s.transfer, s.grid, s.dt, F, then_ ? &then : nullptr);
+    return;
   }
+  // Each bucket's results are tested right after its gather, while in cache, and before
+  // `then` changes F (which checks its own results); the search that names a particle runs
+  // only when a bucket found a bad value.
+  const ParticleGroupUpdate then = then_ ? then_->bind(s) : ParticleGroupUpdate{};
+  std::atomic<bool> finite{true};
+  const ParticleGroupUpdate after = [&](const std::uint32_t* first, const std::uint32_t* last) {
+    if (!all_finite_at(P.v, first, last) || (F && !all_finite_at(*F, first, last)))
+      finite.store(false, std::memory_order_relaxed);
+    if (then) then(first, last);
+  };
+  grid_to_particles(P, s.buckets, s.kernel, s.transfer, s.grid, s.dt, F, &after);
+  if (!finite.load()) check_results(P, F);
+  if (then_) then_->finish(s);
+}
+
+template <int dim>
+void GridToParticles<dim>::check_results(const Particles<dim>& P, const std::vector<Mat<dim>>* F) const {
   if (F) check_finite(*F, name(), "particle", "deformation gradient F");
   check_finite(P.v, name(), "particle", "velocity");
-  if (then_ && !s.adaptive) then_->finish(s);
 }
 
 template class GridToParticles<2>;

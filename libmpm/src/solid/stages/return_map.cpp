@@ -55,6 +55,7 @@ ParticleGroupUpdate ReturnMap<dim>::bind(MpmState<dim>& s) {
   std::vector<Mat<dim>>* cache = solid::stress_cache(P);
   std::vector<double>* packing = solid::rest_packing(P);
   const double dt = s.dt;
+  finite_.store(true);
   return [this, &P, &F, &plastic, cache, packing, dt](const std::uint32_t* first, const std::uint32_t* last) {
     const std::size_t n = static_cast<std::size_t>(last - first);
     for (std::size_t m = 0; m < materials_.size(); ++m) {
@@ -76,12 +77,15 @@ ParticleGroupUpdate ReturnMap<dim>::bind(MpmState<dim>& s) {
           },
           materials_[m].elastic, materials_[m].plasticity);
     }
+    // F^E tested while in cache; finish() names a particle only when a group found a bad one.
+    if (!all_finite_at(F, first, last)) finite_.store(false, std::memory_order_relaxed);
   };
 }
 
 template <int dim>
 void ReturnMap<dim>::finish(MpmState<dim>& s) {
-  check_finite(solid::elastic_F(std::as_const(s.particles)), name(), "particle", "elastic deformation gradient F^E");
+  if (!finite_.load())
+    check_finite(solid::elastic_F(std::as_const(s.particles)), name(), "particle", "elastic deformation gradient F^E");
 }
 
 template bool any_plastic(const std::vector<Material<2>>&);

@@ -16,6 +16,8 @@
 
 #include <tbb/parallel_for.h>
 
+#include <atomic>
+
 #include <utility>
 
 namespace mpm::stages {
@@ -31,6 +33,7 @@ void StressForces<dim>::run(MpmState<dim>& s) {
     weighted_stress_.resize(P.size());
   const std::vector<double>& plastic = solid::plastic_state(std::as_const(P));
   const std::vector<Mat<dim>>* cache = solid::stress_cache(P);
+  std::atomic<bool> finite{true};  // the stresses tested as they are formed, in cache
   for (std::size_t m = 0; m < materials_.size(); ++m) {
     std::visit(
         [&](const auto& model, const auto& plasticity) {
@@ -50,11 +53,15 @@ void StressForces<dim>::run(MpmState<dim>& s) {
                 [&](std::size_t p, const math::Svd<dim>& f) {
                   weighted_stress_[p] = weighted_kirchhoff(model, plasticity, P.volume0[p], f, plastic[p]);
                 });
+            bool ok = true;
+            for (std::size_t p = r.begin(); p != r.end(); ++p)
+              if (P.material[p] == m) ok &= weighted_stress_[p].allFinite();
+            if (!ok) finite.store(false, std::memory_order_relaxed);
           });
         },
         materials_[m].elastic, materials_[m].plasticity);
   }
-  check_finite(weighted_stress_, name(), "particle", "Kirchhoff stress");
+  if (!finite.load()) check_finite(weighted_stress_, name(), "particle", "Kirchhoff stress");
 
   if (s.adaptive) {
     if (fused()) adaptive::particles_to_grid(P, s.transfer, *s.adaptive);

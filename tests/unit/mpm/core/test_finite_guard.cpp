@@ -9,6 +9,7 @@
 #include <mpm/geometry/seeding.h>
 #include <mpm/solid/solid_channels.h>
 #include <mpm/solid/solid_scene.h>
+#include <mpm/solid/stages/return_map.h>
 #include <mpm/solid/stages/stress_forces.h>
 
 #include <doctest/doctest.h>
@@ -143,4 +144,24 @@ TEST_CASE("all_finite finds one NaN or infinity anywhere in short and long array
   F[49999](2, 1) = kNaN;
   CHECK(numerical_error([&] { check_finite(F, "g2p", "particle", "F"); }) ==
         "stage 'g2p': particle 49999 has non-finite F");
+}
+
+TEST_CASE("g2p_plasticity names a non-finite F of its gather as g2p's; an empty channel passes") {
+  const Config sand = Config::parse(
+      "{density: 1000, youngs_modulus: 1.0e5, poisson_ratio: 0.3, elasticity: hencky_stvk, plasticity: {model: "
+      "drucker_prager, "
+      "friction_angle: 30}}");
+  Scene scene;
+  MpmState<2>& s = scene.solid.state;
+  const std::size_t p = s.particles.size() / 2;
+  solid::elastic_F(s.particles)[p](0, 1) = kNaN;
+  stages::GridToParticles<2> fused(solid::kElasticF,
+                                   std::make_unique<stages::ReturnMap<2>>(std::vector{parse_material<2>(sand)}));
+  CHECK(fused.name() == "g2p_plasticity");
+  CHECK(numerical_error([&] { fused.run(s); }) ==
+        "stage 'g2p_plasticity': particle " + std::to_string(p) + " has non-finite deformation gradient F");
+  Scene fresh;
+  CHECK(numerical_error([&] { fused.run(fresh.solid.state); }).empty());
+  const std::vector<Mat<3>> none;
+  CHECK_NOTHROW(check_finite(none, "g2p", "particle", "F"));
 }

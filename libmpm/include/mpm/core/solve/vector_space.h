@@ -36,10 +36,11 @@ double inner(const T& a, const T& b) {
 }
 
 //! Entries per block of the parallel vector operations: large enough that a block's work
-//! outweighs its task, small enough that a 2D pressure system of one block stays serial.
+//! outweighs its task (and that a small system, one block, stays serial with the plain loop's
+//! bits).
 inline constexpr std::size_t kVectorBlock = std::size_t{1} << 14;
 
-//! f(i) for every i in [0, n), in parallel over blocks (f must touch entry i only).
+//! f(i) for every i in [0, n), in parallel over blocks (the calls must write distinct entries).
 template <class F>
 void for_each_entry(std::size_t n, F&& f) {
   const auto block = [&](std::size_t first, std::size_t last) {

@@ -22,6 +22,8 @@ public:
   void run(MpmState<dim>& s) override;
 
 private:
+  //! The NaN guard over all particles: throws naming the first bad one.
+  void check_results(const Particles<dim>& P, const std::vector<Mat<dim>>* F) const;
   std::string deformation_;  // channel updated with the velocity gradient; empty: none
   std::unique_ptr<ParticleStage<dim>> then_;
 };

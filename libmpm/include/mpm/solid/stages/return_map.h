@@ -2,6 +2,8 @@
 #include <mpm/core/stages/particle_stage.h>
 #include <mpm/solid/material.h>
 
+#include <atomic>
+
 namespace mpm::stages {
 
 //! Projects the trial elastic deformation of plastic materials back onto their yield surface.
@@ -21,6 +23,7 @@ public:
 
 private:
   std::vector<Material<dim>> materials_;
+  std::atomic<bool> finite_{true};  // every F^E mapped since bind() finite
 };
 
 //! True when some material has a plasticity model other than none.
