@@ -3,22 +3,13 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
 
-#include <cstdint>
-#include <cstring>
-
 namespace mpm {
 
 namespace {
-//! Whether some value has the exponent of Inf and NaN (all ones): integer operations the
-//! compiler vectorises, with an OR that does not depend on the order.
+//! Whether some of the n values is NaN or infinite (an OR that does not depend on the order).
 bool any_non_finite(const double* values, std::size_t n) {
-  constexpr std::uint64_t exponent = 0x7ff0000000000000ull;
   std::uint64_t any = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    std::uint64_t bits;
-    std::memcpy(&bits, values + i, sizeof bits);
-    any |= static_cast<std::uint64_t>((bits & exponent) == exponent);
-  }
+  for (std::size_t i = 0; i < n; ++i) any |= non_finite_bit(values[i]);
   return any != 0;
 }
 }  // namespace

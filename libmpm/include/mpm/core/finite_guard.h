@@ -20,6 +20,15 @@ bool is_finite_value(const T& value) {
     return value.allFinite();
 }
 
+//! 1 when x is NaN or infinite (its exponent bits all ones), else 0: an integer test the
+//! compiler vectorises, to be OR-ed over many values without a branch.
+inline std::uint64_t non_finite_bit(double x) {
+  constexpr std::uint64_t exponent = 0x7ff0000000000000ull;
+  std::uint64_t bits;
+  std::memcpy(&bits, &x, sizeof bits);
+  return static_cast<std::uint64_t>((bits & exponent) == exponent);
+}
+
 //! Whether all of the n doubles at `values` are finite: their exponent bits tested in blocks,
 //! in parallel, without a branch per value (a check after every stage costs a few per cent of a
 //! step when done value by value on one thread).
@@ -30,7 +39,6 @@ bool all_finite(const double* values, std::size_t n);
 //! what it has just written while it is in cache (a bucket of particles).
 template <class T>
 bool all_finite_at(const std::vector<T>& values, const std::uint32_t* first, const std::uint32_t* last) {
-  constexpr std::uint64_t exponent = 0x7ff0000000000000ull;
   std::uint64_t any = 0;
   for (const std::uint32_t* i = first; i != last; ++i) {
     const double* d;
@@ -43,11 +51,7 @@ bool all_finite_at(const std::vector<T>& values, const std::uint32_t* first, con
       d = values[*i].data();
       n = T::SizeAtCompileTime;
     }
-    for (int k = 0; k < n; ++k) {
-      std::uint64_t bits;
-      std::memcpy(&bits, d + k, sizeof bits);
-      any |= static_cast<std::uint64_t>((bits & exponent) == exponent);
-    }
+    for (int k = 0; k < n; ++k) any |= non_finite_bit(d[k]);
   }
   return any == 0;
 }
