@@ -37,6 +37,14 @@ struct HenckyStVK {
     return 2.0 * mu * eps + Vec<dim>::Constant(lambda * eps.sum());
   }
 
+  //! Kirchhoff stress U diag(tau(L)) U^T of an F with SVD f, given L = log sigma (the return
+  //! maps leave both): isotropic_kirchhoff(*this, f) without its logarithms and divisions where
+  //! every sigma_i >= inversion_clamp (equal up to rounding), that function elsewhere.
+  Mat<dim> kirchhoff(const math::Svd<dim>& f, const Vec<dim>& log_sigma) const {
+    if (f.sigma.minCoeff() < inversion_clamp) return isotropic_kirchhoff(*this, f);
+    return f.U * principal_kirchhoff(log_sigma).asDiagonal() * f.U.transpose();
+  }
+
   double energy(const Mat<dim>& F) const { return isotropic_energy(*this, F); }
   Mat<dim> first_piola(const Mat<dim>& F) const { return isotropic_first_piola(*this, F); }
   Mat<dim> first_piola_differential(const Mat<dim>& F, const Mat<dim>& dF) const {

@@ -186,9 +186,11 @@ public:
     return project(Fe, math::svd(Fe), plastic, rest_packing, dt, result);
   }
 
-  //! The same given f = math::svd(Fe) (stages::ReturnMap takes the SVDs of several at once).
+  //! The same given f = math::svd(Fe) (stages::ReturnMap takes the SVDs of several at once);
+  //! `log_sigma`, when given, receives the log of the result's singular values (the map's
+  //! principal strain, of which the Hencky stress is linear: HenckyStVK::kirchhoff).
   bool project(Mat<dim>& Fe, math::Svd<dim> f, double& plastic, double* rest_packing, double dt,
-               math::Svd<dim>* result = nullptr) const {
+               math::Svd<dim>* result = nullptr, Vec<dim>* log_sigma = nullptr) const {
     const Vec<dim> strain = Hencky::principal_strain(f.sigma);
     const Vec<dim> eps = strain + Vec<dim>::Constant(plastic / dim);
     const double trace = eps.sum();
@@ -213,6 +215,7 @@ public:
       const double y = yield(elastic_.principal_kirchhoff(eps), alpha);
       if (y <= 0.0 && plastic == 0.0) {  // I, nothing stored to absorb
         if (result) *result = f;
+        if (log_sigma) *log_sigma = strain;
         return false;
       }
       plastic = 0.0;
@@ -240,6 +243,7 @@ public:
     f.sigma = H.array().exp();
     Fe = f.U * f.sigma.asDiagonal() * f.V.transpose();
     if (result) *result = f;
+    if (log_sigma) *log_sigma = H;
     return true;
   }
 

@@ -49,19 +49,23 @@ public:
     return project(Fe, math::svd(Fe), plastic, result);
   }
 
-  //! The same given f = math::svd(Fe) (stages::ReturnMap takes the SVDs of several at once).
-  bool project(Mat<dim>& Fe, math::Svd<dim> f, double& /*plastic*/, math::Svd<dim>* result = nullptr) const {
+  //! The same given f = math::svd(Fe) (stages::ReturnMap takes the SVDs of several at once);
+  //! `log_sigma`, when given, receives the log of the result's singular values.
+  bool project(Mat<dim>& Fe, math::Svd<dim> f, double& /*plastic*/, math::Svd<dim>* result = nullptr,
+               Vec<dim>* log_sigma = nullptr) const {
     const Vec<dim> eps = Hencky::principal_strain(f.sigma);
     const Vec<dim> dev = deviator(eps);
     const double y = yield(dev);
     if (y <= 0.0) {
       if (result) *result = f;
+      if (log_sigma) *log_sigma = eps;
       return false;
     }
     const Vec<dim> H = eps - y / (std::sqrt(1.5) * 2.0 * elastic_.mu * dev.norm()) * dev;
     f.sigma = H.array().exp();
     Fe = f.U * f.sigma.asDiagonal() * f.V.transpose();
     if (result) *result = f;
+    if (log_sigma) *log_sigma = H;
     return true;
   }
 

@@ -30,20 +30,37 @@ bool any_dilatant(const std::vector<Material<dim>>& materials) {
 }
 
 namespace {
+//! The maps in Hencky strain, which leave the log of the singular values they return.
+template <int dim, class Model>
+constexpr bool maps_log_strain =
+    std::is_same_v<Model, plasticity::DruckerPrager<dim>> || std::is_same_v<Model, plasticity::VonMises<dim>>;
+
 //! One particle's return map from `trial`, the SVD of F: a dilatant Drucker-Prager material
 //! reads and updates the rest packing (a particle of unknown packing starts at the critical
 //! one), and the step dt reaches a rate-dependent one (the others do not read it); every other
-//! model has its plain map.
+//! model has its plain map. The Hencky-strain maps also fill `log_sigma`.
 template <int dim, class Model>
 void project(const Model& model, Mat<dim>& F, const math::Svd<dim>& trial, double& plastic, double* packing, double dt,
-             math::Svd<dim>* result) {
+             math::Svd<dim>* result, Vec<dim>* log_sigma) {
   if constexpr (std::is_same_v<Model, plasticity::DruckerPrager<dim>>) {
     if (!model.dilatant()) packing = nullptr;
     if (packing && std::isnan(*packing)) *packing = model.flow().critical_packing * F.determinant();
-    model.project(F, trial, plastic, packing, dt, result);
+    model.project(F, trial, plastic, packing, dt, result, log_sigma);
+  } else if constexpr (std::is_same_v<Model, plasticity::VonMises<dim>>) {
+    model.project(F, trial, plastic, result, log_sigma);
   } else {
     model.project(F, trial, plastic, result);
   }
+}
+
+//! The Kirchhoff stress of the F^E a map left (SVD f): Hencky elasticity after a Hencky-strain
+//! map takes the map's log strain (no logarithms again), every other pair the SVD alone.
+template <int dim, class Elastic, class Model>
+Mat<dim> kirchhoff_after_map(const Elastic& elastic, const math::Svd<dim>& f, const Vec<dim>& log_sigma) {
+  if constexpr (std::is_same_v<Elastic, constitutive::HenckyStVK<dim>> && maps_log_strain<dim, Model>)
+    return elastic.kirchhoff(f, log_sigma);
+  else
+    return constitutive::isotropic_kirchhoff(elastic, f);
 }
 }  // namespace
 
@@ -64,14 +81,17 @@ ParticleGroupUpdate ReturnMap<dim>::bind(MpmState<dim>& s) {
             using Model = std::decay_t<decltype(model)>;
             if constexpr (!std::is_same_v<Model, plasticity::NoPlasticity>) {
               math::Svd<dim> f;
+              Vec<dim> log_sigma;
               math::for_each_svd<dim>(
                   0, n, [&](std::size_t i) -> const Mat<dim>& { return F[first[i]]; },
                   [&](std::size_t i) { return P.material[first[i]] == m; },
                   [&](std::size_t i, const math::Svd<dim>& trial) {
                     const std::uint32_t p = first[i];
                     project(model, F[p], trial, plastic[p], packing ? &(*packing)[p] : nullptr, dt,
-                            cache ? &f : nullptr);
-                    if (cache) (*cache)[p] = constitutive::isotropic_kirchhoff(elastic, f);
+                            cache ? &f : nullptr, cache ? &log_sigma : nullptr);
+                    if (cache)
+                      (*cache)[p] =
+                          kirchhoff_after_map<dim, std::decay_t<decltype(elastic)>, Model>(elastic, f, log_sigma);
                   });
             }
           },

@@ -292,6 +292,21 @@ TEST_CASE_TEMPLATE("return map: lands on the yield surface, idempotent, admissib
     CHECK((f.U * f.sigma.asDiagonal() * f.V.transpose() - Fe).norm() <= 1e-13 * Fe.norm());
     const Mat<dim> tau = elastic.first_piola(Fe) * Fe.transpose();
     CHECK((constitutive::isotropic_kirchhoff(elastic, f) - tau).norm() <= 1e-12 * kLame.mu);
+    // The Hencky-strain maps also hand out log sigma of the F^E they leave, and the Hencky
+    // stress from it (without logarithms) is tau(F^E) as well.
+    if constexpr (!std::is_same_v<Model, plasticity::Snow<dim>>) {
+      Mat<dim> third = trial;
+      double third_plastic = 0.0;
+      math::Svd<dim> g;
+      Vec<dim> log_sigma = Vec<dim>::Constant(std::nan(""));
+      if constexpr (std::is_same_v<Model, plasticity::DruckerPrager<dim>>)
+        model.project(third, math::svd(trial), third_plastic, nullptr, 0.0, &g, &log_sigma);
+      else
+        model.project(third, math::svd(trial), third_plastic, &g, &log_sigma);
+      CHECK(third == Fe);
+      CHECK((log_sigma - g.sigma.array().log().matrix()).cwiseAbs().maxCoeff() <= 1e-14);
+      CHECK((elastic.kirchhoff(g, log_sigma) - tau).norm() <= 1e-12 * kLame.mu);
+    }
   };
   for (const Model& model : return_maps<Model>()) {
     int outside = 0, inside = 0;
@@ -325,6 +340,28 @@ TEST_CASE_TEMPLATE("return map: lands on the yield surface, idempotent, admissib
     }
     CHECK(outside > 20);
     CHECK(inside > 20);
+  }
+}
+
+TEST_CASE_TEMPLATE("Hencky stress from the log stretches: without logarithms above the clamp, the same below", Matrix,
+                   Mat<2>, Mat<3>) {
+  constexpr int dim = Matrix::RowsAtCompileTime;
+  const constitutive::HenckyStVK<dim> elastic{kLame.mu, kLame.lambda};
+  std::mt19937 rng(7);
+  for (int n = 0; n < 50; ++n) {
+    // Stretched and compressed states, and every fifth with a singular value below the clamp
+    // (crushed), flat or inverted, where the extended logarithm differs from log|sigma|.
+    Vec<dim> stretch = random_stretches<dim>(rng, 0.5, 1.5);
+    if (n % 5 == 0) stretch(dim - 1) = (n % 3 - 1) * 0.05;
+    const Mat<dim> F = with_stretches<dim>(rng, stretch);
+    const math::Svd<dim> f = math::svd(F);
+    const Vec<dim> log_sigma = constitutive::HenckyStVK<dim>::principal_strain(f.sigma);
+    CAPTURE(f.sigma.transpose());
+    if (f.sigma.minCoeff() < constitutive::inversion_clamp)
+      CHECK(elastic.kirchhoff(f, log_sigma) == constitutive::isotropic_kirchhoff(elastic, f));
+    else
+      CHECK((elastic.kirchhoff(f, log_sigma) - constitutive::isotropic_kirchhoff(elastic, f)).norm() <=
+            1e-14 * (kLame.mu + kLame.lambda));
   }
 }
 
