@@ -13,12 +13,17 @@
 #include <fluid/pressure/model_problems.h>
 #include <fluid/pressure/pressure_solver.h>
 
+#include <mpm/core/memory_budget.h>
+
 #include <tbb/global_control.h>
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <string>
+#include <thread>
 #include <vector>
 
 using namespace fluid;
@@ -34,6 +39,33 @@ struct Options {
   double rtol = 1e-8;
   int threads = 1;
 };
+
+//! Peak bytes per cell of a run (the operator, the vectors, the multigrid levels), from measured
+//! mgpcg peaks with a margin: Poisson 113-114 B (128^3, 2048^2), dam break 175 B (1024^2) and
+//! 1 130-1 160 B (64^3, 96^3; the node/cell operator's Galerkin levels).
+double bytes_per_cell(int dim, const std::string& problem) {
+  if (problem == "poisson") return 160.0;
+  return dim == 2 ? 250.0 : 1600.0;
+}
+
+//! "" when every requested system fits in memory, else the first that does not and why.
+std::string memory_refusal(const Options& o) {
+  const auto check = [](const char* option, int dim, const std::string& problem, const std::vector<int>& sizes) {
+    for (const int n : sizes) {
+      const double cells = std::pow(double(n), dim);
+      if (const std::string why = mpm::memory_shortfall(cells * bytes_per_cell(dim, problem)); !why.empty())
+        return std::string(option) + " " + std::to_string(n) + ": " + std::to_string(static_cast<long long>(cells)) +
+               " cells need " + why;
+    }
+    return std::string();
+  };
+  for (const std::string& why :
+       {check("--poisson-3d", 3, "poisson", o.poisson_3d), check("--poisson-2d", 2, "poisson", o.poisson_2d),
+        check("--dam-break-3d", 3, "dam_break", o.dam_break_3d),
+        check("--dam-break-2d", 2, "dam_break", o.dam_break_2d)})
+    if (!why.empty()) return why;
+  return {};
+}
 
 template <int dim>
 void run(const Options& options, const std::string& problem, int n) {
@@ -69,17 +101,37 @@ void run(const Options& options, const std::string& problem, int n) {
 
 int main(int argc, char** argv) {
   Options options;
+  const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   CLI::App app{"bench_pressure: pressure solver back-ends on the Poisson and dam-break systems"};
-  app.add_option("--poisson-3d", options.poisson_3d, "cells per axis, 3D Poisson runs")->delimiter(',');
-  app.add_option("--poisson-2d", options.poisson_2d, "cells per axis, 2D Poisson runs")->delimiter(',');
-  app.add_option("--dam-break-3d", options.dam_break_3d, "cells per axis, 3D dam-break runs")->delimiter(',');
-  app.add_option("--dam-break-2d", options.dam_break_2d, "cells per axis, 2D dam-break runs")->delimiter(',');
-  app.add_option("--solvers", options.solvers, "back-ends, mgpcg first for the ratio column")->delimiter(',');
-  app.add_option("--max-cholmod-cells", options.max_cholmod_cells, "largest system for cholmod");
-  app.add_option("--max-cg-cells", options.max_cg_cells, "largest system for plain cg");
-  app.add_option("--rtol", options.rtol, "relative residual tolerance");
-  app.add_option("--threads", options.threads, "TBB threads (the targets are for 1)");
+  const auto sizes = CLI::Range(2, 65536);
+  app.add_option("--poisson-3d", options.poisson_3d, "cells per axis, 3D Poisson runs")->delimiter(',')->check(sizes);
+  app.add_option("--poisson-2d", options.poisson_2d, "cells per axis, 2D Poisson runs")->delimiter(',')->check(sizes);
+  app.add_option("--dam-break-3d", options.dam_break_3d, "cells per axis, 3D dam-break runs")
+      ->delimiter(',')
+      ->check(sizes);
+  app.add_option("--dam-break-2d", options.dam_break_2d, "cells per axis, 2D dam-break runs")
+      ->delimiter(',')
+      ->check(sizes);
+  app.add_option("--solvers", options.solvers, "back-ends, mgpcg first for the ratio column")
+      ->delimiter(',')
+      ->check(CLI::IsMember(pressure_solver_names()));
+  app.add_option("--max-cholmod-cells", options.max_cholmod_cells, "largest system for cholmod")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--max-cg-cells", options.max_cg_cells, "largest system for plain cg")->check(CLI::NonNegativeNumber);
+  app.add_option("--rtol", options.rtol, "relative residual tolerance, in [1e-16, 0.5]")
+      ->check(CLI::Validator(
+          [](const std::string& text) {
+            const double value = std::strtod(text.c_str(), nullptr);
+            return value >= 1e-16 && value <= 0.5 ? std::string() : "value " + text + " not in [1e-16, 0.5]";
+          },
+          "in [1e-16, 0.5]"));
+  app.add_option("--threads", options.threads, "TBB threads (the targets are for 1)")
+      ->check(CLI::Range(1, cores, "thread count in [1, cores of this machine = " + std::to_string(cores) + "]"));
   CLI11_PARSE(app, argc, argv);
+  if (const std::string why = memory_refusal(options); !why.empty()) {
+    std::fprintf(stderr, "bench_pressure: %s\n", why.c_str());
+    return 2;
+  }
   tbb::global_control threads(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(options.threads));
   std::printf("bench_pressure: rtol %.1e, %d thread(s)\n", options.rtol, options.threads);
   for (int n : options.poisson_3d) run<3>(options, "poisson", n);
