@@ -11,12 +11,10 @@ work=$3
 mkdir -p "$log" "$work"
 nvidia-smi --query-gpu=name,memory.total,driver_version --format=csv,noheader
 nproc
-step() {  # step <name> <timeout s> <command...>
-  local name=$1 limit=$2
-  shift 2
-  local start=$SECONDS
-  timeout "$limit" "$@" >"$log/$name.log" 2>&1
-  echo "== $name: exit $? in $((SECONDS - start)) s"
+source "$(dirname "$0")/run_logged.sh"
+step() {  # step <name> <timeout s> <command...>: the run and its result lines
+  local name=$1
+  run_logged "$log" "$@"
   grep -E "device_step|device |variant|first step|momentum|runout|transfers|sand step|bench_cuda|SKIPPED|ERROR|error|test cases|wall|steps" "$log/$name.log" | head -40
 }
 step test_cuda_step 90 "$bin/test_cuda_step"
