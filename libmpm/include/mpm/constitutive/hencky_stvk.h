@@ -42,7 +42,7 @@ struct HenckyStVK {
   //! every sigma_i >= inversion_clamp (equal up to rounding), that function elsewhere.
   Mat<dim> kirchhoff(const math::Svd<dim>& f, const Vec<dim>& log_sigma) const {
     if (f.sigma.minCoeff() < inversion_clamp) return isotropic_kirchhoff(*this, f);
-    return f.U * principal_kirchhoff(log_sigma).asDiagonal() * f.U.transpose();
+    return math::scaled_product<dim>(f.U, principal_kirchhoff(log_sigma), f.U);
   }
 
   double energy(const Mat<dim>& F) const { return isotropic_energy(*this, F); }

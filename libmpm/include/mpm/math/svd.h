@@ -370,6 +370,15 @@ Svd<dim> svd(const Mat<dim>& F) {
   }
 }
 
+//! A diag(d) B^T (F = U diag(sigma) V^T, tau = U diag(tau_i) U^T) as one scaled copy and one
+//! product: Eigen's nested lazy product evaluated A diag(d) again for every coefficient, one
+//! call per coefficient (docs/performance.md: the same sums up to their rounding order).
+template <int dim>
+Mat<dim> scaled_product(const Mat<dim>& A, const Vec<dim>& d, const Mat<dim>& B) {
+  const Mat<dim> scaled = A * d.asDiagonal();
+  return scaled * B.transpose();
+}
+
 template <int dim>
 Polar<dim> polar(const Mat<dim>& F) {
   const Svd<dim> f = svd(F);

@@ -54,7 +54,7 @@ public:
     // An inverted F^E (sigma < 0) is clamped to lo_: its volume change has no logarithm, so
     // J^P takes the magnitude of the ratio.
     plastic += std::log(std::abs(f.sigma.prod()) / clamped.prod());
-    Fe = f.U * clamped.asDiagonal() * f.V.transpose();
+    Fe = math::scaled_product<dim>(f.U, clamped, f.V);
     return true;
   }
 

@@ -63,7 +63,7 @@ public:
     }
     const Vec<dim> H = eps - y / (std::sqrt(1.5) * 2.0 * elastic_.mu * dev.norm()) * dev;
     f.sigma = H.array().exp();
-    Fe = f.U * f.sigma.asDiagonal() * f.V.transpose();
+    Fe = math::scaled_product<dim>(f.U, f.sigma, f.V);
     if (result) *result = f;
     if (log_sigma) *log_sigma = H;
     return true;

@@ -142,14 +142,14 @@ double isotropic_energy(const Model& model, const Mat<dim>& F) {
 template <class Model, int dim>
 Mat<dim> isotropic_first_piola(const Model& model, const Mat<dim>& F) {
   const math::Svd<dim> f = math::svd(F);
-  return f.U * model.principal_stress(f.sigma).asDiagonal() * f.V.transpose();
+  return math::scaled_product<dim>(f.U, model.principal_stress(f.sigma), f.V);
 }
 
 //! Kirchhoff stress tau = P F^T = U diag(p_i sigma_i) U^T from the SVD f of F (the return maps
 //! have it at hand: stages::ReturnMap fills the stress cache with it).
 template <class Model, int dim>
 Mat<dim> isotropic_kirchhoff(const Model& model, const math::Svd<dim>& f) {
-  return f.U * model.principal_stress(f.sigma).cwiseProduct(f.sigma).asDiagonal() * f.U.transpose();
+  return math::scaled_product<dim>(f.U, model.principal_stress(f.sigma).cwiseProduct(f.sigma), f.U);
 }
 
 //! The differential at F; with `definite` made positive semi-definite (Teran et al. 2005).
