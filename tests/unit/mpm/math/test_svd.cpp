@@ -246,3 +246,17 @@ TEST_CASE("svd3: a NaN entry shows in the singular values") {
   F(1, 2) = std::numeric_limits<double>::quiet_NaN();
   CHECK(math::svd3(F).sigma.hasNaN());
 }
+
+TEST_CASE_TEMPLATE("scaled_product is A diag(d) B^T to round-off", Matrix, Mat<2>, Mat<3>) {
+  constexpr int dim = Matrix::RowsAtCompileTime;
+  std::srand(5);
+  for (int n = 0; n < 100; ++n) {
+    const Mat<dim> A = Mat<dim>::Random(), B = Mat<dim>::Random();
+    const Vec<dim> d = 10.0 * Vec<dim>::Random();
+    Mat<dim> expected = Mat<dim>::Zero();  // sum_k A_ik d_k B_jk, one term at a time
+    for (int i = 0; i < dim; ++i)
+      for (int j = 0; j < dim; ++j)
+        for (int k = 0; k < dim; ++k) expected(i, j) += A(i, k) * d(k) * B(j, k);
+    CHECK((math::scaled_product<dim>(A, d, B) - expected).cwiseAbs().maxCoeff() <= 1e-14 * 10.0 * dim);
+  }
+}
