@@ -180,7 +180,7 @@ constitutive::StressDerivative<dim> returned_stress(const Elastic& elastic, cons
   };
   const Vec<dim>& sigma = s.f.sigma;
   const Vec<dim> p = principal(sigma);
-  stress = s.f.U * p.asDiagonal() * s.f.V.transpose();
+  stress = math::scaled_product<dim>(s.f.U, p, s.f.V);
   if (!jacobian) return s;
   Mat<dim> J;
   for (int j = 0; j < dim; ++j) {
@@ -232,7 +232,7 @@ void ImplicitUpdate<dim>::linearise(const MpmState<dim>& s, bool derivatives, bo
             } else if (derivatives) {
               derivative_[p] = constitutive::stress_derivative(model, trial_F_[p], definite);
               const math::Svd<dim>& f = derivative_[p].f;
-              stress = f.U * model.principal_stress(f.sigma).asDiagonal() * f.V.transpose();
+              stress = math::scaled_product<dim>(f.U, model.principal_stress(f.sigma), f.V);
             } else {
               stress = model.first_piola(trial_F_[p]);
             }
