@@ -13,6 +13,7 @@ template <int dim>
 typename WeaklyCompressibleSolver<dim>::Stages WeaklyCompressibleSolver<dim>::grid_update() const {
   Stages s;
   s.push_back(std::make_unique<stages::EquationOfStateForces<dim>>(eos_));
+  if (colliders_.walls()) s.push_back(std::make_unique<stages::WallPressureForces<dim>>(eos_, *colliders_.walls()));
   s.push_back(std::make_unique<mpm::stages::GridVelocityUpdate<dim>>(true));
   append_viscosity<dim>(s, fluid_, colliders_);
   return s;

@@ -1,7 +1,8 @@
 #pragma once
 //! A weakly compressible liquid: each particle carries its volume ratio J and its pressure follows
 //! from J by the Tait equation of state (fluid/stages/equation_of_state.h), so a step solves no
-//! linear system. grid_update() = pressure_forces -> grid_update (forces and gravity) ->
+//! linear system. grid_update() = pressure_forces -> wall_pressure (the closed domain walls'
+//! push, from images of the particles next to them) -> grid_update (forces and gravity) ->
 //! viscosity (implicit, only when mu > 0); projection() = nothing; particle_update() =
 //! volume_ratio. The step resolves the speed of sound c (dt <= wave_cfl dx / c), and the liquid
 //! compresses by about (|v| / c)^2: the density_deviation column reports it. A clear fluid only:

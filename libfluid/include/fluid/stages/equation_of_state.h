@@ -5,6 +5,7 @@
 //! particle stress, so no linear system is solved: the time step resolves the speed of sound.
 #include <mpm/core/stage.h>
 #include <mpm/core/state.h>
+#include <mpm/geometry/collider.h>
 
 #include <string>
 #include <vector>
@@ -42,6 +43,44 @@ public:
 private:
   TaitEquationOfState eos_;
   std::vector<mpm::Mat<dim>> weighted_stress_;
+};
+
+//! The walls' push on the liquid. The weak form of the momentum balance carries the boundary
+//! term of the wall, the integral of p w_i n over the wall's face; the particle sum of
+//! EquationOfStateForces covers only the liquid, so a free node whose stencil crosses a wall
+//! keeps a force of about p w_i(wall) per unit area toward the wall that nothing balances (a
+//! tank at rest then compresses the liquid next to its walls to 1.6 rho g h). Each particle
+//! within a kernel's reach of a closed wall's plane (the inner face of the wall layer) gets an
+//! image mirrored across it, with the particle's volume and the pressure at the wall point x_w
+//! below it, extrapolated hydrostatically as for the fixed walls of Adami, Hu & Adams (2012,
+//! eq. 27):
+//!   p_w = max(0, p_p + (rho_0 / J_p) g . (x_w - x_p)),   f_ia += V_p^0 J_p p_w d_a w_i(x')
+//! along the wall's axis a only, on the nodes strictly on the liquid's side of the plane (the
+//! nodes on or behind it carry the wall's condition). Held constant over the image, p_w gives
+//! p_w w_i(wall), the boundary term: the images continue the particles' lattice, and the sum of
+//! d_a w_i over a whole lattice vanishes, so a liquid at rest along a wall is balanced as in the
+//! interior. Colliders other than the domain walls get no images.
+template <int dim>
+class WallPressureForces final : public mpm::Stage<mpm::MpmState<dim>> {
+public:
+  WallPressureForces(TaitEquationOfState eos, mpm::geometry::DomainWalls<dim> walls)
+      : eos_(eos), walls_(std::move(walls)) {}
+  std::string name() const override { return "wall_pressure"; }
+  std::vector<std::string> reads() const override {
+    return {"grid.blocks", "grid.force", "particle.x", "particle.volume0", "particle.volume_ratio"};
+  }
+  std::vector<std::string> writes() const override { return {"grid.force"}; }
+  void run(mpm::MpmState<dim>& s) override;
+
+private:
+  struct Push {  //!< one image's force on one node along its wall's axis [N]
+    mpm::Index node;
+    int axis;
+    double force;
+  };
+  TaitEquationOfState eos_;
+  mpm::geometry::DomainWalls<dim> walls_;
+  std::vector<std::vector<Push>> pushes_;  //!< per fixed chunk of particles
 };
 
 //! J_p <- det(I + dt grad v_p) J_p with grad v_p = sum_i v_i (grad w_ip)^T from the final grid
