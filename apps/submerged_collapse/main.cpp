@@ -121,6 +121,10 @@ int run(const CommandLine& cl, const Config& scene) {
   // stages only (issue 5, lean scenes).
   verify<InputError>(col.sediment.has_value() && col.state.sediment.particles.size() > 0,
                      scene.file() + ": submerged_collapse needs a `sediment` and a sediment body");
+  verify<InputError>(!col.fluid_solver || col.fluid_solver->incompressible(),
+                     scene.file() +
+                         ": fluid.solver: the base pore pressure sensor reads the mixture projection's "
+                         "pressure; use 'projection'");
   // The experiment's runout, when the scene names it: the summary then gives the error.
   std::optional<double> measured_runout;
   if (const std::optional<Config> experiment = scene.optional_child("experiment"))

@@ -3,7 +3,9 @@
 #include <coupling/stages/exchange_stage.h>
 #include <coupling/stages/mixture_projection.h>
 #include <coupling/stages/on_phase.h>
+#include <coupling/stages/pore_pressure.h>
 #include <coupling/stages/volume_fraction_stage.h>
+#include <fluid/stages/equation_of_state.h>
 #include <fluid/stages/surface_velocity_extension.h>
 #include <mpm/core/error.h>
 #include <mpm/core/stages/grid_boundary.h>
@@ -43,10 +45,9 @@ CoupledScene<dim> make_coupled_scene(mpm::SceneSettings<dim> settings, mpm::geom
   if (fluid) {
     state.fluid = mpm::initial_state(settings);
     liquid = fluid::make_fluid_solver<dim>(fluid_solver, *fluid, pressure, colliders, settings);
-    mpm::verify<mpm::InputError>(!sediment || liquid->incompressible(),
-                                 "coupled scene: fluid solver '" + fluid_solver.name +
-                                     "' is not incompressible; a sediment needs the mixture projection");
     liquid->add_channels(state.fluid.particles);
+    if (sediment && !liquid->incompressible())  // its pressure from its own volume (pore_pressure.h)
+      state.fluid.particles.template add_channel<double>(fluid::kPoreRatio, 1.0, {.checkpoint = true});
   }
   std::shared_ptr<const mpm::solid::SolidSolver<dim>> solid;
   if (sediment) {
@@ -133,6 +134,8 @@ mpm::Pipeline<CoupledState<dim>> make_coupled_pipeline(const CoupledScene<dim>& 
   if (wet) on(Phase::fluid, std::make_unique<ms::ParticlesToGrid<dim>>());
   if (sandy)  // p2g, with the stress forces in the same scatter where the solver has them
     for (auto& stage : scene.solid_solver->to_grid()) on(Phase::sediment, std::move(stage));
+  // A liquid with an equation of state instead of the mixture projection (pore_pressure.h).
+  const bool compressible = wet && sandy && !scene.fluid_solver->incompressible();
   if (wet && sandy)
     p.add(std::make_unique<stages::VolumeFractionStage<dim>>(scene.fluid->density, scene.sediment->density,
                                                              scene.sediment->min_fluid_fraction));
@@ -140,9 +143,10 @@ mpm::Pipeline<CoupledState<dim>> make_coupled_pipeline(const CoupledScene<dim>& 
     for (auto& stage : scene.fluid_solver->grid_update()) on(Phase::fluid, std::move(stage));
   if (sandy)
     for (auto& stage : scene.solid_solver->grid_update()) on(Phase::sediment, std::move(stage));
+  if (compressible) p.add(std::make_unique<stages::PorePressureShare<dim>>());
   if (wet && sandy) p.add(std::make_unique<stages::ExchangeStage<dim>>(*scene.drag));
   both([&] { return std::make_unique<ms::GridBoundary<dim>>(scene.colliders); });
-  if (wet && sandy) {
+  if (wet && sandy && !compressible) {
     p.add(std::make_unique<stages::MixtureProjection<dim>>(scene.fluid->density, scene.sediment->density,
                                                            scene.colliders, scene.pressure));
     if (scene.pressure.surface_extension)
@@ -150,9 +154,10 @@ mpm::Pipeline<CoupledState<dim>> make_coupled_pipeline(const CoupledScene<dim>& 
     // The sediment correction reaches nodes next to walls that the fluid's prescribed
     // nodes do not shield: impose the sediment's wall conditions again.
     on(Phase::sediment, std::make_unique<ms::GridBoundary<dim>>(scene.colliders));
-  } else if (wet) {
+  } else if (wet) {  // a clear fluid's own projection (none for an equation of state)
     for (auto& stage : scene.fluid_solver->projection()) on(Phase::fluid, std::move(stage));
   }
+  if (compressible) p.add(std::make_unique<stages::PoreRatioUpdate<dim>>());
   if (wet) {
     for (auto& stage : scene.fluid_solver->particle_update()) on(Phase::fluid, std::move(stage));
     on(Phase::fluid, std::make_unique<ms::GridToParticles<dim>>());

@@ -67,6 +67,7 @@ SettlingScene<dim> load_settling_column(const mpm::Config& scene) {
   const int ppc = mpm::geometry::particles_per_cell<dim>(c);
 
   const fluid::FluidMaterial water = fluid::parse_fluid_material(scene.child("fluid"));
+  const fluid::FluidSolverSettings liquid = fluid::parse_fluid_solver(scene.child("fluid"));
   col.fluid_density = water.density;
   col.drag = drag::parse_drag_law(scene);
   const mpm::Config s = scene.child("sediment");
@@ -87,7 +88,7 @@ SettlingScene<dim> load_settling_column(const mpm::Config& scene) {
                                scene.path() + ": the settling column needs `walls` (contact: sticky) to be closed");
 
   SettlingScene<dim> out{col, make_coupled_scene<dim>(settings, std::move(colliders), water,
-                                                      fluid::parse_pressure_settings(scene), sand, col.drag)};
+                                                      fluid::parse_pressure_settings(scene), sand, col.drag, liquid)};
   mpm::Vec<dim> top = mpm::Vec<dim>::Constant(col.width), mid = top;
   top[1] = col.height;
   mid[1] = col.suspension_height;
@@ -101,6 +102,7 @@ SettlingScene<dim> load_settling_column(const mpm::Config& scene) {
   if (col.suspension_height < col.height)
     add_fluid_particles(out.scene, mpm::geometry::seed_box<dim>(above, top, dx, ppc, 0.0, 1), volume, 1.0, rest,
                         "column");
+  out.scene.fluid_solver->start_at_rest(out.scene.state.fluid.particles, out.scene.settings);
   return out;
 }
 

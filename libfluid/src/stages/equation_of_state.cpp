@@ -28,19 +28,20 @@ double TaitEquationOfState::pressure(double J) const {
 
 namespace stages {
 
-template <int dim>
-void EquationOfStateForces<dim>::run(mpm::MpmState<dim>& s) {
-  const mpm::Particles<dim>& P = s.particles;
-  const std::vector<double>& J = P.template channel<double>(kVolumeRatio);
-  weighted_stress_.resize(P.size());
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.size(), 4096), [&](const auto& r) {
-    for (std::size_t p = r.begin(); p != r.end(); ++p)
-      weighted_stress_[p] = (-P.volume0[p] * eos_.pressure(J[p]) * J[p]) * mpm::Mat<dim>::Identity();
-  });
-  mpm::stress_to_grid_forces(weighted_stress_, P, s.buckets, s.kernel, s.grid);
-}
-
 namespace {
+
+//! The liquid's own volume ratio J_p r_p (kPoreRatio; r = 1 for a clear liquid).
+template <int dim>
+class OwnVolumeRatio {
+public:
+  explicit OwnVolumeRatio(const mpm::Particles<dim>& P)
+      : J_(P.template channel<double>(kVolumeRatio)), pore_(P.template find_channel<double>(kPoreRatio)) {}
+  double operator()(std::size_t p) const { return pore_ ? J_[p] * (*pore_)[p] : J_[p]; }
+
+private:
+  const std::vector<double>& J_;
+  const std::vector<double>* pore_;
+};
 
 //! A closed wall's plane (the inner face of its layer) along one axis.
 struct WallPlane {
@@ -61,9 +62,23 @@ bool next_stencil_node(std::array<int, dim>& offset) {
 }  // namespace
 
 template <int dim>
+void EquationOfStateForces<dim>::run(mpm::MpmState<dim>& s) {
+  const mpm::Particles<dim>& P = s.particles;
+  const std::vector<double>& J = P.template channel<double>(kVolumeRatio);
+  const OwnVolumeRatio<dim> own(P);
+  weighted_stress_.resize(P.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.size(), 4096), [&](const auto& r) {
+    for (std::size_t p = r.begin(); p != r.end(); ++p)
+      weighted_stress_[p] = (-P.volume0[p] * eos_.pressure(own(p)) * J[p]) * mpm::Mat<dim>::Identity();
+  });
+  mpm::stress_to_grid_forces(weighted_stress_, P, s.buckets, s.kernel, s.grid);
+}
+
+template <int dim>
 void WallPressureForces<dim>::run(mpm::MpmState<dim>& s) {
   const mpm::Particles<dim>& P = s.particles;
   const std::vector<double>& J = P.template channel<double>(kVolumeRatio);
+  const OwnVolumeRatio<dim> own(P);
   mpm::SparseGrid<dim>& grid = s.grid;
   const double dx = grid.dx();
   const double reach = 0.5 * mpm::kernel_support(s.kernel) * dx;  // a stencil's nodes lie within this
@@ -109,7 +124,7 @@ void WallPressureForces<dim>::run(mpm::MpmState<dim>& s) {
               mpm::Vec<dim> wall_point = x;
               wall_point[a] = plane.position;
               const double wall_pressure =
-                  std::max(0.0, eos_.pressure(J[p]) + eos_.density / J[p] * s.gravity.dot(wall_point - x));
+                  std::max(0.0, eos_.pressure(own(p)) + eos_.density / own(p) * s.gravity.dot(wall_point - x));
               if (wall_pressure == 0.0) continue;
               for (int b = 0; b < dim; ++b)
                 if (b != a) kernel((image[b] - grid.origin()[b]) / dx, base[b], w[b], dw[b]);
@@ -145,12 +160,13 @@ void VolumeRatioUpdate<dim>::run(mpm::MpmState<dim>& s) {
   });
   mpm::check_finite(J, name(), "particle", "volume ratio J");
   deviation_ = 0.0;
+  const OwnVolumeRatio<dim> own(P);
   for (std::size_t p = 0; p < J.size(); ++p) {
     if (!(J[p] > 0.0))
       throw mpm::NumericalError("stage '" + name() + "': particle " + std::to_string(p) +
                                 " was compressed to J = " + std::to_string(J[p]) + " at t = " + std::to_string(s.time) +
                                 " s: the step exceeds the acoustic limit (lower time.wave_cfl)");
-    if (J[p] < 1.0) deviation_ = std::max(deviation_, 1.0 / J[p] - 1.0);
+    if (own(p) < 1.0) deviation_ = std::max(deviation_, 1.0 / own(p) - 1.0);
   }
 }
 

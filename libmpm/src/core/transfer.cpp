@@ -145,6 +145,26 @@ void scalar_to_grid(const std::vector<double>& values, const Particles<dim>& P, 
 }
 
 template <int dim>
+void grid_to_scalar(const std::vector<double>& values, const Particles<dim>& P, const ParticleBuckets<dim>& buckets,
+                    const Kernel& kernel, const SparseGrid<dim>& grid, std::vector<double>& out) {
+  out.resize(P.size());
+  const std::array<ChannelView, 1> channels{scalar_view(values)};
+  std::visit(
+      [&](const auto& k) {
+        using K = std::decay_t<decltype(k)>;
+        detail::gather<dim, 1>(
+            grid, buckets, channels, [&](std::uint32_t p, const PatchFrame<dim>& f, const double* patch) {
+              Stencil<dim, K::support> st;
+              st.template compute<false>(k, f.cells(P.x[p]), f.origin);
+              double sum = 0.0;
+              st.for_each_node([&](int node, double w, const Vec<dim>&, const Vec<dim>&) { sum += w * patch[node]; });
+              out[p] = sum;
+            });
+      },
+      kernel);
+}
+
+template <int dim>
 void stress_to_grid_forces(const std::vector<Mat<dim>>& weighted_stress, const Particles<dim>& P,
                            const ParticleBuckets<dim>& buckets, const Kernel& kernel, SparseGrid<dim>& g) {
   stress_to_nodes(weighted_stress, P, buckets, kernel, g, g.force);
@@ -190,6 +210,8 @@ void stress_to_nodes(const std::vector<Mat<dim>>& weighted_stress, const Particl
   template void grid_to_particles(Particles<dim>&, const ParticleBuckets<dim>&, const Kernel&, const TransferScheme&,  \
                                   const SparseGrid<dim>&, double, std::vector<Mat<dim>>*, const ParticleGroupUpdate*); \
   template void scalar_to_grid(const std::vector<double>&, const Particles<dim>&, const ParticleBuckets<dim>&,         \
+                               const Kernel&, const SparseGrid<dim>&, std::vector<double>&);                           \
+  template void grid_to_scalar(const std::vector<double>&, const Particles<dim>&, const ParticleBuckets<dim>&,         \
                                const Kernel&, const SparseGrid<dim>&, std::vector<double>&);                           \
   template void stress_to_grid_forces(const std::vector<Mat<dim>>&, const Particles<dim>&,                             \
                                       const ParticleBuckets<dim>&, const Kernel&, SparseGrid<dim>&);                   \

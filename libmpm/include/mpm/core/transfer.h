@@ -58,6 +58,13 @@ void scalar_to_grid(const std::vector<double>& values, const Particles<dim>& par
                     const ParticleBuckets<dim>& buckets, const Kernel& kernel, const SparseGrid<dim>& grid,
                     std::vector<double>& out);
 
+//! out_p = sum_i w_ip values_i for every particle: a node field (sized to the grid's node
+//! storage) read at the particles with the G2P weights, the counterpart of scalar_to_grid.
+template <int dim>
+void grid_to_scalar(const std::vector<double>& values, const Particles<dim>& particles,
+                    const ParticleBuckets<dim>& buckets, const Kernel& kernel, const SparseGrid<dim>& grid,
+                    std::vector<double>& out);
+
 //! grid.force_i = - sum_p S_p grad w_ip on every node (zeroed first), S_p = V_p^0 tau_p the
 //! particle's volume-weighted Kirchhoff stress [N m]: the internal forces of an elastic solid, of
 //! a weakly compressible fluid, of any stress carried by particles (Gao et al. 2017, eq. 1-2).

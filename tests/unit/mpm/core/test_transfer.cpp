@@ -1,7 +1,8 @@
 // P2G conserves mass and linear momentum to round-off; APIC P2G conserves angular momentum
 // (particle angular momentum includes the affine part, Jiang et al. 2015 sec. 5.3); an affine
 // velocity field survives P2G -> G2P exactly, C_p included; the sparse grid allocates only
-// the blocks near particles.
+// the blocks near particles; grid_to_scalar reads linear node fields exactly and is the adjoint
+// of scalar_to_grid.
 #include <mpm/core/error.h>
 #include <mpm/core/transfer.h>
 
@@ -268,6 +269,36 @@ TEST_CASE("APIC reproduces an affine velocity field through P2G -> G2P") {
   for (const Kernel& k : {Kernel{QuadraticBSpline{}}, Kernel{CubicBSpline{}}, Kernel{UGimp{0.3}}}) {
     check_affine_reproduction<2>(k);
     check_affine_reproduction<3>(k);
+  }
+}
+
+template <int dim>
+void check_scalar_transfers(const Kernel& kernel) {
+  SparseGrid<dim> grid(Vec<dim>::Zero(), Vec<dim>::Ones(), 1.0 / 16);
+  Particles<dim> P = random_cloud<dim>(300, Vec<dim>::Constant(0.3), Vec<dim>::Constant(0.7), 11);
+  ParticleBuckets<dim> buckets;
+  sort_into_buckets(P, kernel, grid, buckets);
+  // A linear node field is read back exactly at the particles (linear reproduction).
+  const Vec<dim> slope = Vec<dim>::LinSpaced(0.5, 2.0);
+  std::vector<double> node(grid.node_storage()), at;
+  for (std::size_t k = 0; k < node.size(); ++k) node[k] = 3.0 + slope.dot(grid.node_position(k));
+  grid_to_scalar(node, P, buckets, kernel, grid, at);
+  REQUIRE(at.size() == P.size());
+  for (std::size_t p = 0; p < P.size(); ++p) CHECK(at[p] == doctest::Approx(3.0 + slope.dot(P.x[p])).epsilon(1e-12));
+  // The gather is the adjoint of scalar_to_grid: sum_p a_p (G u)_p = sum_i u_i (S a)_i.
+  std::vector<double> a(P.size()), spread;
+  for (std::size_t p = 0; p < a.size(); ++p) a[p] = std::sin(7.0 * p);
+  scalar_to_grid(a, P, buckets, kernel, grid, spread);
+  double lhs = 0.0, rhs = 0.0;
+  for (std::size_t p = 0; p < a.size(); ++p) lhs += a[p] * at[p];
+  for (std::size_t k = 0; k < node.size(); ++k) rhs += node[k] * spread[k];
+  CHECK(lhs == doctest::Approx(rhs).epsilon(1e-12));
+}
+
+TEST_CASE("grid_to_scalar reads a linear node field exactly and is the adjoint of scalar_to_grid") {
+  for (const Kernel& k : {Kernel{QuadraticBSpline{}}, Kernel{CubicBSpline{}}, Kernel{UGimp{0.3}}}) {
+    check_scalar_transfers<2>(k);
+    check_scalar_transfers<3>(k);
   }
 }
 

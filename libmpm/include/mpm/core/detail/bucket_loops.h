@@ -238,6 +238,11 @@ template <class T>
 BasicChannelView<T> scalar_view(std::vector<T>& c) {
   return {c.data(), 1, 0};
 }
+//! For the gathers, which only read through the view.
+template <class T>
+BasicChannelView<T> scalar_view(const std::vector<T>& c) {
+  return scalar_view(const_cast<std::vector<T>&>(c));
+}
 template <int dim, class T>
 BasicChannelView<T> component_view(std::vector<Eigen::Matrix<T, dim, 1>>& c, int a) {
   return {reinterpret_cast<T*>(c.data()), dim, a};
