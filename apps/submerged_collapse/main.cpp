@@ -35,8 +35,8 @@
 // height, and the grain mass is unchanged.
 #include <coupling/bed_profile.h>
 #include <coupling/coupled_runner.h>
+#include <coupling/pressure_probe.h>
 #include <coupling/scene_loader.h>
-#include <coupling/stages/mixture_projection.h>
 #include <mpm/core/app.h>
 #include <mpm/core/command_line.h>
 #include <mpm/core/error.h>
@@ -121,10 +121,6 @@ int run(const CommandLine& cl, const Config& scene) {
   // stages only (issue 5, lean scenes).
   verify<InputError>(col.sediment.has_value() && col.state.sediment.particles.size() > 0,
                      scene.file() + ": submerged_collapse needs a `sediment` and a sediment body");
-  verify<InputError>(!col.fluid_solver || col.fluid_solver->incompressible(),
-                     scene.file() +
-                         ": fluid.solver: the base pore pressure sensor reads the mixture projection's "
-                         "pressure; use 'projection'");
   // The experiment's runout, when the scene names it: the summary then gives the error.
   std::optional<double> measured_runout;
   if (const std::optional<Config> experiment = scene.optional_child("experiment"))
@@ -154,8 +150,7 @@ int run(const CommandLine& cl, const Config& scene) {
   runner.add_column(
       "discrete", [](const coupling::CoupledState<dim>& st) { return double(coupling::count_sediment(st).discrete); });
   // The pore-pressure sensor under the column and its hydrostatic reference at the far end.
-  using Projection = coupling::stages::MixtureProjection<dim>;
-  if (const Projection* projection = s.has_fluid ? pipeline.template find<Projection>() : nullptr) {
+  if (const coupling::PressureProbe<dim> pressure = coupling::liquid_pressure_probe(col, pipeline)) {
     const auto [grains_lo, grains_hi] = bounds(s.sediment.particles);
     const Vec<dim> fluid_hi = bounds(s.fluid.particles).second;
     // The second cell row above the column's base (the first touches the floor's prescribed
@@ -170,11 +165,9 @@ int run(const CommandLine& cl, const Config& scene) {
     Vec<dim> reference = x;
     reference[0] = fluid_hi[0] - dx;
     runner.add_column("base_pore_pressure", [=](const coupling::CoupledState<dim>& st) {
-      const SparseGrid<dim>& g = st.fluid.grid;
-      const auto& p = projection->projection();
       double sum = 0.0;
-      for (const Vec<dim>& at : sensor) sum += p.pressure_at(g, at);
-      return sum / static_cast<double>(sensor.size()) - p.pressure_at(g, reference);
+      for (const Vec<dim>& at : sensor) sum += pressure(st, at);
+      return sum / static_cast<double>(sensor.size()) - pressure(st, reference);
     });
   }
   runner.run(s, pipeline);

@@ -7,4 +7,5 @@ list(APPEND COUPLING_SOURCES
   src/core/coupled_runner.cpp
   src/core/bed_profile.cpp
   src/core/pipeline_scour.cpp
+  src/core/pressure_probe.cpp
 )

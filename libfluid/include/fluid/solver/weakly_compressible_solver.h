@@ -39,6 +39,7 @@ public:
   }
   void start_at_rest(mpm::Particles<dim>& particles, const mpm::SceneSettings<dim>& settings) const override;
   double wave_speed() const override { return wave_speed_; }
+  const TaitEquationOfState& equation_of_state() const { return eos_; }
   Stages grid_update() const override;
   Stages projection() const override { return {}; }
   Stages particle_update() const override;
