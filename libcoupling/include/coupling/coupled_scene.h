@@ -59,7 +59,8 @@ struct CoupledScene {
   //! The sediment's solid solver, built from SedimentPhase::solver (null without a sediment).
   std::shared_ptr<const mpm::solid::SolidSolver<dim>> solid_solver;
   //! The liquid's fluid solver (fluid/solver/fluid_solver.h; null without a fluid). With a
-  //! sediment the mixture projection stands in for its projection, so it must be incompressible.
+  //! sediment the mixture projection stands in for an incompressible solver's projection; a
+  //! weakly compressible liquid carries the pore pressure itself (stages/pore_pressure.h).
   std::shared_ptr<const fluid::FluidSolver<dim>> fluid_solver;
   CoupledState<dim> state;
   //! Inflow and outflow (flow_boundary_config.h), already applied to `colliders`: the inflow
@@ -72,7 +73,7 @@ struct CoupledScene {
 //! A scene without particles; a grid is allocated for each phase present. InputError when
 //! both phases are present without a drag law, or neither is, or the sediment's solver does
 //! not match its materials (explicit needs them, grains has none), or it switches without a
-//! continuum material, or a sediment meets a fluid solver that is not incompressible.
+//! continuum material.
 template <int dim>
 CoupledScene<dim> make_coupled_scene(mpm::SceneSettings<dim> settings, mpm::geometry::ColliderSet<dim> colliders,
                                      std::optional<fluid::FluidMaterial> fluid,
