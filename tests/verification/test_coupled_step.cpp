@@ -201,21 +201,20 @@ TEST_CASE("a weakly compressible liquid in the pores: the projection's settling 
   const double v_projection = steady_settling_speed(projected), v = steady_settling_speed(compressible);
   MESSAGE("settling velocity " << v << " m/s (weakly compressible), " << v_projection << " m/s (projection), drag law "
                                << compressible.column.hindered_velocity() << " m/s");
-  // Without the pore ratio (r = 1: the liquid compressed by its own divergence, not the
-  // mixture's) it settles 8.4 % fast; without the pressure share (no buoyancy) 74 % fast.
+  // With the liquid compressed by its own divergence instead of the mixture flux's it settles
+  // 8.4 % fast; without the pressure share (no buoyancy) 74 % fast.
   CHECK(std::abs(v / v_projection - 1.0) < 0.05);
 
-  // The clear water above the suspension keeps rho g (h - y) (0.03 rho g h; 0.36 when r followed
-  // n_w at the particle instead of the mixture flux's divergence).
+  // The clear water above the suspension keeps rho g (h - y) (0.03 rho g h; 0.36 when the
+  // liquid's share of the volume was read from n_w at the particle instead).
   const CoupledState<2>& s = compressible.scene.state;
   const fluid::TaitEquationOfState eos{1000.0, 5.0, 7.0};
-  const auto& J = s.fluid.particles.channel<double>(fluid::kVolumeRatio);
-  const auto& r = s.fluid.particles.channel<double>(fluid::kPoreRatio);
+  const std::vector<double>& own = s.fluid.particles.channel<double>(fluid::kLiquidVolumeRatio);
   const double h = 0.03, rho_g = 1000.0 * 9.81;
   double worst = 0.0;
-  for (std::size_t p = 0; p < J.size(); ++p)
+  for (std::size_t p = 0; p < own.size(); ++p)
     if (s.fluid.particles.x[p][1] > 0.02 && s.fluid.particles.x[p][1] < h - 0.004)  // below the lid's row
-      worst = std::max(worst, std::abs(eos.pressure(J[p] * r[p]) - rho_g * (h - s.fluid.particles.x[p][1])));
+      worst = std::max(worst, std::abs(eos.pressure(own[p]) - rho_g * (h - s.fluid.particles.x[p][1])));
   MESSAGE("largest pressure error of the clear water at 0.4 s: " << worst / (rho_g * h) << " rho g h");
   CHECK(worst < 0.04 * rho_g * h);
 }
@@ -489,14 +488,14 @@ fluid: {density: 1000, viscosity: 1.0e-3, solver: weakly_compressible}
 sediment: {density: 2650}
 )");
   // Beside a sediment the weakly compressible liquid carries the pore pressure itself
-  // (coupling/stages/pore_pressure.h): no mixture projection, the pore ratio checkpointed.
+  // (coupling/stages/pore_pressure.h): no mixture projection, the liquid volume ratio checkpointed.
   const CoupledScene<2> wet_sand = make_coupled_scene<2>(
       mpm::parse_scene_settings<2>(sandy), {}, fluid::parse_fluid_material(sandy.child("fluid")), {},
       parse_sediment_phase<2>(sandy.child("sediment")), drag::make_drag_law("stokes", {1e-4, 1e-3, 1000.0}),
       fluid::parse_fluid_solver(sandy.child("fluid")));
-  CHECK(wet_sand.state.fluid.particles.has_channel(fluid::kPoreRatio));
+  CHECK(wet_sand.state.fluid.particles.has_channel(fluid::kLiquidVolumeRatio));
   const auto names = make_coupled_pipeline(wet_sand).stage_names();
-  for (const char* stage : {"pore_pressure_share", "pore_ratio"})
+  for (const char* stage : {"pore_pressure_share", "liquid_volume"})
     CHECK(std::find(names.begin(), names.end(), stage) != names.end());
   CHECK(std::find(names.begin(), names.end(), "mixture_pressure") == names.end());
 
@@ -526,8 +525,8 @@ sediment: {density: 2650}
   // Measured 3.4e-11 of sum m |v| after 33 steps (the same blob under the mixture projection
   // drifts by 3.9e-5, its surface extension not being momentum-neutral).
   CHECK((momentum() - before - mass * 0.05 * blob.settings.gravity).norm() <= 1e-9 * scale);
-  double change = 0.0;  // the liquid was squeezed: the pore ratio moved
-  for (const double r : s.fluid.particles.channel<double>(fluid::kPoreRatio))
+  double change = 0.0;  // the liquid was squeezed: its own volume changed
+  for (const double r : s.fluid.particles.channel<double>(fluid::kLiquidVolumeRatio))
     change = std::max(change, std::abs(r - 1.0));
   CHECK(change > 1e-4);
 }

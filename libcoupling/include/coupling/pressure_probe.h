@@ -10,7 +10,7 @@
 namespace coupling {
 
 //! p(state, x) [Pa]: with the mixture projection its cell pressure at x
-//! (PressureProjection::pressure_at); for a weakly compressible liquid the mean pressure p(J r)
+//! (PressureProjection::pressure_at); for a weakly compressible liquid the mean pressure
 //! of its particles within half a cell of x (NaN where none is). An empty function otherwise
 //! (no liquid, or a clear liquid without sediment). The pipeline must outlive the probe.
 template <int dim>

@@ -47,7 +47,7 @@ CoupledScene<dim> make_coupled_scene(mpm::SceneSettings<dim> settings, mpm::geom
     liquid = fluid::make_fluid_solver<dim>(fluid_solver, *fluid, pressure, colliders, settings);
     liquid->add_channels(state.fluid.particles);
     if (sediment && !liquid->incompressible())  // its pressure from its own volume (pore_pressure.h)
-      state.fluid.particles.template add_channel<double>(fluid::kPoreRatio, 1.0, {.checkpoint = true});
+      state.fluid.particles.template add_channel<double>(fluid::kLiquidVolumeRatio, 1.0, {.checkpoint = true});
   }
   std::shared_ptr<const mpm::solid::SolidSolver<dim>> solid;
   if (sediment) {
@@ -157,7 +157,7 @@ mpm::Pipeline<CoupledState<dim>> make_coupled_pipeline(const CoupledScene<dim>& 
   } else if (wet) {  // a clear fluid's own projection (none for an equation of state)
     for (auto& stage : scene.fluid_solver->projection()) on(Phase::fluid, std::move(stage));
   }
-  if (compressible) p.add(std::make_unique<stages::PoreRatioUpdate<dim>>());
+  if (compressible) p.add(std::make_unique<stages::LiquidVolumeUpdate<dim>>());
   if (wet) {
     for (auto& stage : scene.fluid_solver->particle_update()) on(Phase::fluid, std::move(stage));
     on(Phase::fluid, std::make_unique<ms::GridToParticles<dim>>());

@@ -19,14 +19,13 @@ PressureProbe<dim> liquid_pressure_probe(const CoupledScene<dim>& scene, mpm::Pi
   if (const auto* liquid = dynamic_cast<const fluid::WeaklyCompressibleSolver<dim>*>(scene.fluid_solver.get()))
     return [eos = liquid->equation_of_state()](const CoupledState<dim>& s, const mpm::Vec<dim>& x) {
       const mpm::Particles<dim>& P = s.fluid.particles;
-      const std::vector<double>& J = P.template channel<double>(fluid::kVolumeRatio);
-      const std::vector<double>* r = P.template find_channel<double>(fluid::kPoreRatio);
+      const std::vector<double>& own = fluid::own_volume_ratio(P);
       const double half = 0.5 * s.fluid.grid.dx();
       double sum = 0.0;
       int count = 0;
       for (std::size_t p = 0; p < P.size(); ++p)
         if (((P.x[p] - x).array().abs() <= half).all()) {
-          sum += eos.pressure(r ? J[p] * (*r)[p] : J[p]);
+          sum += eos.pressure(own[p]);
           ++count;
         }
       return count > 0 ? sum / count : std::numeric_limits<double>::quiet_NaN();

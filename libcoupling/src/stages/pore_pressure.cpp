@@ -5,15 +5,13 @@
 #include <mpm/core/finite_guard.h>
 #include <mpm/core/transfer.h>
 
-#include <Eigen/LU>
-
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 namespace coupling::stages {
 
 template <int dim>
-void PoreRatioUpdate<dim>::run(CoupledState<dim>& s) {
+void LiquidVolumeUpdate<dim>::run(CoupledState<dim>& s) {
   mpm::MpmState<dim>& liquid = s.fluid;
   const mpm::SparseGrid<dim>& gw = liquid.grid;
   const mpm::SparseGrid<dim>& gs = s.sediment.grid;
@@ -28,15 +26,13 @@ void PoreRatioUpdate<dim>::run(CoupledState<dim>& s) {
   const mpm::Particles<dim>& P = liquid.particles;
   mpm::grid_to_scalar(node_fraction_, P, liquid.buckets, liquid.kernel, gw, particle_fraction_);
   mpm::node_field_gradient(P, liquid.buckets, liquid.kernel, gw, flux_, grad_flux_);
-  mpm::velocity_gradient(P, liquid.buckets, liquid.kernel, gw, grad_v_);
-  std::vector<double>& ratio = liquid.particles.template channel<double>(fluid::kPoreRatio);
+  std::vector<double>& own = liquid.particles.template channel<double>(fluid::kLiquidVolumeRatio);
   const double dt = s.dt;
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, ratio.size(), 4096), [&](const auto& r) {
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, own.size(), 4096), [&](const auto& r) {
     for (std::size_t p = r.begin(); p != r.end(); ++p)
-      ratio[p] *= (1.0 + dt * grad_flux_[p].trace() / particle_fraction_[p]) /
-                  (mpm::Mat<dim>::Identity() + dt * grad_v_[p]).determinant();
+      own[p] *= 1.0 + dt * grad_flux_[p].trace() / particle_fraction_[p];
   });
-  mpm::check_finite(ratio, name(), "fluid particle", "pore ratio");
+  mpm::check_finite(own, name(), "fluid particle", "liquid volume ratio");
 }
 
 template <int dim>
@@ -52,8 +48,8 @@ void PorePressureShare<dim>::run(CoupledState<dim>& s) {
   });
 }
 
-template class PoreRatioUpdate<2>;
-template class PoreRatioUpdate<3>;
+template class LiquidVolumeUpdate<2>;
+template class LiquidVolumeUpdate<3>;
 template class PorePressureShare<2>;
 template class PorePressureShare<3>;
 

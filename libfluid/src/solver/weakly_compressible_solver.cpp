@@ -50,9 +50,11 @@ void WeaklyCompressibleSolver<dim>::start_at_rest(mpm::Particles<dim>& particles
   }
   const double bulk = eos_.density * eos_.speed_of_sound * eos_.speed_of_sound / eos_.exponent;  // B
   auto& J = particles.template channel<double>(kVolumeRatio);
+  std::vector<double>* own = particles.template find_channel<double>(kLiquidVolumeRatio);  // in pores
   for (std::size_t p = 0; p < particles.size(); ++p) {
     const double depth = surface.at(column(particles.x[p])) - up * particles.x[p][axis];
     J[p] = std::pow(1.0 + eos_.density * std::abs(g[axis]) * depth / bulk, -1.0 / eos_.exponent);
+    if (own) (*own)[p] = J[p];
   }
 }
 

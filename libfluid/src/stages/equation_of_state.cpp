@@ -3,6 +3,7 @@
 //   f_i = - sum_p V_p^0 tau_p grad w_ip,  tau_p = -p_p J_p I           (Kirchhoff stress of a pressure)
 //   J_p <- det(I + dt grad v_p) J_p                                     (after the final grid velocity)
 //   wall images: f_ia += V_p J_p p_w d_a w_i(x'), p_w = max(0, p_p + rho_p g . (x_w - x_p))  (Adami et al. 2012 eq. 27)
+//   p_p of the particle's own volume ratio (own_volume_ratio: J, or the pore liquid's V_own / V^0)
 #include <fluid/stages/equation_of_state.h>
 
 #include <mpm/core/error.h>
@@ -30,19 +31,6 @@ namespace stages {
 
 namespace {
 
-//! The liquid's own volume ratio J_p r_p (kPoreRatio; r = 1 for a clear liquid).
-template <int dim>
-class OwnVolumeRatio {
-public:
-  explicit OwnVolumeRatio(const mpm::Particles<dim>& P)
-      : J_(P.template channel<double>(kVolumeRatio)), pore_(P.template find_channel<double>(kPoreRatio)) {}
-  double operator()(std::size_t p) const { return pore_ ? J_[p] * (*pore_)[p] : J_[p]; }
-
-private:
-  const std::vector<double>& J_;
-  const std::vector<double>* pore_;
-};
-
 //! A closed wall's plane (the inner face of its layer) along one axis.
 struct WallPlane {
   double position;  //!< [m]
@@ -65,11 +53,11 @@ template <int dim>
 void EquationOfStateForces<dim>::run(mpm::MpmState<dim>& s) {
   const mpm::Particles<dim>& P = s.particles;
   const std::vector<double>& J = P.template channel<double>(kVolumeRatio);
-  const OwnVolumeRatio<dim> own(P);
+  const std::vector<double>& own = own_volume_ratio(P);
   weighted_stress_.resize(P.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.size(), 4096), [&](const auto& r) {
     for (std::size_t p = r.begin(); p != r.end(); ++p)
-      weighted_stress_[p] = (-P.volume0[p] * eos_.pressure(own(p)) * J[p]) * mpm::Mat<dim>::Identity();
+      weighted_stress_[p] = (-P.volume0[p] * eos_.pressure(own[p]) * J[p]) * mpm::Mat<dim>::Identity();
   });
   mpm::stress_to_grid_forces(weighted_stress_, P, s.buckets, s.kernel, s.grid);
 }
@@ -78,7 +66,7 @@ template <int dim>
 void WallPressureForces<dim>::run(mpm::MpmState<dim>& s) {
   const mpm::Particles<dim>& P = s.particles;
   const std::vector<double>& J = P.template channel<double>(kVolumeRatio);
-  const OwnVolumeRatio<dim> own(P);
+  const std::vector<double>& own = own_volume_ratio(P);
   mpm::SparseGrid<dim>& grid = s.grid;
   const double dx = grid.dx();
   const double reach = 0.5 * mpm::kernel_support(s.kernel) * dx;  // a stencil's nodes lie within this
@@ -124,7 +112,7 @@ void WallPressureForces<dim>::run(mpm::MpmState<dim>& s) {
               mpm::Vec<dim> wall_point = x;
               wall_point[a] = plane.position;
               const double wall_pressure =
-                  std::max(0.0, eos_.pressure(own(p)) + eos_.density / own(p) * s.gravity.dot(wall_point - x));
+                  std::max(0.0, eos_.pressure(own[p]) + eos_.density / own[p] * s.gravity.dot(wall_point - x));
               if (wall_pressure == 0.0) continue;
               for (int b = 0; b < dim; ++b)
                 if (b != a) kernel((image[b] - grid.origin()[b]) / dx, base[b], w[b], dw[b]);
@@ -160,13 +148,13 @@ void VolumeRatioUpdate<dim>::run(mpm::MpmState<dim>& s) {
   });
   mpm::check_finite(J, name(), "particle", "volume ratio J");
   deviation_ = 0.0;
-  const OwnVolumeRatio<dim> own(P);
+  const std::vector<double>& own = own_volume_ratio(P);
   for (std::size_t p = 0; p < J.size(); ++p) {
     if (!(J[p] > 0.0))
       throw mpm::NumericalError("stage '" + name() + "': particle " + std::to_string(p) +
                                 " was compressed to J = " + std::to_string(J[p]) + " at t = " + std::to_string(s.time) +
                                 " s: the step exceeds the acoustic limit (lower time.wave_cfl)");
-    if (own(p) < 1.0) deviation_ = std::max(deviation_, 1.0 / own(p) - 1.0);
+    if (own[p] < 1.0) deviation_ = std::max(deviation_, 1.0 / own[p] - 1.0);
   }
 }
 

@@ -24,18 +24,25 @@ struct TaitEquationOfState {
 
 //! The name of the volume ratio channel (double, 1 at rest; written to frames, checkpointed).
 inline constexpr const char* kVolumeRatio = "volume_ratio";
-//! The name of the pore ratio channel of a liquid in a sediment's pores (double, written every
-//! step by the coupling, coupling/stages/pore_pressure.h): r = n_w(x_p) / n_w at the particle's
-//! first step, so that the liquid's own volume ratio, the one its pressure follows, is J r
-//! while J (volume_ratio) follows the mixture volume the particle stands for. A clear liquid
-//! has no such channel (r = 1).
-inline constexpr const char* kPoreRatio = "pore_ratio";
+//! The name of the liquid volume ratio channel of a liquid in a sediment's pores (double,
+//! checkpointed; advanced by the coupling, coupling/stages/pore_pressure.h): V_own / V^0, the
+//! ratio its pressure follows, while volume_ratio (J) follows the mixture volume the particle
+//! stands for. A clear liquid has no such channel: its own volume ratio is J.
+inline constexpr const char* kLiquidVolumeRatio = "liquid_volume_ratio";
+
+//! The volume ratio each particle's pressure follows: liquid_volume_ratio where the particles
+//! carry it, else volume_ratio.
+template <int dim>
+const std::vector<double>& own_volume_ratio(const mpm::Particles<dim>& P) {
+  if (const std::vector<double>* own = P.template find_channel<double>(kLiquidVolumeRatio)) return *own;
+  return P.template channel<double>(kVolumeRatio);
+}
 
 namespace stages {
 
 //! Grid forces of the pressure: f_i = - sum_p V_p^0 tau_p grad w_ip with the Kirchhoff stress
-//! tau_p = -p(J_p r_p) J_p I (mpm::stress_to_grid_forces; r_p the pore ratio, 1 without the
-//! channel). Precondition: particles sorted.
+//! tau_p = -p(J_own,p) J_p I (mpm::stress_to_grid_forces; J_own = own_volume_ratio, J itself
+//! for a clear liquid). Precondition: particles sorted.
 template <int dim>
 class EquationOfStateForces final : public mpm::Stage<mpm::MpmState<dim>> {
 public:
