@@ -41,13 +41,16 @@ void scatter_irregular(const Particles<dim>& P, const AdaptiveGrid<dim>& grid, F
   });
 }
 
-// fn(i, p, n) for every particle p = list[i] (transfer level n), in parallel (G2P-like gathers).
+// fn(i, p, n) for every particle p = list[i] (transfer level n), in parallel (G2P-like gathers);
+// with `then`, each range of the list goes through it right after its gathers.
 template <int dim, class Fn>
-void gather_each(const std::vector<std::uint32_t>& list, const AdaptiveGrid<dim>& grid, Fn&& fn) {
+void gather_each(const std::vector<std::uint32_t>& list, const AdaptiveGrid<dim>& grid, Fn&& fn,
+                 const ParticleGroupUpdate* then = nullptr) {
   detail::for_each_range(list.size(), std::size_t{256}, list.size() < detail::serial_below_particles,
                          [&](const tbb::blocked_range<std::size_t>& range) {
                            for (std::size_t i = range.begin(); i != range.end(); ++i)
                              fn(i, list[i], grid.transfer_level(list[i]));
+                           if (then) (*then)(list.data() + range.begin(), list.data() + range.end());
                          });
 }
 
@@ -154,12 +157,22 @@ GhostTerms<dim> ghost_terms(const AdaptiveGrid<dim>& grid, int n, const Vec<dim>
     for (int k = 0; k < 3; ++k) D += s.w[a][k] * (s.base[a] + k - s.xi[a]) * (s.base[a] + k - s.xi[a]);
     t.D_uniform[a] = D * dx * dx;
   }
-  t.dB.setZero();
-  Mat<dim> D = t.D_uniform.asDiagonal();
+  // The ghosts first, then their sums: the table lookups and the loads of Q_k and R_k overlap
+  // instead of waiting on a chain of accumulations.
+  std::array<int, AdaptiveGrid<dim>::stencil_offsets.size()> js;
+  std::array<double, AdaptiveGrid<dim>::stencil_offsets.size()> ws;
+  int count = 0;
   for_each_embedded(grid, n, s, mask, [&](int j, double w) {
-    t.dB += w * ghosts.velocity_moment[j];
-    D += w * ghosts.spread[j];
+    js[count] = j;
+    ws[count++] = w;
   });
+  Mat<dim> dB = Mat<dim>::Zero();
+  Mat<dim> D = t.D_uniform.asDiagonal();
+  for (int e = 0; e < count; ++e) {
+    dB.noalias() += ws[e] * ghosts.velocity_moment[js[e]];
+    D.noalias() += ws[e] * ghosts.spread[js[e]];
+  }
+  t.dB = dB;
   t.D_inverse = D.inverse();
   return t;
 }
@@ -173,16 +186,18 @@ std::vector<std::vector<Vec<dim>>*> per_level(AdaptiveGrid<dim>& grid, std::vect
 }  // namespace
 
 template <int dim>
-void particles_to_grid(const Particles<dim>& P, const TransferScheme& scheme, AdaptiveGrid<dim>& grid) {
+void particles_to_grid(const Particles<dim>& P, const TransferScheme& scheme, AdaptiveGrid<dim>& grid,
+                       const std::vector<Mat<dim>>* S) {
   MPM_ASSERT(grid.particle_count() == P.size());
   const bool apic = scheme.type == TransferScheme::Type::apic;
   std::vector<std::vector<Mat<dim>>> affine(grid.levels());
   for (int n = 0; n < grid.levels(); ++n) {
-    mpm::particles_to_grid(P, grid.regular(n), grid.regular_kernel(), scheme, grid.level(n));  // zeroes first
+    mpm::particles_to_grid(P, grid.regular(n), grid.regular_kernel(), scheme, grid.level(n), S);  // zeroes first
     affine[n].assign(grid.ghosts(n).node.size(), Mat<dim>::Zero());
   }
-  scatter_irregular(P, grid, [&](std::size_t p, int n, Index k, double w, const Vec<dim>&, const Vec<dim>& xk) {
+  scatter_irregular(P, grid, [&](std::size_t p, int n, Index k, double w, const Vec<dim>& grad, const Vec<dim>& xk) {
     SparseGrid<dim>& g = grid.level(n);
+    if (S) g.force[k] -= (*S)[p] * grad;
     const double wm = w * P.mass[p];
     g.mass[k] += wm;
     if (apic) {
@@ -205,6 +220,7 @@ void particles_to_grid(const Particles<dim>& P, const TransferScheme& scheme, Ad
     });
   }
   grid.push_momentum(affine);
+  if (S) grid.push(per_level(grid, &SparseGrid<dim>::force));
 }
 
 template <int dim>
@@ -230,7 +246,7 @@ void pull_velocities(AdaptiveGrid<dim>& grid, const TransferScheme& scheme) {
 
 template <int dim>
 void grid_to_particles(Particles<dim>& P, const TransferScheme& scheme, const AdaptiveGrid<dim>& grid, double dt,
-                       std::vector<Mat<dim>>* F) {
+                       std::vector<Mat<dim>>* F, const ParticleGroupUpdate* then) {
   MPM_ASSERT(grid.particle_count() == P.size());
   const bool apic = scheme.type == TransferScheme::Type::apic;
   // The uniform loops' C_p has neither the ghosts' terms nor their D_p: the particles near
@@ -240,7 +256,7 @@ void grid_to_particles(Particles<dim>& P, const TransferScheme& scheme, const Ad
   for (int n = 0; apic && n < grid.levels(); ++n)
     for (const std::uint32_t p : grid.near_embedded(n).particle) x_before[n].push_back(P.x[p]);
   for (int n = 0; n < grid.levels(); ++n)
-    mpm::grid_to_particles(P, grid.regular(n), grid.regular_kernel(), scheme, grid.level(n), dt, F);
+    mpm::grid_to_particles(P, grid.regular(n), grid.regular_kernel(), scheme, grid.level(n), dt, F, then);
   for (int n = 0; apic && n < grid.levels(); ++n)
     gather_each(grid.near_embedded(n).particle, grid, [&](std::size_t i, std::size_t p, int) {
       const GhostTerms<dim> t = ghost_terms(grid, n, x_before[n][i], grid.near_embedded_masks(n)[i]);
@@ -272,7 +288,7 @@ void grid_to_particles(Particles<dim>& P, const TransferScheme& scheme, const Ad
       P.C[p].setZero();
     }
     P.x[p] += dt * v_pic;
-  });
+  }, then);
 }
 
 template <int dim>
@@ -296,12 +312,13 @@ std::vector<RealWeight<dim>> real_weights(const AdaptiveGrid<dim>& grid, int n, 
 }
 
 #define MPM_INSTANTIATE(dim)                                                                                    \
-  template void particles_to_grid(const Particles<dim>&, const TransferScheme&, AdaptiveGrid<dim>&);            \
+  template void particles_to_grid(const Particles<dim>&, const TransferScheme&, AdaptiveGrid<dim>&,              \
+                                  const std::vector<Mat<dim>>*);                                                \
   template void momentum_to_velocity(AdaptiveGrid<dim>&, const TransferScheme&);                                \
   template void stress_to_grid_forces(const std::vector<Mat<dim>>&, const Particles<dim>&, AdaptiveGrid<dim>&); \
   template void pull_velocities(AdaptiveGrid<dim>&, const TransferScheme&);                                     \
   template void grid_to_particles(Particles<dim>&, const TransferScheme&, const AdaptiveGrid<dim>&, double,     \
-                                  std::vector<Mat<dim>>*);                                                      \
+                                  std::vector<Mat<dim>>*, const ParticleGroupUpdate*);                          \
   template std::vector<RealWeight<dim>> real_weights(const AdaptiveGrid<dim>&, int, double, const Vec<dim>&);
 MPM_INSTANTIATE(2)
 MPM_INSTANTIATE(3)

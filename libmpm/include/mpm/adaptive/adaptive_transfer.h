@@ -18,9 +18,11 @@
 namespace mpm::adaptive {
 
 //! Mass and momentum (in `velocity`, as the uniform P2G) of the real nodes; ghosts pushed and
-//! cleared.
+//! cleared. With `weighted_stress` the same scatter also forms the forces of
+//! stress_to_grid_forces (one pass over particles and grid, as the uniform P2G).
 template <int dim>
-void particles_to_grid(const Particles<dim>& particles, const TransferScheme& scheme, AdaptiveGrid<dim>& grid);
+void particles_to_grid(const Particles<dim>& particles, const TransferScheme& scheme, AdaptiveGrid<dim>& grid,
+                       const std::vector<Mat<dim>>* weighted_stress = nullptr);
 
 //! velocity = momentum / mass on every level (velocity_old kept for FLIP).
 template <int dim>
@@ -37,10 +39,12 @@ void pull_velocities(AdaptiveGrid<dim>& grid, const TransferScheme& scheme);
 
 //! Updates v_p and C_p (APIC) or v_p (FLIP, C_p = 0) and advects x_p by dt with v^PIC; with
 //! `F`, also F_p = (I + dt grad v_p) F_p, grad v_p = sum_i v_i (grad w_ip)^T at x_p before the
-//! advection (the uniform loops gather it with v and C, mpm::grid_to_particles).
+//! advection (the uniform loops gather it with v and C, mpm::grid_to_particles). With `then`,
+//! each group of particles goes through it once its v, x and F are final (C of the particles
+//! near embedded ghosts is completed afterwards: `then` must not read C).
 template <int dim>
 void grid_to_particles(Particles<dim>& particles, const TransferScheme& scheme, const AdaptiveGrid<dim>& grid,
-                       double dt, std::vector<Mat<dim>>* F = nullptr);
+                       double dt, std::vector<Mat<dim>>* F = nullptr, const ParticleGroupUpdate* then = nullptr);
 
 //! The weights of one particle on the real nodes: w_ip and grad w_ip [1/m] by (level, storage
 //! index), summed over its ghosts. For tests and diagnostics; the transfers never build it.

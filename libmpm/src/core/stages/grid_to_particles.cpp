@@ -38,12 +38,6 @@ template <int dim>
 void GridToParticles<dim>::run(MpmState<dim>& s) {
   Particles<dim>& P = s.particles;
   std::vector<Mat<dim>>* F = deformation_.empty() ? nullptr : &P.template channel<Mat<dim>>(deformation_);
-  if (s.adaptive) {
-    adaptive::grid_to_particles(P, s.transfer, *s.adaptive, s.dt, F);
-    check_results(P, F);
-    if (then_) then_->run(s);
-    return;
-  }
   // Each bucket's results are tested right after its gather, while in cache, and before
   // `then` changes F (which checks its own results); the search that names a particle runs
   // only when a bucket found a bad value.
@@ -54,7 +48,10 @@ void GridToParticles<dim>::run(MpmState<dim>& s) {
       finite.store(false, std::memory_order_relaxed);
     if (then) then(first, last);
   };
-  grid_to_particles(P, s.buckets, s.kernel, s.transfer, s.grid, s.dt, F, &after);
+  if (s.adaptive)
+    adaptive::grid_to_particles(P, s.transfer, *s.adaptive, s.dt, F, &after);
+  else
+    grid_to_particles(P, s.buckets, s.kernel, s.transfer, s.grid, s.dt, F, &after);
   if (!finite.load()) check_results(P, F);
   if (then_) then_->finish(s);
 }

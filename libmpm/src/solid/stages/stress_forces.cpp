@@ -64,8 +64,10 @@ void StressForces<dim>::run(MpmState<dim>& s) {
   if (!finite.load()) check_finite(weighted_stress_, name(), "particle", "Kirchhoff stress");
 
   if (s.adaptive) {
-    if (fused()) adaptive::particles_to_grid(P, s.transfer, *s.adaptive);
-    adaptive::stress_to_grid_forces(weighted_stress_, P, *s.adaptive);
+    if (fused())
+      adaptive::particles_to_grid(P, s.transfer, *s.adaptive, &weighted_stress_);
+    else
+      adaptive::stress_to_grid_forces(weighted_stress_, P, *s.adaptive);
   } else if (fused()) {
     particles_to_grid(P, s.buckets, s.kernel, s.transfer, s.grid, &weighted_stress_);
   } else {

@@ -35,8 +35,8 @@ Mat<dim> weighted_kirchhoff(const Elastic& model, const Plasticity& plasticity, 
 //! grains) says so with `stress_free_particles`; those particles then add no force. Without it
 //! every particle must hold a listed material and the loop is that of a plain solid.
 //! With Scatter::with_momentum the stage is also the step's p2g: node mass, momentum and
-//! forces in one pass over particles and grid (stage "p2g_stress"; on an adaptive grid the two
-//! transfers still run one after the other).
+//! forces in one pass over particles and grid (stage "p2g_stress", on a uniform or adaptive
+//! grid).
 template <int dim>
 class StressForces final : public Stage<MpmState<dim>> {
 public:
