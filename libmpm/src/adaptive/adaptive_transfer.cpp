@@ -77,104 +77,118 @@ void apic_moments(const AdaptiveGrid<dim>& grid, int n, double h, const Vec<dim>
   });
 }
 
-// The regular stencil of a particle at x on level n: the uniform loops' first node
-// (uniform_base) and regular_kernel()'s weights per axis, from the same expressions.
-template <int dim>
-struct RegularStencil {
-  IVec<dim> base;
-  double xi[dim];    // position [cells of level n]
-  double w[dim][3];  // w[axis][node]
-};
-
-template <int dim>
-RegularStencil<dim> regular_stencil(const AdaptiveGrid<dim>& grid, int n, const Vec<dim>& x) {
-  const SparseGrid<dim>& g = grid.level(n);
-  const double inv_dx = 1.0 / g.dx();
-  RegularStencil<dim> s;
+// The particles near embedded ghosts (AdaptiveGrid::near_embedded), bucket by bucket: fn(b,
+// kernel) for every bucket b of level n, the buckets of a colour in parallel (their patches
+// share no node), with regular_kernel() as its 3-node type.
+template <int dim, class Fn>
+void for_each_near_bucket(const AdaptiveGrid<dim>& grid, int n, Fn&& fn) {
+  const ParticleBuckets<dim>& near = grid.near_embedded(n);
+  const bool serial = near.particle.size() < detail::serial_below_particles;
   std::visit(
       [&](const auto& kernel) {
         if constexpr (std::decay_t<decltype(kernel)>::support == 3) {
-          double dw[3];
-          for (int a = 0; a < dim; ++a) {
-            s.xi[a] = (x[a] - g.origin()[a]) * inv_dx;
-            kernel(s.xi[a], s.base[a], s.w[a], dw);
-          }
+          for (const std::vector<int>& same_color : near.by_color)
+            detail::for_each_range(same_color.size(), std::size_t{1}, serial, [&](const auto& range) {
+              for (std::size_t r = range.begin(); r != range.end(); ++r) fn(same_color[r], kernel);
+            });
         } else {
           MPM_VERIFY(false, Error, "adaptive grid: the regular kernel has a 3-node stencil");
         }
       },
       grid.regular_kernel());
-  return s;
 }
 
-// fn(j, w) for the embedded ghosts j of a regular stencil: its nodes flagged in `mask`
-// (AdaptiveGrid::near_embedded_masks), w their weight.
+// fn(patch index, w) for the embedded ghosts of a particle's regular stencil `st`: the nodes
+// flagged in `mask` (AdaptiveGrid::near_embedded_masks), w their weight.
 template <int dim, class Fn>
-void for_each_embedded(const AdaptiveGrid<dim>& grid, int n, const RegularStencil<dim>& s, std::uint32_t mask,
-                       Fn&& fn) {
-  const SparseGrid<dim>& g = grid.level(n);
-  const auto& ghosts = grid.ghosts(n);
-  BlockKey last_block = ~BlockKey{0};
-  Index first_node = 0;  // storage index of node 0 of last_block: one table lookup per block
+void for_each_embedded(const detail::Stencil<dim, 3>& st, std::uint32_t mask, Fn&& fn) {
+  constexpr int W = detail::patch_width<dim>;
   for (; mask != 0; mask &= mask - 1) {
     const auto& digit = AdaptiveGrid<dim>::stencil_offsets[std::countr_zero(mask)];
-    IVec<dim> node;
+    int node = st.patch_offset;
     double w = 1.0;
-    for (int a = 0; a < dim; ++a) {
-      node[a] = s.base[a] + digit[a];
-      w *= s.w[a][digit[a]];
+    for (int a = 0, stride = 1; a < dim; ++a, stride *= W) {
+      node += digit[a] * stride;
+      w *= st.w[a][digit[a]];
     }
-    if (const BlockKey block = g.block_id(node); block != last_block) {
-      last_block = block;
-      first_node = static_cast<Index>(g.slot(block)) * SparseGrid<dim>::nodes_per_block;
-    }
-    const int j = ghosts.of_node[static_cast<std::size_t>(first_node + SparseGrid<dim>::local_index(node))];
-    MPM_ASSERT(j >= 0);
-    fn(j, w);
+    fn(node, w);
   }
+}
+
+// APIC's G_k = sum_p w_kp m_p C_p of the embedded ghosts from the particles near them, which
+// the uniform loops gave their mass and momentum: per bucket into its patch, then onto the
+// patch's ghosts.
+template <int dim>
+void scatter_ghost_affine(const Particles<dim>& P, const AdaptiveGrid<dim>& grid, int n,
+                          std::vector<Mat<dim>>& affine) {
+  constexpr int M = dim * dim;
+  const SparseGrid<dim>& g = grid.level(n);
+  const auto& ghosts = grid.ghosts(n);
+  const ParticleBuckets<dim>& near = grid.near_embedded(n);
+  const std::vector<std::uint32_t>& masks = grid.near_embedded_masks(n);
+  for_each_near_bucket(grid, n, [&](int b, const auto& kernel) {
+    alignas(64) std::array<double, detail::patch_nodes<dim> * M> patch;
+    patch.fill(0.0);
+    const detail::PatchFrame<dim> frame(g, near.block[b]);
+    for (std::uint32_t e = near.begin[b]; e < near.begin[b + 1]; ++e) {
+      const std::uint32_t p = near.particle[e];
+      detail::Stencil<dim, 3> st;
+      st.template compute<false>(kernel, frame.cells(P.x[p]), frame.origin);
+      const Mat<dim> mC = P.mass[p] * P.C[p];
+      for_each_embedded(st, masks[e],
+                        [&](int node, double w) { Eigen::Map<Mat<dim>>(patch.data() + node * M) += w * mC; });
+    }
+    detail::for_each_patch_node(g, near.block[b], [&](int node, std::size_t k) {
+      if (const int j = ghosts.of_node[k]; j >= 0) affine[j] += Eigen::Map<const Mat<dim>>(patch.data() + node * M);
+    });
+  });
 }
 
 // What the uniform G2P leaves out for a regular particle whose stencil holds embedded ghosts:
-// the ghosts' terms of B_p and D_p (sum_ghost w_kp Q_k and w_kp R_k), with D_p^u, the uniform
-// loops' own (diagonal: the tensor weights reproduce linear fields). Then, from the uniform
-// C^u = B^u (D^u)^-1, C_p = (C^u D^u + dB) (D^u + dD)^-1. Ghosts that are real nodes of
-// another level add nothing (their Q_k and R_k vanish): only the embedded ones are visited.
+// the ghosts' terms of B_p and D_p, dB = sum_ghost w_kp Q_k and dD = sum_ghost w_kp R_k, with
+// D_p^u, the uniform loops' own (diagonal: the tensor weights reproduce linear fields). From
+// the uniform C^u = B^u (D^u)^-1, C_p = (C^u D^u + dB) (D^u + dD)^-1. Ghosts that are real
+// nodes of another level add nothing (their Q_k and R_k vanish): only the embedded ones are
+// visited. Per bucket, the patch's Q_k and R_k are read once (zero where a node is no ghost);
+// x_before: the particles' positions at P2G, in the order of near_embedded(n).particle.
 template <int dim>
-struct GhostTerms {
-  Mat<dim> dB;
-  Vec<dim> D_uniform;  // diagonal [m^2]
-  Mat<dim> D_inverse;  // (D^u + dD)^-1 [1/m^2]
-};
-
-template <int dim>
-GhostTerms<dim> ghost_terms(const AdaptiveGrid<dim>& grid, int n, const Vec<dim>& xp, std::uint32_t mask) {
+void add_ghost_terms(Particles<dim>& P, const AdaptiveGrid<dim>& grid, int n, const std::vector<Vec<dim>>& x_before) {
+  constexpr int M = dim * dim, Ch = 2 * M;  // Q_k, then R_k
+  const SparseGrid<dim>& g = grid.level(n);
   const auto& ghosts = grid.ghosts(n);
-  const RegularStencil<dim> s = regular_stencil(grid, n, xp);
-  const double dx = grid.level(n).dx();
-  GhostTerms<dim> t;
-  for (int a = 0; a < dim; ++a) {
-    double D = 0;
-    for (int k = 0; k < 3; ++k) D += s.w[a][k] * (s.base[a] + k - s.xi[a]) * (s.base[a] + k - s.xi[a]);
-    t.D_uniform[a] = D * dx * dx;
-  }
-  // The ghosts first, then their sums: the table lookups and the loads of Q_k and R_k overlap
-  // instead of waiting on a chain of accumulations.
-  std::array<int, AdaptiveGrid<dim>::stencil_offsets.size()> js;
-  std::array<double, AdaptiveGrid<dim>::stencil_offsets.size()> ws;
-  int count = 0;
-  for_each_embedded(grid, n, s, mask, [&](int j, double w) {
-    js[count] = j;
-    ws[count++] = w;
+  const ParticleBuckets<dim>& near = grid.near_embedded(n);
+  const std::vector<std::uint32_t>& masks = grid.near_embedded_masks(n);
+  const double dx = g.dx();
+  for_each_near_bucket(grid, n, [&](int b, const auto& kernel) {
+    alignas(64) std::array<double, detail::patch_nodes<dim> * Ch> patch;
+    detail::for_each_patch_node(g, near.block[b], [&](int node, std::size_t k) {
+      double* out = patch.data() + node * Ch;
+      if (const int j = ghosts.of_node[k]; j >= 0) {
+        std::copy_n(ghosts.velocity_moment[j].data(), M, out);
+        std::copy_n(ghosts.spread[j].data(), M, out + M);
+      } else {
+        std::fill_n(out, Ch, 0.0);
+      }
+    });
+    const detail::PatchFrame<dim> frame(g, near.block[b]);
+    for (std::uint32_t e = near.begin[b]; e < near.begin[b + 1]; ++e) {
+      detail::Stencil<dim, 3> st;
+      st.template compute<false>(kernel, frame.cells(x_before[e]), frame.origin);
+      Vec<dim> D_uniform;  // [m^2]
+      for (int a = 0; a < dim; ++a) {
+        double D = 0;
+        for (int k = 0; k < 3; ++k) D += st.w[a][k] * st.rel[a][k] * st.rel[a][k];
+        D_uniform[a] = D * dx * dx;
+      }
+      Mat<dim> dB = Mat<dim>::Zero(), D = D_uniform.asDiagonal();
+      for_each_embedded(st, masks[e], [&](int node, double w) {
+        dB.noalias() += w * Eigen::Map<const Mat<dim>>(patch.data() + node * Ch);
+        D.noalias() += w * Eigen::Map<const Mat<dim>>(patch.data() + node * Ch + M);
+      });
+      const std::uint32_t p = near.particle[e];
+      P.C[p] = (P.C[p] * D_uniform.asDiagonal() + dB) * D.inverse();
+    }
   });
-  Mat<dim> dB = Mat<dim>::Zero();
-  Mat<dim> D = t.D_uniform.asDiagonal();
-  for (int e = 0; e < count; ++e) {
-    dB.noalias() += ws[e] * ghosts.velocity_moment[js[e]];
-    D.noalias() += ws[e] * ghosts.spread[js[e]];
-  }
-  t.dB = dB;
-  t.D_inverse = D.inverse();
-  return t;
 }
 
 template <int dim>
@@ -207,18 +221,7 @@ void particles_to_grid(const Particles<dim>& P, const TransferScheme& scheme, Ad
       g.velocity[k] += wm * P.v[p];
     }
   });
-  // The uniform loops gave the particles near embedded ghosts their mass and momentum; APIC's
-  // G_k of those ghosts is added here.
-  for (int n = 0; apic && n < grid.levels(); ++n) {
-    const ParticleBuckets<dim>& near = grid.near_embedded(n);
-    const std::vector<std::uint32_t>& masks = grid.near_embedded_masks(n);
-    scatter_by_color(near.by_color, near.begin, [&](std::uint32_t e) {
-      const std::uint32_t p = near.particle[e];
-      const Mat<dim> mC = P.mass[p] * P.C[p];
-      for_each_embedded(grid, n, regular_stencil(grid, n, P.x[p]), masks[e],
-                        [&](int j, double w) { affine[n][j] += w * mC; });
-    });
-  }
+  for (int n = 0; apic && n < grid.levels(); ++n) scatter_ghost_affine(P, grid, n, affine[n]);
   grid.push_momentum(affine);
   if (S) grid.push(per_level(grid, &SparseGrid<dim>::force));
 }
@@ -257,38 +260,37 @@ void grid_to_particles(Particles<dim>& P, const TransferScheme& scheme, const Ad
     for (const std::uint32_t p : grid.near_embedded(n).particle) x_before[n].push_back(P.x[p]);
   for (int n = 0; n < grid.levels(); ++n)
     mpm::grid_to_particles(P, grid.regular(n), grid.regular_kernel(), scheme, grid.level(n), dt, F, then);
-  for (int n = 0; apic && n < grid.levels(); ++n)
-    gather_each(grid.near_embedded(n).particle, grid, [&](std::size_t i, std::size_t p, int) {
-      const GhostTerms<dim> t = ghost_terms(grid, n, x_before[n][i], grid.near_embedded_masks(n)[i]);
-      P.C[p] = (P.C[p] * t.D_uniform.asDiagonal() + t.dB) * t.D_inverse;
-    });
-  gather_each(grid.irregular(), grid, [&](std::size_t, std::size_t p, int n) {
-    const SparseGrid<dim>& g = grid.level(n);
-    const Vec<dim> xp = P.x[p];
-    if (F) {
-      Mat<dim> G = Mat<dim>::Zero();
-      grid.for_each_weight(n, grid.half_cells(p), xp, [&](Index k, double, const Vec<dim>& grad, const Vec<dim>&) {
-        G.noalias() += g.velocity[k] * grad.transpose();
-      });
-      (*F)[p] = (Mat<dim>::Identity() + dt * G) * (*F)[p];
-    }
-    Vec<dim> v_pic = Vec<dim>::Zero();
-    if (apic) {
-      Mat<dim> B, D;
-      apic_moments(grid, n, grid.half_cells(p), xp, v_pic, B, D);
-      P.v[p] = v_pic;
-      P.C[p] = B * D.inverse();
-    } else {
-      Vec<dim> dv = Vec<dim>::Zero();
-      grid.for_each_weight(n, grid.half_cells(p), xp, [&](Index k, double w, const Vec<dim>&, const Vec<dim>&) {
-        v_pic += w * g.velocity[k];
-        dv += w * (g.velocity[k] - g.velocity_old[k]);
-      });
-      P.v[p] = scheme.flip_ratio * (P.v[p] + dv) + (1.0 - scheme.flip_ratio) * v_pic;
-      P.C[p].setZero();
-    }
-    P.x[p] += dt * v_pic;
-  }, then);
+  for (int n = 0; apic && n < grid.levels(); ++n) add_ghost_terms(P, grid, n, x_before[n]);
+  gather_each(
+      grid.irregular(), grid,
+      [&](std::size_t, std::size_t p, int n) {
+        const SparseGrid<dim>& g = grid.level(n);
+        const Vec<dim> xp = P.x[p];
+        if (F) {
+          Mat<dim> G = Mat<dim>::Zero();
+          grid.for_each_weight(n, grid.half_cells(p), xp, [&](Index k, double, const Vec<dim>& grad, const Vec<dim>&) {
+            G.noalias() += g.velocity[k] * grad.transpose();
+          });
+          (*F)[p] = (Mat<dim>::Identity() + dt * G) * (*F)[p];
+        }
+        Vec<dim> v_pic = Vec<dim>::Zero();
+        if (apic) {
+          Mat<dim> B, D;
+          apic_moments(grid, n, grid.half_cells(p), xp, v_pic, B, D);
+          P.v[p] = v_pic;
+          P.C[p] = B * D.inverse();
+        } else {
+          Vec<dim> dv = Vec<dim>::Zero();
+          grid.for_each_weight(n, grid.half_cells(p), xp, [&](Index k, double w, const Vec<dim>&, const Vec<dim>&) {
+            v_pic += w * g.velocity[k];
+            dv += w * (g.velocity[k] - g.velocity_old[k]);
+          });
+          P.v[p] = scheme.flip_ratio * (P.v[p] + dv) + (1.0 - scheme.flip_ratio) * v_pic;
+          P.C[p].setZero();
+        }
+        P.x[p] += dt * v_pic;
+      },
+      then);
 }
 
 template <int dim>
@@ -312,7 +314,7 @@ std::vector<RealWeight<dim>> real_weights(const AdaptiveGrid<dim>& grid, int n, 
 }
 
 #define MPM_INSTANTIATE(dim)                                                                                    \
-  template void particles_to_grid(const Particles<dim>&, const TransferScheme&, AdaptiveGrid<dim>&,              \
+  template void particles_to_grid(const Particles<dim>&, const TransferScheme&, AdaptiveGrid<dim>&,             \
                                   const std::vector<Mat<dim>>*);                                                \
   template void momentum_to_velocity(AdaptiveGrid<dim>&, const TransferScheme&);                                \
   template void stress_to_grid_forces(const std::vector<Mat<dim>>&, const Particles<dim>&, AdaptiveGrid<dim>&); \

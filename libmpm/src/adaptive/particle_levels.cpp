@@ -1,6 +1,8 @@
 #include <mpm/adaptive/particle_levels.h>
 #include <mpm/core/error.h>
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -105,68 +107,76 @@ std::vector<int> depth_search(const std::vector<IVec<dim>>& sites, const std::ve
 template <int dim>
 std::vector<int> manhattan_depth(const std::vector<IVec<dim>>& sites, int max_depth) {
   if (sites.empty()) return {};
-  // Coordinates relative to one site below the lowest, so that the empty neighbours fit too.
   IVec<dim> lo = sites[0], hi = sites[0];
   for (const IVec<dim>& i : sites) {
     lo = lo.cwiseMin(i);
     hi = hi.cwiseMax(i);
   }
-  lo.array() -= 1;
-  MPM_VERIFY(((hi - lo).array() < (1 << kSiteBits) - 2).all(), Error,
+  const LatticeBox<dim> box(lo, hi);
+  MPM_VERIFY((box.extent.array() < (1 << kSiteBits)).all(), Error,
              "manhattan_depth: the sites span more than 2^21 - 3 lattice steps on an axis");
-  const IVec<dim> extent = (hi - lo).array() + 2;
-  double box = 1.0;
-  for (int a = 0; a < dim; ++a) box *= extent[a];
-  std::vector<int> first(sites.size()), unique;
-  std::vector<int> depth;
-  if (box <= 8.0 * static_cast<double>(sites.size()) + 65536.0) {
-    // A compact set (a body): a dense array over the bounding box.
-    auto flat = [&](const IVec<dim>& i) {
-      std::size_t f = 0;
-      for (int a = dim - 1; a >= 0; --a) f = f * static_cast<std::size_t>(extent[a]) + (i[a] - lo[a]);
-      return f;
-    };
-    std::vector<int> id(static_cast<std::size_t>(box), -1);
-    for (std::size_t i = 0; i < sites.size(); ++i) {
-      int& slot = id[flat(sites[i])];
-      if (slot < 0) {
-        slot = static_cast<int>(i);
-        unique.push_back(slot);
-      }
-      first[i] = slot;
-    }
-    depth = depth_search<dim>(
-        sites, unique,
-        [&](const IVec<dim>& j) {
-          return ((j - lo).array() < 0).any() || ((j - lo).array() >= extent.array()).any() ? -1 : id[flat(j)];
-        },
-        max_depth);
-  } else {
-    auto key = [&](const IVec<dim>& i) {
-      std::uint64_t k = 0;
-      for (int a = dim - 1; a >= 0; --a) k = (k << kSiteBits) | static_cast<std::uint64_t>(i[a] - lo[a]);
-      return k;
-    };
-    std::unordered_map<std::uint64_t, int> id;  // site key -> index of its first entry
-    id.reserve(sites.size());
-    for (std::size_t i = 0; i < sites.size(); ++i) {
-      const auto [it, inserted] = id.emplace(key(sites[i]), static_cast<int>(i));
-      if (inserted) unique.push_back(it->second);
-      first[i] = it->second;
-    }
-    depth = depth_search<dim>(
-        sites, unique,
-        [&](const IVec<dim>& j) {
-          const auto it = id.find(key(j));
-          return it == id.end() ? -1 : it->second;
-        },
-        max_depth);
+  if (box.dense_for(sites.size())) {  // a compact set (a body)
+    const int cap = box.cap(max_depth);
+    std::vector<int> cells(static_cast<std::size_t>(box.cells()), 0);
+    for (const IVec<dim>& i : sites) cells[box.flat(i)] = cap;
+    manhattan_transform(box, cells, cap);
+    std::vector<int> depth(sites.size());
+    for (std::size_t i = 0; i < sites.size(); ++i) depth[i] = std::min(cells[box.flat(sites[i])], max_depth + 1);
+    return depth;
   }
+  // A sparse set: a breadth-first search over the distinct sites, found by hashed keys.
+  auto key = [&](const IVec<dim>& i) {
+    std::uint64_t k = 0;
+    for (int a = dim - 1; a >= 0; --a) k = (k << kSiteBits) | static_cast<std::uint64_t>(i[a] - box.lo[a]);
+    return k;
+  };
+  std::vector<int> first(sites.size()), unique;
+  std::unordered_map<std::uint64_t, int> id;  // site key -> index of its first entry
+  id.reserve(sites.size());
+  for (std::size_t i = 0; i < sites.size(); ++i) {
+    const auto [it, inserted] = id.emplace(key(sites[i]), static_cast<int>(i));
+    if (inserted) unique.push_back(it->second);
+    first[i] = it->second;
+  }
+  std::vector<int> depth = depth_search<dim>(
+      sites, unique,
+      [&](const IVec<dim>& j) {
+        const auto it = id.find(key(j));
+        return it == id.end() ? -1 : it->second;
+      },
+      max_depth);
   for (std::size_t i = 0; i < sites.size(); ++i) {
     const int d = depth[first[i]];
     depth[i] = (d == 0 || d > max_depth) ? max_depth + 1 : d;
   }
   return depth;
+}
+
+template <int dim>
+void manhattan_transform(const LatticeBox<dim>& lattice, std::vector<int>& depth, int cap) {
+  const std::size_t box = depth.size();
+  MPM_VERIFY(static_cast<double>(box) == lattice.cells() && cap < std::numeric_limits<int>::max(), Error,
+             "manhattan_transform: one depth per cell of the box and a cap below the largest int");
+  const IVec<dim>& extent = lattice.extent;
+  constexpr std::size_t chunk = 256;  // lines of a strided axis swept together (one vector loop)
+  std::size_t stride = 1;             // cells between neighbours along axis a
+  for (int a = 0; a < dim; ++a) {
+    const std::size_t n = static_cast<std::size_t>(extent[a]);
+    const std::size_t outer = box / (stride * n), chunks = (stride + chunk - 1) / chunk;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, outer * chunks), [&](const auto& r) {
+      for (std::size_t t = r.begin(); t != r.end(); ++t) {
+        int* line = depth.data() + (t / chunks) * stride * n;
+        const std::size_t i0 = (t % chunks) * chunk, i1 = std::min(stride, i0 + chunk);
+        for (std::size_t k = 1; k < n; ++k)
+          for (std::size_t i = i0; i < i1; ++i)
+            line[k * stride + i] = std::min(line[k * stride + i], line[(k - 1) * stride + i] + 1);
+        for (std::size_t k = n - 1; k-- > 0;)
+          for (std::size_t i = i0; i < i1; ++i)
+            line[k * stride + i] = std::min(line[k * stride + i], line[(k + 1) * stride + i] + 1);
+      }
+    });
+    stride *= n;
+  }
 }
 
 template <int dim>
@@ -182,7 +192,8 @@ std::vector<int> lattice_surface_distance(const std::vector<Vec<dim>>& x, double
   template LevelledParticles<dim> match_particles_to_leaves(const CellTree<dim>&, const std::vector<Vec<dim>>&, \
                                                             double, int, int);                                  \
   template std::vector<int> lattice_surface_distance(const std::vector<Vec<dim>>&, double);                     \
-  template std::vector<int> manhattan_depth(const std::vector<IVec<dim>>&, int);
+  template std::vector<int> manhattan_depth(const std::vector<IVec<dim>>&, int);                                \
+  template void manhattan_transform(const LatticeBox<dim>&, std::vector<int>&, int);
 MPM_INSTANTIATE(2)
 MPM_INSTANTIATE(3)
 

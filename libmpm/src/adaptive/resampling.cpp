@@ -6,11 +6,14 @@
 #include <mpm/core/error.h>
 #include <mpm/math/svd.h>
 
+#include <tbb/parallel_for.h>
+
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -204,26 +207,66 @@ std::vector<double> surface_distance(const CellTree<dim>& tree, const std::vecto
                                      double max_distance) {
   const double h = tree.dx(tree.finest());
   const Vec<dim>& origin = tree.origin();
-  // The first x.size() sites are the particles' own cells; then the other cells their boxes
-  // overlap. (Covering only the cells whose centres lie in a box leaves holes inside a
-  // deformed body of coarse particles, and a hole is a free surface to the distance.)
-  std::vector<IVec<dim>> sites;
-  sites.reserve(2 * x.size());
-  for (const Vec<dim>& xp : x) sites.push_back(cell_of(xp, origin, h));
-  for (std::size_t p = 0; p < x.size(); ++p) {
+  const int max_depth = static_cast<int>(std::min(1e6, std::ceil(max_distance / h))) + 1;
+  std::vector<double> d(x.size());
+  if (x.empty()) return d;
+  // Each particle covers its own finest cell and the cells its box overlaps. (Covering only the
+  // cells whose centres lie in a box leaves holes inside a deformed body of coarse particles,
+  // and a hole is a free surface to the distance.)
+  auto box_of = [&](std::size_t p, IVec<dim>& lo, IVec<dim>& hi) {
     const double half = 0.5 * tree.dx(level[p]) / points_per_axis;
-    IVec<dim> lo, hi;
     for (int a = 0; a < dim; ++a) {
       lo[a] = static_cast<int>(std::floor((x[p][a] - half - origin[a]) / h));
       hi[a] = static_cast<int>(std::ceil((x[p][a] + half - origin[a]) / h)) - 1;
     }
-    for_each_in_box<dim>(lo, hi, [&](const IVec<dim>& c) {
+  };
+  // The box: the particles' extent widened by the largest particle's half-size.
+  Vec<dim> x_lo = x[0], x_hi = x[0];
+  int coarsest = level[0];
+  for (std::size_t p = 0; p < x.size(); ++p) {
+    x_lo = x_lo.cwiseMin(x[p]);
+    x_hi = x_hi.cwiseMax(x[p]);
+    coarsest = std::min<int>(coarsest, level[p]);
+  }
+  const double widest = 0.5 * tree.dx(coarsest) / points_per_axis + h;
+  const LatticeBox<dim> box(cell_of(Vec<dim>(x_lo.array() - widest), origin, h),
+                            cell_of(Vec<dim>(x_hi.array() + widest), origin, h));
+  if (box.dense_for(x.size())) {
+    // A compact body (the usual case): the cells marked in parallel on a dense box, then the
+    // transform; no list of sites.
+    const int cap = box.cap(max_depth);
+    std::vector<int> cells(static_cast<std::size_t>(box.cells()), 0);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 4096), [&](const auto& r) {
+      for (std::size_t p = r.begin(); p != r.end(); ++p) {
+        IVec<dim> first, last;
+        box_of(p, first, last);
+        auto mark = [&](const IVec<dim>& c) {
+          std::atomic_ref<int>(cells[box.flat(c)]).store(cap, std::memory_order_relaxed);
+        };
+        mark(cell_of(x[p], origin, h));
+        for_each_in_box<dim>(first, last, mark);
+      }
+    });
+    manhattan_transform(box, cells, cap);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 4096), [&](const auto& r) {
+      for (std::size_t p = r.begin(); p != r.end(); ++p)
+        d[p] = (std::min(cells[box.flat(cell_of(x[p], origin, h))], max_depth + 1) - 0.5) * h;
+    });
+    return d;
+  }
+  // A scattered set: the first x.size() sites are the particles' own cells, then the other
+  // cells their boxes overlap, for the hashed search.
+  std::vector<IVec<dim>> sites;
+  sites.reserve(2 * x.size());
+  for (const Vec<dim>& xp : x) sites.push_back(cell_of(xp, origin, h));
+  for (std::size_t p = 0; p < x.size(); ++p) {
+    IVec<dim> first, last;
+    box_of(p, first, last);
+    for_each_in_box<dim>(first, last, [&](const IVec<dim>& c) {
       if (c != sites[p]) sites.push_back(c);
     });
   }
-  const int max_depth = static_cast<int>(std::min(1e6, std::ceil(max_distance / h))) + 1;
   const std::vector<int> depth = manhattan_depth(sites, max_depth);
-  std::vector<double> d(x.size());
   for (std::size_t p = 0; p < x.size(); ++p) d[p] = (depth[p] - 0.5) * h;
   return d;
 }

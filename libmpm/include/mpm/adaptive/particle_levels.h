@@ -6,6 +6,7 @@
 #include <mpm/adaptive/cell_tree.h>
 #include <mpm/core/particles.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <limits>
 #include <vector>
@@ -46,5 +47,33 @@ std::vector<int> lattice_surface_distance(const std::vector<Vec<dim>>& x, double
 template <int dim>
 std::vector<int> manhattan_depth(const std::vector<IVec<dim>>& sites,
                                  int max_depth = std::numeric_limits<int>::max() - 1);
+
+//! A dense box of lattice cells around a set of cells lo_cell..hi_cell, with a ring of empty
+//! cells on every side (axis 0 fastest in flat()).
+template <int dim>
+struct LatticeBox {
+  IVec<dim> lo, extent;
+  LatticeBox(const IVec<dim>& lo_cell, const IVec<dim>& hi_cell)
+      : lo(lo_cell.array() - 1), extent((hi_cell - lo_cell).array() + 3) {}
+  double cells() const { return extent.template cast<double>().prod(); }
+  std::size_t flat(const IVec<dim>& i) const {
+    std::size_t f = 0;
+    for (int a = dim - 1; a >= 0; --a) f = f * static_cast<std::size_t>(extent[a]) + (i[a] - lo[a]);
+    return f;
+  }
+  //! max_depth + 1, or less where the ring bounds every depth: the transform's cap.
+  int cap(int max_depth) const {
+    return static_cast<int>(std::min<long long>(static_cast<long long>(max_depth) + 1, extent.sum()));
+  }
+  //! Whether a set of `count` cells is compact enough for a dense box.
+  bool dense_for(std::size_t count) const { return cells() <= 8.0 * static_cast<double>(count) + 65536.0; }
+};
+
+//! manhattan_depth on a LatticeBox: `depth` (one per cell) holds 0 on empty cells and `cap` on
+//! the set's; afterwards each cell holds min(fewest face steps to an empty cell, cap). The L1
+//! metric is separable, so one forward and one backward sweep per axis give it exactly, the
+//! lines of a sweep in parallel.
+template <int dim>
+void manhattan_transform(const LatticeBox<dim>& box, std::vector<int>& depth, int cap);
 
 }  // namespace mpm::adaptive
