@@ -31,12 +31,17 @@ def main():
     ap.add_argument("--to", dest="last", type=float, default=1.35, help="last section [m]")
     ap.add_argument("--reference", type=float, help="a flux [m^2/s] to compare with")
     a = ap.parse_args()
-    for name, value in (("--packing", a.packing), ("--grain-density", a.grain_density), ("--step", a.step)):
+    checked = [("--packing", a.packing), ("--grain-density", a.grain_density), ("--step", a.step)]
+    if a.reference is not None:
+        checked.append(("--reference", a.reference))
+    for name, value in checked:
         if not value > 0:
             sys.exit(f"bed_load_flux: {name} {value} must be > 0")
     try:
-        rows = list(csv.DictReader(open(a.out / "bed_profile.csv")))
-        diagnostics = list(csv.DictReader(open(a.out / "diagnostics.csv")))
+        with open(a.out / "bed_profile.csv") as f:
+            rows = list(csv.DictReader(f))
+        with open(a.out / "diagnostics.csv") as f:
+            diagnostics = list(csv.DictReader(f))
     except OSError as e:
         sys.exit(f"bed_load_flux: {e}")
     if len(rows) < 2 or "z" in rows[0] or not diagnostics:
@@ -46,19 +51,22 @@ def main():
         sys.exit(f"bed_load_flux: the run in {a.out} ends at t = {t}")
     x = [float(r["x"]) for r in rows]
     width = x[1] - x[0]
+    first_face, last_face = x[0] + 0.5 * width, x[-1] + 0.5 * width
+    if a.first < first_face - width or a.last > last_face + width:
+        sys.exit(f"bed_load_flux: sections {a.first}..{a.last} m reach outside the profile's {first_face:g}..{last_face:g} m")
     passed, total = [], 0.0  # mass that crossed the right face of each column [kg/m]
     for r in rows:
         total -= a.packing * a.grain_density * (float(r["final_height"]) - float(r["initial_height"])) * width
         passed.append(total)
     print(f"bed budget of {a.out} over t = {t:g} s (packing {a.packing}, rho_s {a.grain_density} kg/m^3)")
-    print("| section x [m] | mass passed [kg/m] | mean grain flux [m^2/s] |" + (" / reference |" if a.reference else ""))
-    print("|---:|---:|---:|" + ("---:|" if a.reference else ""))
+    print("| section x [m] | mass passed [kg/m] | mean grain flux [m^2/s] |" + (" / reference |" if a.reference is not None else ""))
+    print("|---:|---:|---:|" + ("---:|" if a.reference is not None else ""))
     section = a.first
     while section <= a.last + 1e-9:
         c = min(range(len(x)), key=lambda i: abs(x[i] + 0.5 * width - section))  # the column whose right face is nearest
         q = passed[c] / (a.grain_density * t)
         line = f"| {x[c] + 0.5 * width:.3f} | {passed[c]:.3f} | {q:.3g} |"
-        if a.reference:
+        if a.reference is not None:
             line += f" {q / a.reference:.3g} |"
         print(line)
         section += a.step

@@ -15,41 +15,35 @@
 namespace mpm::adaptive {
 
 namespace {
-// fn(e) for the entries e of every group (group g: begin[g] .. begin[g + 1] - 1), one colour
-// after the other, the groups of a colour in parallel: the colourings keep the stencils of one
-// colour's groups apart (particle_buckets.h, AdaptiveGrid::irregular_groups).
-template <class Colors, class Fn>
-void scatter_by_color(const Colors& by_color, const std::vector<std::uint32_t>& begin, Fn&& fn) {
-  const bool serial = begin.back() < detail::serial_below_particles;
-  for (const std::vector<int>& same_color : by_color)
-    detail::for_each_range(same_color.size(), std::size_t{1}, serial, [&](const tbb::blocked_range<std::size_t>& r) {
-      for (std::size_t i = r.begin(); i != r.end(); ++i)
-        for (std::uint32_t e = begin[same_color[i]]; e < begin[same_color[i] + 1]; ++e) fn(e);
-    });
-}
-
-// fn(p, n, k, w, grad_w, x_k) over the stencil of every irregular particle (transfer level n).
+// fn(p, n, k, w, grad_w, x_k) over the stencil of every irregular particle (transfer level n):
+// the groups of AdaptiveGrid::irregular_groups one colour after the other, the groups of a
+// colour in parallel (the colouring keeps their stencils apart).
 template <int dim, class Fn>
 void scatter_irregular(const Particles<dim>& P, const AdaptiveGrid<dim>& grid, Fn&& fn) {
   const auto& groups = grid.irregular_groups();
-  scatter_by_color(groups.by_color, groups.begin, [&](std::uint32_t e) {
-    const std::uint32_t p = grid.irregular()[e];
-    const int n = grid.transfer_level(p);
-    grid.for_each_weight(
-        n, grid.half_cells(p), P.x[p],
-        [&](Index k, double w, const Vec<dim>& grad, const Vec<dim>& xk) { fn(p, n, k, w, grad, xk); });
-  });
+  const bool serial = groups.begin.back() < detail::serial_below_particles;
+  for (const std::vector<int>& same_color : groups.by_color)
+    detail::for_each_range(same_color.size(), std::size_t{1}, serial, [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t i = r.begin(); i != r.end(); ++i)
+        for (std::uint32_t e = groups.begin[same_color[i]]; e < groups.begin[same_color[i] + 1]; ++e) {
+          const std::uint32_t p = grid.irregular()[e];
+          const int n = grid.transfer_level(p);
+          grid.for_each_weight(
+              n, grid.half_cells(p), P.x[p],
+              [&](Index k, double w, const Vec<dim>& grad, const Vec<dim>& xk) { fn(p, n, k, w, grad, xk); });
+        }
+    });
 }
 
-// fn(i, p, n) for every particle p = list[i] (transfer level n), in parallel (G2P-like gathers);
-// with `then`, each range of the list goes through it right after its gathers.
+// fn(p, n) for every irregular particle p (transfer level n), in parallel (G2P-like gathers);
+// with `then`, each range of them goes through it right after its gathers.
 template <int dim, class Fn>
-void gather_each(const std::vector<std::uint32_t>& list, const AdaptiveGrid<dim>& grid, Fn&& fn,
-                 const ParticleGroupUpdate* then = nullptr) {
+void gather_irregular(const AdaptiveGrid<dim>& grid, Fn&& fn, const ParticleGroupUpdate* then) {
+  const std::vector<std::uint32_t>& list = grid.irregular();
   detail::for_each_range(list.size(), std::size_t{256}, list.size() < detail::serial_below_particles,
                          [&](const tbb::blocked_range<std::size_t>& range) {
                            for (std::size_t i = range.begin(); i != range.end(); ++i)
-                             fn(i, list[i], grid.transfer_level(list[i]));
+                             fn(list[i], grid.transfer_level(list[i]));
                            if (then) (*then)(list.data() + range.begin(), list.data() + range.end());
                          });
 }
@@ -78,19 +72,26 @@ void apic_moments(const AdaptiveGrid<dim>& grid, int n, double h, const Vec<dim>
 }
 
 // The particles near embedded ghosts (AdaptiveGrid::near_embedded), bucket by bucket: fn(b,
-// kernel) for every bucket b of level n, the buckets of a colour in parallel (their patches
-// share no node), with regular_kernel() as its 3-node type.
+// kernel) for every bucket b of level n in parallel, with regular_kernel() as its 3-node type.
+// A scatter goes colour by colour (the patches of one colour's buckets share no node); a gather
+// needs no colours.
+enum class Walk { gather, scatter };
 template <int dim, class Fn>
-void for_each_near_bucket(const AdaptiveGrid<dim>& grid, int n, Fn&& fn) {
+void for_each_near_bucket(const AdaptiveGrid<dim>& grid, int n, Walk walk, Fn&& fn) {
   const ParticleBuckets<dim>& near = grid.near_embedded(n);
   const bool serial = near.particle.size() < detail::serial_below_particles;
   std::visit(
       [&](const auto& kernel) {
         if constexpr (std::decay_t<decltype(kernel)>::support == 3) {
-          for (const std::vector<int>& same_color : near.by_color)
-            detail::for_each_range(same_color.size(), std::size_t{1}, serial, [&](const auto& range) {
-              for (std::size_t r = range.begin(); r != range.end(); ++r) fn(same_color[r], kernel);
+          if (walk == Walk::gather)
+            detail::for_each_range(near.count(), 1, serial, [&](const auto& range) {
+              for (int b = range.begin(); b != range.end(); ++b) fn(b, kernel);
             });
+          else
+            for (const std::vector<int>& same_color : near.by_color)
+              detail::for_each_range(same_color.size(), std::size_t{1}, serial, [&](const auto& range) {
+                for (std::size_t r = range.begin(); r != range.end(); ++r) fn(same_color[r], kernel);
+              });
         } else {
           MPM_VERIFY(false, Error, "adaptive grid: the regular kernel has a 3-node stencil");
         }
@@ -126,7 +127,7 @@ void scatter_ghost_affine(const Particles<dim>& P, const AdaptiveGrid<dim>& grid
   const auto& ghosts = grid.ghosts(n);
   const ParticleBuckets<dim>& near = grid.near_embedded(n);
   const std::vector<std::uint32_t>& masks = grid.near_embedded_masks(n);
-  for_each_near_bucket(grid, n, [&](int b, const auto& kernel) {
+  for_each_near_bucket(grid, n, Walk::scatter, [&](int b, const auto& kernel) {
     alignas(64) std::array<double, detail::patch_nodes<dim> * M> patch;
     patch.fill(0.0);
     const detail::PatchFrame<dim> frame(g, near.block[b]);
@@ -159,7 +160,7 @@ void add_ghost_terms(Particles<dim>& P, const AdaptiveGrid<dim>& grid, int n, co
   const ParticleBuckets<dim>& near = grid.near_embedded(n);
   const std::vector<std::uint32_t>& masks = grid.near_embedded_masks(n);
   const double dx = g.dx();
-  for_each_near_bucket(grid, n, [&](int b, const auto& kernel) {
+  for_each_near_bucket(grid, n, Walk::gather, [&](int b, const auto& kernel) {
     alignas(64) std::array<double, detail::patch_nodes<dim> * Ch> patch;
     detail::for_each_patch_node(g, near.block[b], [&](int node, std::size_t k) {
       double* out = patch.data() + node * Ch;
@@ -261,9 +262,9 @@ void grid_to_particles(Particles<dim>& P, const TransferScheme& scheme, const Ad
   for (int n = 0; n < grid.levels(); ++n)
     mpm::grid_to_particles(P, grid.regular(n), grid.regular_kernel(), scheme, grid.level(n), dt, F, then);
   for (int n = 0; apic && n < grid.levels(); ++n) add_ghost_terms(P, grid, n, x_before[n]);
-  gather_each(
-      grid.irregular(), grid,
-      [&](std::size_t, std::size_t p, int n) {
+  gather_irregular(
+      grid,
+      [&](std::size_t p, int n) {
         const SparseGrid<dim>& g = grid.level(n);
         const Vec<dim> xp = P.x[p];
         if (F) {

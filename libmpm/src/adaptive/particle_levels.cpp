@@ -153,16 +153,16 @@ std::vector<int> manhattan_depth(const std::vector<IVec<dim>>& sites, int max_de
 }
 
 template <int dim>
-void manhattan_transform(const LatticeBox<dim>& lattice, std::vector<int>& depth, int cap) {
-  const std::size_t box = depth.size();
-  MPM_VERIFY(static_cast<double>(box) == lattice.cells() && cap < std::numeric_limits<int>::max(), Error,
+void manhattan_transform(const LatticeBox<dim>& box, std::vector<int>& depth, int cap) {
+  const std::size_t cells = depth.size();
+  MPM_VERIFY(static_cast<double>(cells) == box.cells() && cap < std::numeric_limits<int>::max(), Error,
              "manhattan_transform: one depth per cell of the box and a cap below the largest int");
-  const IVec<dim>& extent = lattice.extent;
+  const IVec<dim>& extent = box.extent;
   constexpr std::size_t chunk = 256;  // lines of a strided axis swept together (one vector loop)
   std::size_t stride = 1;             // cells between neighbours along axis a
   for (int a = 0; a < dim; ++a) {
     const std::size_t n = static_cast<std::size_t>(extent[a]);
-    const std::size_t outer = box / (stride * n), chunks = (stride + chunk - 1) / chunk;
+    const std::size_t outer = cells / (stride * n), chunks = (stride + chunk - 1) / chunk;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, outer * chunks), [&](const auto& r) {
       for (std::size_t t = r.begin(); t != r.end(); ++t) {
         int* line = depth.data() + (t / chunks) * stride * n;

@@ -220,18 +220,30 @@ std::vector<double> surface_distance(const CellTree<dim>& tree, const std::vecto
       hi[a] = static_cast<int>(std::ceil((x[p][a] + half - origin[a]) / h)) - 1;
     }
   };
-  // The box: the particles' extent widened by the largest particle's half-size.
+  // The box: the particles' extent widened by the largest particle's half-size; the cells the
+  // particles mark, at most (2 half / h + 2)^dim each.
   Vec<dim> x_lo = x[0], x_hi = x[0];
-  int coarsest = level[0];
+  std::vector<std::size_t> per_level(static_cast<std::size_t>(tree.levels()), 0);
   for (std::size_t p = 0; p < x.size(); ++p) {
+    MPM_VERIFY(level[p] < per_level.size(), InputError,
+               "resampling: particle " + std::to_string(p) + " has type " + std::to_string(level[p]) +
+                   ", outside the grid's levels [0, " + std::to_string(per_level.size() - 1) + "]");
     x_lo = x_lo.cwiseMin(x[p]);
     x_hi = x_hi.cwiseMax(x[p]);
-    coarsest = std::min<int>(coarsest, level[p]);
+    ++per_level[level[p]];
   }
+  int coarsest = tree.finest();
+  std::size_t marks = 0;
+  for (int q = 0; q < tree.levels(); ++q)
+    if (per_level[q] > 0) {
+      coarsest = std::min(coarsest, q);
+      marks += per_level[q] * static_cast<std::size_t>(std::pow(std::floor(tree.dx(q) / points_per_axis / h) + 2.0,
+                                                                static_cast<double>(dim)));
+    }
   const double widest = 0.5 * tree.dx(coarsest) / points_per_axis + h;
   const LatticeBox<dim> box(cell_of(Vec<dim>(x_lo.array() - widest), origin, h),
                             cell_of(Vec<dim>(x_hi.array() + widest), origin, h));
-  if (box.dense_for(x.size())) {
+  if (box.dense_for(marks)) {
     // A compact body (the usual case): the cells marked in parallel on a dense box, then the
     // transform; no list of sites.
     const int cap = box.cap(max_depth);
@@ -255,7 +267,7 @@ std::vector<double> surface_distance(const CellTree<dim>& tree, const std::vecto
     return d;
   }
   // A scattered set: the first x.size() sites are the particles' own cells, then the other
-  // cells their boxes overlap, for the hashed search.
+  // cells their boxes overlap, for manhattan_depth.
   std::vector<IVec<dim>> sites;
   sites.reserve(2 * x.size());
   for (const Vec<dim>& xp : x) sites.push_back(cell_of(xp, origin, h));
@@ -293,7 +305,8 @@ ResampleCounts resample_particles(Particles<dim>& P, const CellTree<dim>& tree, 
       merges.push_back({q, P.material[p], cell_of(P.x[p], tree.origin(), tree.dx(q - 1) / points_per_axis), p});
   }
 
-  // Split guard: the particles of each level in each cell of that level.
+  // Split guard: the particles of each level in each cell of that level, counted in the split
+  // candidates' cells only (a few hundred; most particles are of a level with none).
   const int nominal = ipow(points_per_axis, dim);
   std::vector<std::size_t> allowed_splits;
   if (!splits.empty()) {
@@ -303,7 +316,13 @@ ResampleCounts resample_particles(Particles<dim>& P, const CellTree<dim>& tree, 
       for (int a = dim - 1; a >= 0; --a) k = (k << 21) | static_cast<std::uint64_t>(c[a] + 1);
       return k;
     };
-    for (std::size_t p = 0; p < n; ++p) ++per_cell[level[p]][key(cell_of(P.x[p], tree.origin(), tree.dx(level[p])))];
+    for (const Slot<dim>& s : splits) per_cell[s.level].emplace(key(s.cell), 0);
+    for (std::size_t p = 0; p < n; ++p) {
+      auto& cells = per_cell[level[p]];
+      if (cells.empty()) continue;
+      if (const auto it = cells.find(key(cell_of(P.x[p], tree.origin(), tree.dx(level[p])))); it != cells.end())
+        ++it->second;
+    }
     for (const Slot<dim>& s : splits) {
       const int count = per_cell[s.level][key(s.cell)];
       if (2 * count >= nominal && count <= 2 * nominal) allowed_splits.push_back(s.p);

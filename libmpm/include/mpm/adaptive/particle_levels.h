@@ -43,7 +43,7 @@ std::vector<int> lattice_surface_distance(const std::vector<Vec<dim>>& x, double
 
 //! Manhattan depth of each of the lattice sites `sites` (repeats allowed) in the set they form:
 //! the fewest face steps to a site outside the set (1 for a site with an empty face neighbour).
-//! Sites deeper than max_depth get max_depth + 1 (the search stops there).
+//! Sites deeper than max_depth get max_depth + 1 (the result is capped there).
 template <int dim>
 std::vector<int> manhattan_depth(const std::vector<IVec<dim>>& sites,
                                  int max_depth = std::numeric_limits<int>::max() - 1);
