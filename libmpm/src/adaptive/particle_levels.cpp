@@ -121,7 +121,7 @@ std::vector<int> manhattan_depth(const std::vector<IVec<dim>>& sites, int max_de
     for (const IVec<dim>& i : sites) cells[box.flat(i)] = cap;
     manhattan_transform(box, cells, cap);
     std::vector<int> depth(sites.size());
-    for (std::size_t i = 0; i < sites.size(); ++i) depth[i] = std::min(cells[box.flat(sites[i])], max_depth + 1);
+    for (std::size_t i = 0; i < sites.size(); ++i) depth[i] = cells[box.flat(sites[i])];  // <= cap <= max_depth + 1
     return depth;
   }
   // A sparse set: a breadth-first search over the distinct sites, found by hashed keys.

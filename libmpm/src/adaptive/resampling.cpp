@@ -262,7 +262,7 @@ std::vector<double> surface_distance(const CellTree<dim>& tree, const std::vecto
     manhattan_transform(box, cells, cap);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 4096), [&](const auto& r) {
       for (std::size_t p = r.begin(); p != r.end(); ++p)
-        d[p] = (std::min(cells[box.flat(cell_of(x[p], origin, h))], max_depth + 1) - 0.5) * h;
+        d[p] = (cells[box.flat(cell_of(x[p], origin, h))] - 0.5) * h;  // <= cap <= max_depth + 1
     });
     return d;
   }
