@@ -27,6 +27,7 @@
 #include <cstdio>
 #include <numeric>
 #include <random>
+#include <string>
 #include <vector>
 
 using namespace mpm::cuda::detail;
@@ -39,7 +40,17 @@ struct Options {
   int steps = 10;
   std::string precision = "both";
   bool sand = true;
+  std::string p2g = "both";  //!< warp, atomic or both (DeviceScene::p2g_scatter)
 };
+
+using Scatter = DeviceScene::Scatter;
+
+//! The P2G scatters to run.
+std::vector<Scatter> scatters(const Options& o) {
+  if (o.p2g == "both") return {Scatter::warp_reduced, Scatter::one_atomic};
+  return {o.p2g == "warp" ? Scatter::warp_reduced : Scatter::one_atomic};
+}
+const char* scatter_name(Scatter s) { return s == Scatter::warp_reduced ? "warp" : "atomic"; }
 
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
@@ -81,7 +92,7 @@ HostParticles lattice(const Options& o, bool shuffled) {
   return h;
 }
 
-DeviceScene scene(const Options& o, bool transfers_only) {
+DeviceScene scene(const Options& o, bool transfers_only, Scatter scatter) {
   DeviceScene d{};
   const int nodes = static_cast<int>(std::lround(1.0 / o.dx)) + 1;
   for (int a = 0; a < 3; ++a) d.origin[a] = 0.0, d.node_counts[a] = nodes, d.gravity[a] = 0.0;
@@ -90,6 +101,7 @@ DeviceScene scene(const Options& o, bool transfers_only) {
   d.wave_cfl = 0.5;
   d.max_dt = 1e300;
   d.transfers_only = transfers_only;
+  d.p2g_scatter = scatter;
   // Drucker-Prager sand (E = 3.5e7 Pa, nu = 0.3, 30 degrees; Gao et al.'s sand), Hencky elasticity.
   const double E = 3.5e7, nu = 0.3, mu = E / (2 * (1 + nu)), lambda = E * nu / ((1 + nu) * (1 - 2 * nu));
   const double s = std::sin(30.0 * M_PI / 180.0);
@@ -132,27 +144,27 @@ Timing time_steps(DeviceSolid& device, int steps) {
 
 double total(const StepTimes& t) { return t.sort + t.p2g + t.grid + t.g2p; }
 
-void transfers(const Options& o, bool single) {
+void transfers(const Options& o, bool single, Scatter scatter) {
   const char* precision = single ? "single" : "double";
   for (const bool shuffled : {false, true}) {
-    auto device = make_device_solid(scene(o, true), single);
+    auto device = make_device_solid(scene(o, true, scatter), single);
     const HostParticles h = lattice(o, shuffled);
     device->upload(h);
     const Timing t = time_steps(*device, o.steps);
     const StepTimes& m = t.median;
     std::printf(
-        "transfers %-6s %-8s %9zu particles  sort %7.3f ms  P2G %7.3f ms  grid %7.3f ms  G2P %7.3f ms  "
+        "transfers %-6s %-8s %-6s %9zu particles  sort %7.3f ms  P2G %7.3f ms  grid %7.3f ms  G2P %7.3f ms  "
         "step %7.3f ms  (device memory %.2f GiB)\n",
-        precision, shuffled ? "shuffled" : "sorted", h.n, 1e3 * m.sort, 1e3 * m.p2g, 1e3 * m.grid, 1e3 * m.g2p,
-        1e3 * total(m), device->memory_bytes() / 1073741824.0);
-    std::printf("transfers %-6s %-8s first step %7.3f ms (sort %.3f ms%s)\n", precision,
-                shuffled ? "shuffled" : "sorted", 1e3 * total(t.first), 1e3 * t.first.sort,
+        precision, shuffled ? "shuffled" : "sorted", scatter_name(scatter), h.n, 1e3 * m.sort, 1e3 * m.p2g,
+        1e3 * m.grid, 1e3 * m.g2p, 1e3 * total(m), device->memory_bytes() / 1073741824.0);
+    std::printf("transfers %-6s %-8s %-6s first step %7.3f ms (sort %.3f ms%s)\n", precision,
+                shuffled ? "shuffled" : "sorted", scatter_name(scatter), 1e3 * total(t.first), 1e3 * t.first.sort,
                 t.first.reordered ? ", the particle data moved into block order" : "");
   }
 }
 
-void sand_step(const Options& o, bool single) {
-  auto device = make_device_solid(scene(o, false), single);
+void sand_step(const Options& o, bool single, Scatter scatter) {
+  auto device = make_device_solid(scene(o, false, scatter), single);
   const HostParticles h = lattice(o, false);
   device->upload(h);
   std::vector<double> wall, sort, p2g, grid, g2p;
@@ -168,10 +180,10 @@ void sand_step(const Options& o, bool single) {
     sort.push_back(times.sort), p2g.push_back(times.p2g), grid.push_back(times.grid), g2p.push_back(times.g2p);
   }
   std::printf(
-      "sand step %-6s %9zu particles  wall %7.3f ms per step  (sort %.3f, P2G+stress %.3f, grid %.3f, "
+      "sand step %-6s %-6s %9zu particles  wall %7.3f ms per step  (sort %.3f, P2G+stress %.3f, grid %.3f, "
       "G2P+F+return map %.3f ms)\n",
-      single ? "single" : "double", h.n, 1e3 * median(wall), 1e3 * median(sort), 1e3 * median(p2g), 1e3 * median(grid),
-      1e3 * median(g2p));
+      single ? "single" : "double", scatter_name(scatter), h.n, 1e3 * median(wall), 1e3 * median(sort),
+      1e3 * median(p2g), 1e3 * median(grid), 1e3 * median(g2p));
 }
 
 }  // namespace
@@ -185,6 +197,10 @@ int main(int argc, char** argv) {
   app.add_option("--precision", o.precision, "single, double or both")
       ->check(CLI::IsMember({"single", "double", "both"}));
   app.add_flag("!--no-sand", o.sand, "skip the full sand step");
+  app.add_option("--p2g", o.p2g,
+                 "P2G scatter: warp (reduced over the peers of a warp), atomic (one shared atomic per particle and "
+                 "node) or both (DeviceScene::p2g_scatter says which the library takes)")
+      ->check(CLI::IsMember({"warp", "atomic", "both"}));
   CLI11_PARSE(app, argc, argv);
   if (const std::string why = device_unavailable_reason(); !why.empty()) {
     std::fprintf(stderr, "bench_cuda: %s\n", why.c_str());
@@ -194,8 +210,10 @@ int main(int argc, char** argv) {
   try {
     for (const bool single : {true, false}) {
       if (o.precision != "both" && (o.precision == "single") != single) continue;
-      transfers(o, single);
-      if (o.sand) sand_step(o, single);
+      for (const Scatter scatter : scatters(o)) {
+        transfers(o, single, scatter);
+        if (o.sand) sand_step(o, single, scatter);
+      }
     }
   } catch (const mpm::Error& e) {
     std::fprintf(stderr, "bench_cuda: %s\n", e.what());

@@ -15,11 +15,11 @@ source "$(dirname "$0")/run_logged.sh"
 step() {  # step <name> <timeout s> <command...>: the run and its result lines
   local name=$1
   run_logged "$log" "$@"
-  grep -E "device_step|device |variant|first step|momentum|runout|transfers|sand step|bench_cuda|SKIPPED|ERROR|error|test cases|wall|steps" "$log/$name.log" | head -40
+  grep -E "device_step|device |variant|warp|first step|momentum|runout|transfers|sand step|bench_cuda|SKIPPED|ERROR|error|test cases|wall|steps" "$log/$name.log" | head -40
 }
 step test_cuda_step 90 "$bin/test_cuda_step"
 step column_runout 150 python3 tests/gpu/column_runout.py "$bin" data "$work/runout"
-step bench_cuda 150 "$bin/bench_cuda" --steps 10
+step bench_cuda 240 "$bin/bench_cuda" --steps 10
 # The 3D column collapse at 10.6 M particles (column.cells_per_width=110), single precision on
 # the GPU, and the first steps of the same scene on the CPU's cores for the per-step ratio.
 big="--set column.cells_per_width=110 --set output.particles=false --set output.png=false --quiet"

@@ -25,6 +25,7 @@
 #include <cstring>
 #include <numeric>
 #include <string>
+#include <type_traits>
 
 namespace mpm::cuda::detail {
 
@@ -142,11 +143,14 @@ __global__ void max_speed_kernel(ParticleView<T> P, unsigned long long* result) 
   if ((threadIdx.x & 31) == 0) atomicMax(result, static_cast<unsigned long long>(__double_as_longlong(m)));
 }
 
-template <class T>
+//! The sort key of each particle: the block of its first stencil node, and with `cell` also that
+//! node's place in the block (6 low bits), so that a move of the data leaves the particles of a
+//! cell side by side: the warp-reduced P2G then finds its peers in neighbouring lanes.
+template <class T, bool cell>
 __global__ void keys_kernel(ParticleView<T> P, GridFrame g, unsigned* keys, unsigned* index, unsigned* errors) {
   const std::size_t p = blockIdx.x * std::size_t(blockDim.x) + threadIdx.x;
   if (p >= P.n) return;
-  int b[3];
+  int b[3], local[3];
   bool inside = true;
 #pragma unroll
   for (int a = 0; a < 3; ++a) {
@@ -159,9 +163,12 @@ __global__ void keys_kernel(ParticleView<T> P, GridFrame g, unsigned* keys, unsi
     else
       inside = false;  // NaN positions too
     b[a] = base >> kBlockBits;
+    local[a] = base & ((1 << kBlockBits) - 1);
   }
   if (!inside) atomicOr(errors, kOutside);
-  keys[p] = block_key(g, b[0], b[1], b[2]);
+  const unsigned key = block_key(g, b[0], b[1], b[2]);
+  keys[p] =
+      cell ? key << (3 * kBlockBits) | unsigned((local[2] << kBlockBits | local[1]) << kBlockBits | local[0]) : key;
   index[p] = static_cast<unsigned>(p);
 }
 
@@ -216,30 +223,23 @@ __device__ __forceinline__ T pick(const T (&a)[3], int i) {
   return i == 0 ? a[0] : (i == 1 ? a[1] : a[2]);
 }
 
+//! One particle's P2G terms (Gao et al. 2017 eq. 1-2, APIC): its stencil in the tile of its
+//! block and what it adds to each of the 27 nodes. An empty share (no particle) adds zeros.
 template <class T, bool stress>
-__global__ void __launch_bounds__(kP2gThreads)
-    p2g_kernel(ParticleView<T> P, GridFrame g, GridView<T> G, const unsigned* segment_keys, const unsigned* offsets,
-               const unsigned* counts, const unsigned* order, const unsigned* slot, T dt) {
-  __shared__ T tile[4][kTileNodes];
-  for (int t = threadIdx.x; t < 4 * kTileNodes; t += blockDim.x) (&tile[0][0])[t] = T(0);
-  int b[3];
-  decode(g, segment_keys[blockIdx.x], b);
-  const int o[3] = {b[0] << kBlockBits, b[1] << kBlockBits, b[2] << kBlockBits};
-  __syncthreads();
-  const T dx = T(g.dx), inv_dx = T(g.inv_dx);
-  const unsigned first = offsets[blockIdx.x], count = counts[blockIdx.x];
-  for (unsigned q = threadIdx.x; q < count; q += blockDim.x) {
-    const unsigned p = order[first + q];
-    T w[3][3], dw[3][3], f[3];
-    int local[3];
+struct P2gShare {
+  T w[3][3], dw[3][3], f[3];
+  int local[3];  //!< first stencil node in the tile
+  T m, mv[3], mC[3][3], A[3][3];
+
+  __device__ void load(const ParticleView<T>& P, const GridFrame& g, const int (&o)[3], unsigned p, T dt) {
+    const T dx = T(g.dx), inv_dx = T(g.inv_dx);
 #pragma unroll
     for (int a = 0; a < 3; ++a) {
       local[a] = quadratic(cells(P.x[a * P.n + p], g.origin[a], g.inv_dx), w[a], dw[a], f[a]) - o[a];
     }
-    const T m = P.mass[p];
+    m = P.mass[p];
     // Node value: m v + (m dx C) rel + A (dw_0 w_1 w_2, w_0 dw_1 w_2, w_0 w_1 dw_2), rel = node - x_p
     // [cells], A = -dt V0 tau / dx (the stress impulse, stress_forces.cpp).
-    T mv[3], mC[3][3], A[3][3];
     const T* tau = P.tau;
     T s[3][3] = {};
     if constexpr (stress) {
@@ -256,32 +256,52 @@ __global__ void __launch_bounds__(kP2gThreads)
         A[r][c] = stress ? -dt * inv_dx * s[r][c] : T(0);
       }
     }
-    // One node's share: mass, APIC momentum and the stress impulse.
-    const auto node = [&](int i, int j, int k, T w0, T w1, T w2, T d0, T d1, T d2) {
-      const T wjk = w1 * w2;
-      const T weight = w0 * wjk;
-      const T rel[3] = {T(i) - f[0], T(j) - f[1], T(k) - f[2]};
-      const T grad[3] = {d0 * wjk, w0 * d1 * w2, w0 * w1 * d2};
-      const int t = (local[2] + k) * kTile * kTile + (local[1] + j) * kTile + local[0] + i;
-      atomicAdd(&tile[0][t], weight * m);
+  }
+
+  __device__ void clear() {
 #pragma unroll
-      for (int r = 0; r < 3; ++r) {
-        T value = weight * (mv[r] + mC[r][0] * rel[0] + mC[r][1] * rel[1] + mC[r][2] * rel[2]);
-        if constexpr (stress) value += A[r][0] * grad[0] + A[r][1] * grad[1] + A[r][2] * grad[2];
-        atomicAdd(&tile[1 + r][t], value);
-      }
-    };
-    // Each lane starts its 27 nodes at another node, so that lanes whose particles share a cell
-    // add to different tile entries at the same time: same-address shared atomics serialise
-    // (double precision: P2G 2.6 ms instead of 5.2 ms on the benchmark; single: 1.61 / 1.64).
-    const int start = threadIdx.x % 27;
-    for (int m27 = 0; m27 < 27; ++m27) {
-      const int n27 = m27 + start < 27 ? m27 + start : m27 + start - 27;
-      const int i = n27 % 3, j = (n27 / 3) % 3, k = n27 / 9;
-      node(i, j, k, pick(w[0], i), pick(w[1], j), pick(w[2], k), pick(dw[0], i), pick(dw[1], j), pick(dw[2], k));
+    for (int a = 0; a < 3; ++a) {
+      local[a] = 0, f[a] = T(0);
+#pragma unroll
+      for (int k = 0; k < 3; ++k) w[a][k] = dw[a][k] = T(0);
+    }
+    m = T(0);
+#pragma unroll
+    for (int r = 0; r < 3; ++r) {
+      mv[r] = T(0);
+#pragma unroll
+      for (int c = 0; c < 3; ++c) mC[r][c] = A[r][c] = T(0);
     }
   }
-  __syncthreads();
+
+  //! The share of node (i, j, k) of the stencil: value = {mass, momentum (3)}; returns its tile index.
+  __device__ int node(int i, int j, int k, T (&value)[4]) const {
+    const T w0 = pick(w[0], i), w1 = pick(w[1], j), w2 = pick(w[2], k);
+    const T d0 = pick(dw[0], i), d1 = pick(dw[1], j), d2 = pick(dw[2], k);
+    const T wjk = w1 * w2;
+    const T weight = w0 * wjk;
+    const T rel[3] = {T(i) - f[0], T(j) - f[1], T(k) - f[2]};
+    const T grad[3] = {d0 * wjk, w0 * d1 * w2, w0 * w1 * d2};
+    value[0] = weight * m;
+#pragma unroll
+    for (int r = 0; r < 3; ++r) {
+      value[1 + r] = weight * (mv[r] + mC[r][0] * rel[0] + mC[r][1] * rel[1] + mC[r][2] * rel[2]);
+      if constexpr (stress) value[1 + r] += A[r][0] * grad[0] + A[r][1] * grad[1] + A[r][2] * grad[2];
+    }
+    return (local[2] + k) * kTile * kTile + (local[1] + j) * kTile + local[0] + i;
+  }
+};
+
+//! The tile of a particle block: 4 channels (mass, momentum) of 6^3 nodes, cleared.
+template <class T>
+__device__ void clear_tile(T (&tile)[4][kTileNodes]) {
+  for (int t = threadIdx.x; t < 4 * kTileNodes; t += blockDim.x) (&tile[0][0])[t] = T(0);
+}
+
+//! Adds the tile to the grid's nodes (one global atomic per channel of a touched node).
+template <class T>
+__device__ void flush_tile(const T (&tile)[4][kTileNodes], const GridFrame& g, const GridView<T>& G,
+                           const unsigned* slot, const int (&o)[3]) {
   for (int t = threadIdx.x; t < kTileNodes; t += blockDim.x) {
     const T m = tile[0][t];
     if (m == T(0)) continue;
@@ -291,6 +311,109 @@ __global__ void __launch_bounds__(kP2gThreads)
 #pragma unroll
     for (int r = 0; r < 3; ++r) atomicAdd(&G.momentum[r * G.nodes + n], tile[1 + r][t]);
   }
+}
+
+//! P2G with one shared-memory atomic per node channel and particle (the scatter before the
+//! warp reduction; the faster one in double precision: DeviceScene::p2g_scatter).
+template <class T, bool stress>
+__global__ void __launch_bounds__(kP2gThreads)
+    p2g_atomic_kernel(ParticleView<T> P, GridFrame g, GridView<T> G, const unsigned* segment_keys,
+                      const unsigned* offsets, const unsigned* counts, const unsigned* order, const unsigned* slot,
+                      T dt) {
+  __shared__ T tile[4][kTileNodes];
+  clear_tile(tile);
+  int b[3];
+  decode(g, segment_keys[blockIdx.x], b);
+  const int o[3] = {b[0] << kBlockBits, b[1] << kBlockBits, b[2] << kBlockBits};
+  __syncthreads();
+  const unsigned first = offsets[blockIdx.x], count = counts[blockIdx.x];
+  for (unsigned q = threadIdx.x; q < count; q += blockDim.x) {
+    P2gShare<T, stress> share;
+    share.load(P, g, o, order[first + q], dt);
+    // Each lane starts its 27 nodes at another node, so that lanes whose particles share a cell
+    // add to different tile entries at the same time: same-address shared atomics serialise.
+    const int start = threadIdx.x % 27;
+    for (int m27 = 0; m27 < 27; ++m27) {
+      const int n27 = m27 + start < 27 ? m27 + start : m27 + start - 27;
+      T value[4];
+      const int t = share.node(n27 % 3, (n27 / 3) % 3, n27 / 9, value);
+#pragma unroll
+      for (int c = 0; c < 4; ++c) atomicAdd(&tile[c][t], value[c]);
+    }
+  }
+  __syncthreads();
+  flush_tile(tile, g, G, slot, o);
+}
+
+//! P2G with a warp-level reduction (Gao et al. 2018, sec. 4.2, for particles grouped by cell):
+//! the lanes of a warp whose particles share a first stencil node ("peers", found by
+//! __match_any_sync, in any lane order) add their shares of each node in a tree of shuffles,
+//! and only the group's first lane adds the sum to the tile. Same-address shared atomics,
+//! which serialise (compare-and-swap loops), drop from one per particle to one per cell.
+template <class T, bool stress>
+__global__ void __launch_bounds__(kP2gThreads)
+    p2g_warp_kernel(ParticleView<T> P, GridFrame g, GridView<T> G, const unsigned* segment_keys,
+                    const unsigned* offsets, const unsigned* counts, const unsigned* order, const unsigned* slot,
+                    T dt) {
+  __shared__ T tile[4][kTileNodes];
+  clear_tile(tile);
+  int b[3];
+  decode(g, segment_keys[blockIdx.x], b);
+  const int o[3] = {b[0] << kBlockBits, b[1] << kBlockBits, b[2] << kBlockBits};
+  __syncthreads();
+  const unsigned first = offsets[blockIdx.x], count = counts[blockIdx.x];
+  const unsigned lane = threadIdx.x & 31u, warp_first = threadIdx.x - lane;
+  constexpr unsigned kAll = 0xffffffffu;
+  for (unsigned q0 = 0; q0 < count; q0 += blockDim.x) {  // uniform in the block: whole warps shuffle
+    if (q0 + warp_first >= count) break;
+    const unsigned q = q0 + threadIdx.x;
+    const bool has = q < count;
+    P2gShare<T, stress> share;
+    if (has)
+      share.load(P, g, o, order[first + q], dt);
+    else
+      share.clear();
+    // Peers: same first stencil node (its cell in the block, 0..63); an empty lane is alone.
+    const unsigned key = has ? unsigned((share.local[2] * 4 + share.local[1]) * 4 + share.local[0]) : 64u + lane;
+    const unsigned peers = __match_any_sync(kAll, key);
+    const unsigned rank = __popc(peers & ((1u << lane) - 1u)), size = __popc(peers);
+    unsigned largest = size;  // the largest group of the warp: the rounds of the tree
+#pragma unroll
+    for (int offset = 16; offset > 0; offset /= 2) largest = max(largest, __shfl_xor_sync(kAll, largest, offset));
+    // Tree over the ranks: in round r, rank k (k mod 2^(r+1) = 0) adds rank k + 2^r's partial
+    // sum. The rounds' sources are found once per particle, for all 27 nodes (compile-time
+    // indices: the arrays stay in registers).
+    unsigned source[5];
+    bool adds[5];
+#pragma unroll
+    for (int r = 0; r < 5; ++r) {
+      const unsigned d = 1u << r;
+      unsigned above = peers & ~((2u << lane) - 1u);                  // the peers after this lane
+      for (unsigned s = 1; s < d && above; ++s) above &= above - 1u;  // less the first d - 1
+      adds[r] = (rank & (2u * d - 1u)) == 0u && rank + d < size;
+      source[r] = adds[r] ? unsigned(__ffs(above) - 1) : lane;
+    }
+#pragma unroll
+    for (int n27 = 0; n27 < 27; ++n27) {
+      T value[4];
+      const int t = share.node(n27 % 3, (n27 / 3) % 3, n27 / 9, value);
+#pragma unroll
+      for (int r = 0; r < 5; ++r) {
+        if ((1u << r) >= largest) break;  // uniform in the warp
+#pragma unroll
+        for (int c = 0; c < 4; ++c) {
+          const T other = __shfl_sync(kAll, value[c], source[r]);
+          if (adds[r]) value[c] += other;
+        }
+      }
+      if (has && rank == 0u) {
+#pragma unroll
+        for (int c = 0; c < 4; ++c) atomicAdd(&tile[c][t], value[c]);
+      }
+    }
+  }
+  __syncthreads();
+  flush_tile(tile, g, G, slot, o);
 }
 
 template <class T>
@@ -556,7 +679,9 @@ __global__ void breaks_kernel(const unsigned* order, std::size_t n, unsigned* br
   if ((threadIdx.x & 31) == 0 && votes) atomicAdd(breaks, static_cast<unsigned>(__popc(votes)));
 }
 
-//! Moves the particle data into the sorted order: to[c][i] = from[c][order[i]] for every channel.
+//! Moves the particle data into the sorted order: to[c][i] = from[c][order[i]], channel c =
+//! blockIdx.y (the last y: material and host index). Blocks run in the order of their index, x
+//! first, so the random reads of one channel (n values, tens of MB) hit the L2 cache.
 template <class T>
 __global__ void permute_kernel(const T* from, T* to, int channels, const std::uint16_t* material_from,
                                std::uint16_t* material_to, const unsigned* host_from, unsigned* host_to,
@@ -564,9 +689,13 @@ __global__ void permute_kernel(const T* from, T* to, int channels, const std::ui
   const std::size_t i = blockIdx.x * std::size_t(blockDim.x) + threadIdx.x;
   if (i >= n) return;
   const std::size_t p = order[i];
-  for (int c = 0; c < channels; ++c) to[c * n + i] = from[c * n + p];
-  material_to[i] = material_from[p];
-  host_to[i] = host_from[p];
+  const int c = blockIdx.y;
+  if (c < channels) {
+    to[c * n + i] = from[c * n + p];
+  } else {
+    material_to[i] = material_from[p];
+    host_to[i] = host_from[p];
+  }
 }
 
 __global__ void iota_kernel(unsigned* out, std::size_t n) {
@@ -604,7 +733,10 @@ private:
 template <class T>
 class Solid final : public DeviceSolid {
 public:
-  explicit Solid(const DeviceScene& scene) : scene_(scene) {
+  explicit Solid(const DeviceScene& scene)
+      : scene_(scene),
+        warp_reduced_(scene.p2g_scatter == DeviceScene::Scatter::warp_reduced ||
+                      (scene.p2g_scatter == DeviceScene::Scatter::automatic && std::is_same_v<T, float>)) {
     for (int a = 0; a < 3; ++a) {
       frame_.origin[a] = scene.origin[a];
       frame_.node_counts[a] = scene.node_counts[a];
@@ -717,7 +849,7 @@ public:
     unsigned* keys_out = keys_.get() + n_;
     unsigned* index_in = index_.get();
     unsigned* index_out = index_.get() + n_;
-    keys_kernel<<<blocks_for(n_), 256>>>(view(), frame_, keys_in, index_in, errors);
+    keys_kernel<T, false><<<blocks_for(n_), 256>>>(view(), frame_, keys_in, index_in, errors);
     reserve_temp();
     std::size_t bytes = temp_bytes_;
     const int key_bits = bits_for(table_);
@@ -741,10 +873,20 @@ public:
     // the identity). Longer runs (a seeding lattice's rows, particles drifting across blocks)
     // keep their place: a move costs more than a few steps of gathers (docs/gpu.md).
     reordered_ = reinterpret_cast<const unsigned*>(host_scalars_ + 2)[0] > n_ / 4;
+    if (reordered_ && key_bits + 3 * kBlockBits <= 32) {
+      // The move puts the particles in cell order within their blocks (the block runs found
+      // above stay: the block is the key's high part). Later steps sort by block only, and the
+      // stable radix sort keeps this order for the particles that stay in their block.
+      keys_kernel<T, true><<<blocks_for(n_), 256>>>(view(), frame_, keys_in, index_in, errors);
+      bytes = temp_bytes_;
+      check(cub::DeviceRadixSort::SortPairs(temp_.get(), bytes, keys_in, keys_out, index_in, index_out, n_, 0,
+                                            key_bits + 3 * kBlockBits),
+            "sorting particles by cell");
+    }
     if (reordered_) {
-      permute_kernel<T><<<blocks_for(n_), 256>>>(particles_.get(), spare_.get(), static_cast<int>(channels),
-                                                 material_.get(), spare_material_.get(), host_index_.get(),
-                                                 spare_host_index_.get(), index_out, n_);
+      permute_kernel<T><<<dim3(blocks_for(n_), static_cast<unsigned>(channels + 1)), 256>>>(
+          particles_.get(), spare_.get(), static_cast<int>(channels), material_.get(), spare_material_.get(),
+          host_index_.get(), spare_host_index_.get(), index_out, n_);
       particles_.swap(spare_);
       material_.swap(spare_material_);
       host_index_.swap(spare_host_index_);
@@ -762,7 +904,8 @@ public:
     check(cudaMemsetAsync(grid_.get(), 0, 4 * nodes_ * sizeof(T)), "clearing the grid");
     cudaEventRecord(events_[1]);
     const GridView<T> G{grid_.get(), grid_.get() + nodes_, nodes_};
-    const auto p2g = scene_.transfers_only ? p2g_kernel<T, false> : p2g_kernel<T, true>;
+    const auto p2g = warp_reduced_ ? (scene_.transfers_only ? p2g_warp_kernel<T, false> : p2g_warp_kernel<T, true>)
+                                   : (scene_.transfers_only ? p2g_atomic_kernel<T, false> : p2g_atomic_kernel<T, true>);
     p2g<<<segments, kP2gThreads>>>(view(), frame_, G, segment_keys_.get(), offsets_.get(), counts_.get(), index_out,
                                    slot_.get(), T(dt));
     cudaEventRecord(events_[2]);
@@ -811,7 +954,7 @@ private:
     std::size_t sort = 0, encode = 0, scan_table = 0, scan_particles = 0;
     unsigned* u = nullptr;
     int* count = nullptr;
-    cub::DeviceRadixSort::SortPairs(nullptr, sort, u, u, u, u, n_, 0, bits_for(table_));
+    cub::DeviceRadixSort::SortPairs(nullptr, sort, u, u, u, u, n_, 0, std::min(bits_for(table_) + 3 * kBlockBits, 32));
     cub::DeviceRunLengthEncode::Encode(nullptr, encode, u, u, u, count, n_);
     cub::DeviceScan::ExclusiveSum(nullptr, scan_table, u, u, table_);
     cub::DeviceScan::ExclusiveSum(nullptr, scan_particles, u, u, n_);
@@ -820,6 +963,7 @@ private:
   }
 
   DeviceScene scene_;
+  bool warp_reduced_;  //!< the P2G scatter (DeviceScene::p2g_scatter)
   GridFrame frame_{};
   std::size_t table_ = 0, n_ = 0, nodes_ = 0, temp_bytes_ = 0;
   int active_blocks_ = 0;

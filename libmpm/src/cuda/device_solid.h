@@ -57,6 +57,14 @@ struct DeviceScene {
   //! The transfer benchmark (Gao et al. 2017, Table 1; bench/bench_cuda.cpp): P2G of mass and
   //! APIC momentum without the stress, G2P of v, C and x without F, return map or stress.
   bool transfers_only = false;
+  //! The P2G scatter into a particle block's shared tile. `automatic` takes the one measured
+  //! faster (docs/performance.md, "The CUDA step"): in single precision the warp-level reduction
+  //! of peers (P2G 0.65x on the transfer benchmark, 0.67x in the 3D column collapse with the
+  //! stress), in double precision one shared atomic per particle and node (shuffles of doubles
+  //! cost more than the atomics they save: 1.6x). The two others force one (bench_cuda --p2g,
+  //! the scatter test).
+  enum class Scatter { automatic, warp_reduced, one_atomic };
+  Scatter p2g_scatter = Scatter::automatic;
 };
 
 //! The particle channels the device holds, component-major (channel[c * n + p]) in double on the

@@ -51,22 +51,27 @@ void for_each_entry(std::size_t n, F&& f) {
                     [&](const tbb::blocked_range<std::size_t>& r) { block(r.begin(), r.end()); });
 }
 
+//! The sum of partial(first, last) over the blocks of kVectorBlock indices of [0, n), computed
+//! in parallel and added in block order: the same bits on every run and thread count.
+template <class F>
+double sum_by_blocks(std::size_t n, F&& partial) {
+  if (n <= kVectorBlock) return partial(std::size_t{0}, n);
+  std::vector<double> sums((n + kVectorBlock - 1) / kVectorBlock);
+  tbb::parallel_for(std::size_t{0}, sums.size(),
+                    [&](std::size_t k) { sums[k] = partial(k * kVectorBlock, std::min(n, (k + 1) * kVectorBlock)); });
+  double s = 0.0;
+  for (const double p : sums) s += p;
+  return s;
+}
+
 //! The Euclidean inner product of two vectors of equal size (summed by blocks, see above).
 template <class T>
 double dot(const std::vector<T>& a, const std::vector<T>& b) {
-  const auto sum = [&](std::size_t first, std::size_t last) {
+  return sum_by_blocks(a.size(), [&](std::size_t first, std::size_t last) {
     double s = 0.0;
     for (std::size_t i = first; i < last; ++i) s += inner(a[i], b[i]);
     return s;
-  };
-  const std::size_t n = a.size();
-  if (n <= kVectorBlock) return sum(0, n);
-  std::vector<double> partial((n + kVectorBlock - 1) / kVectorBlock);
-  tbb::parallel_for(std::size_t{0}, partial.size(),
-                    [&](std::size_t k) { partial[k] = sum(k * kVectorBlock, std::min(n, (k + 1) * kVectorBlock)); });
-  double s = 0.0;
-  for (const double p : partial) s += p;
-  return s;
+  });
 }
 
 }  // namespace mpm::solve
