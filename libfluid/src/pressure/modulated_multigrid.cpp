@@ -129,13 +129,23 @@ PatternRows multiply_patterns(const Eigen::SparseMatrix<double, Eigen::RowMajor>
       out.start.push_back(static_cast<int>(out.column.size()));
     }
   });
-  PatternRows joined = std::move(parts[0]);
-  for (std::size_t b = 1; b < parts.size(); ++b) {
-    const int offset = static_cast<int>(joined.column.size());
-    for (std::size_t r = 1; r < parts[b].start.size(); ++r) joined.start.push_back(offset + parts[b].start[r]);
-    joined.column.insert(joined.column.end(), parts[b].column.begin(), parts[b].column.end());
-    joined.value.insert(joined.value.end(), parts[b].value.begin(), parts[b].value.end());
+  // The blocks' rows joined in order, each block copied in parallel to its place.
+  std::vector<std::size_t> first_row(parts.size() + 1, 0), first_entry(parts.size() + 1, 0);
+  for (std::size_t b = 0; b < parts.size(); ++b) {
+    first_row[b + 1] = first_row[b] + parts[b].start.size() - 1;
+    first_entry[b + 1] = first_entry[b] + parts[b].column.size();
   }
+  PatternRows joined;
+  joined.start.resize(first_row.back() + 1);
+  joined.column.resize(first_entry.back());
+  joined.value.resize(first_entry.back() * static_cast<std::size_t>(K));
+  tbb::parallel_for(std::size_t{0}, parts.size(), [&](std::size_t b) {
+    const PatternRows& part = parts[b];
+    for (std::size_t r = 0; r < part.start.size(); ++r)
+      joined.start[first_row[b] + r] = static_cast<int>(first_entry[b]) + part.start[r];
+    std::copy(part.column.begin(), part.column.end(), joined.column.begin() + std::ptrdiff_t(first_entry[b]));
+    std::copy(part.value.begin(), part.value.end(), joined.value.begin() + std::ptrdiff_t(first_entry[b] * K));
+  });
   return joined;
 }
 
@@ -153,13 +163,13 @@ std::vector<Eigen::SparseMatrix<double, Eigen::RowMajor>> modulated_galerkin(
   const PatternRows C = multiply_patterns(R0, signs, P0.cols(), [&](Eigen::Index m, auto&& emit) {
     for (int e = T.start[m]; e < T.start[m + 1]; ++e) emit(T.column[e], &T.value[static_cast<std::size_t>(e) * K], 1);
   });
-  std::vector<Matrix> result;
-  std::vector<double> values(C.column.size());
-  for (int k = 0; k < K; ++k) {
+  std::vector<Matrix> result(static_cast<std::size_t>(K));
+  tbb::parallel_for(0, K, [&](int k) {
+    std::vector<double> values(C.column.size());
     for (std::size_t e = 0; e < values.size(); ++e) values[e] = C.value[e * K + k];
-    result.emplace_back(Eigen::Map<const Matrix>(R0.rows(), P0.cols(), static_cast<Eigen::Index>(values.size()),
-                                                 C.start.data(), C.column.data(), values.data()));
-  }
+    result[static_cast<std::size_t>(k)] = Eigen::Map<const Matrix>(
+        R0.rows(), P0.cols(), static_cast<Eigen::Index>(values.size()), C.start.data(), C.column.data(), values.data());
+  });
   return result;
 }
 
@@ -234,14 +244,20 @@ ModulatedMultigrid<dim>::ModulatedMultigrid(const CellOperator<dim>& op, const O
 template <int dim>
 typename ModulatedMultigrid<dim>::Matrix ModulatedMultigrid<dim>::fine_matrix(
     const CellOperator<dim>& op, const std::vector<std::int64_t>& compact) {
+  // for_each_entry gives the rows in cell order, each row's columns ascending and merged, and
+  // the fluid cells are numbered in cell order: the entries are the compressed rows as they come.
   const auto n = static_cast<Eigen::Index>(fluid_cells_.size());
-  std::vector<Triplet> entries;
+  std::vector<int> start{0}, column;
+  std::vector<double> value;
+  start.reserve(static_cast<std::size_t>(n) + 1);
   op.for_each_entry([&](std::int64_t row, std::int64_t col, double v) {
-    entries.emplace_back(static_cast<int>(compact[row]), static_cast<int>(compact[col]), v);
+    while (static_cast<std::int64_t>(start.size()) <= compact[row]) start.push_back(static_cast<int>(column.size()));
+    column.push_back(static_cast<int>(compact[col]));
+    value.push_back(v);
   });
-  Matrix A(n, n);
-  A.setFromTriplets(entries.begin(), entries.end());
-  return A;
+  start.resize(static_cast<std::size_t>(n) + 1, static_cast<int>(column.size()));
+  return Eigen::Map<const Matrix>(n, n, static_cast<Eigen::Index>(column.size()), start.data(), column.data(),
+                                  value.data());
 }
 
 template <int dim>
