@@ -83,26 +83,14 @@ bool order_by_block(const std::vector<Eigen::Matrix<T, dim, 1>>& x, const Kernel
       },
       kernel);
 
-  // Stable sort by block key (a counting sort by rank, block_table.h). The sorted keys are
-  // gathered once, in the order's sequence.
-  const bool in_order = std::is_sorted(key.begin(), key.end());
-  if (!in_order) {
-    order = stable_key_order(key);
-    std::vector<BlockKey> sorted_key(n);
-    for (std::size_t i = 0; i < n; ++i) sorted_key[i] = key[order[i]];
-    key.swap(sorted_key);
-  }
-
-  buckets.begin.clear();
-  buckets.block.clear();
+  // Stable sort by block key (a parallel counting sort by rank, block_table.h): its ranks are
+  // the buckets.
+  KeyOrder sorted = sort_keys(key);
+  const bool in_order = sorted.identity;
+  if (!in_order) order = std::move(sorted.order);
+  buckets.begin = std::move(sorted.begin);
+  buckets.block = std::move(sorted.key);
   for (auto& c : buckets.by_color) c.clear();
-  for (std::size_t i = 0; i < n; ++i) {
-    if (i == 0 || key[i] != key[i - 1]) {
-      buckets.begin.push_back(static_cast<std::uint32_t>(i));
-      buckets.block.push_back(key[i]);
-    }
-  }
-  buckets.begin.push_back(static_cast<std::uint32_t>(n));
 
   // Every bucket touches its own block and the +1 neighbours on each axis.
   std::vector<BlockKey> blocks;

@@ -2,6 +2,7 @@ list(APPEND MPM_CORE_SOURCES
   src/core/config.cpp
   src/core/command_line.cpp
   src/core/sparse_grid.cpp
+  src/core/block_table.cpp
   src/core/particle_buckets.cpp
   src/core/transfer.cpp
   src/core/finite_guard.cpp

@@ -87,24 +87,22 @@ private:
   std::size_t size_ = 0;
 };
 
-//! The stable order that sorts `keys`: the sorted sequence holds keys[order[0]], keys[order[1]],
-//! ... A counting sort by the rank of the keys present, O(n + k log k) for k distinct keys
-//! (blocks are few against particles).
-inline std::vector<std::uint32_t> stable_key_order(const std::vector<BlockKey>& keys) {
-  BlockTable rank;
-  std::vector<BlockKey> present;
-  for (BlockKey k : keys)
-    if (rank.insert(k, static_cast<int>(present.size())) == static_cast<int>(present.size())) present.push_back(k);
-  std::sort(present.begin(), present.end());
-  for (std::size_t r = 0; r < present.size(); ++r) rank.assign(present[r], static_cast<int>(r));
-  std::vector<std::uint32_t> offset(present.size() + 1, 0);
-  std::vector<std::uint32_t> key_rank(keys.size());
-  for (std::size_t i = 0; i < keys.size(); ++i)
-    ++offset[(key_rank[i] = static_cast<std::uint32_t>(rank.find(keys[i]))) + 1];
-  for (std::size_t r = 0; r < present.size(); ++r) offset[r + 1] += offset[r];
-  std::vector<std::uint32_t> order(keys.size());
-  for (std::size_t i = 0; i < keys.size(); ++i) order[offset[key_rank[i]]++] = static_cast<std::uint32_t>(i);
-  return order;
-}
+//! A stable sort of block keys (particles by the block of their stencil).
+struct KeyOrder {
+  std::vector<std::uint32_t> order;  //!< the sorted sequence holds keys[order[0]], keys[order[1]], ...
+  std::vector<BlockKey> key;         //!< the distinct keys, ascending
+  std::vector<std::uint32_t> begin;  //!< where key[r] begins in the sorted sequence; begin.back() = n
+  bool identity = false;             //!< the keys were sorted already (order is then empty)
+};
+
+//! The stable counting sort of `keys` by the rank of the keys present: O(n + k log k) for k
+//! distinct keys (blocks are few against particles). In parallel over chunks of the keys (each
+//! counts its keys per rank, then places them after the earlier chunks' keys of that rank); a
+//! key equal to its predecessor reuses its rank without a lookup. A stable sort's result is
+//! unique, so it does not depend on the thread count.
+KeyOrder sort_keys(const std::vector<BlockKey>& keys);
+
+//! The stable order that sorts `keys` (sort_keys' order, the identity when already sorted).
+std::vector<std::uint32_t> stable_key_order(const std::vector<BlockKey>& keys);
 
 }  // namespace mpm

@@ -2,12 +2,15 @@
 // particles whose first stencil node lies in its block, scattered storage is moved into
 // bucket order once, nearly ordered storage is reached through the index with transfers
 // bitwise equal to those on moved particles, single-precision positions give the same
-// buckets, and the scalar-generic loops run in float.
+// buckets, and the scalar-generic loops run in float. The parallel key sort under the buckets
+// equals std::stable_sort.
+#include <mpm/core/block_table.h>
 #include <mpm/core/detail/transfer_loops.h>
 #include <mpm/core/error.h>
 #include <mpm/core/transfer.h>
 
 #include <doctest/doctest.h>
+#include <tbb/task_arena.h>
 
 #include "random_particles.h"
 
@@ -143,4 +146,44 @@ TEST_CASE("the lowest-indexed bad particle is reported, whatever the thread coun
   ParticleBuckets<3> buckets;
   CHECK_THROWS_WITH_AS(sort_into_buckets(P, Kernel{QuadraticBSpline{}}, grid, buckets, "sort"),
                        doctest::Contains("particle 12345 has a non-finite position"), NumericalError);
+}
+
+TEST_CASE("the parallel key sort equals std::stable_sort on every thread count") {
+  // Keys in runs (particles of one block side by side), then shuffled, then sorted: more
+  // than one chunk of 2^16 keys, few and many distinct keys, and the empty and sorted cases.
+  std::mt19937_64 random(5);
+  for (const std::size_t n : {std::size_t{0}, std::size_t{1}, std::size_t{1000}, std::size_t{300000}}) {
+    for (const BlockKey distinct : {BlockKey{3}, BlockKey{5000}}) {
+      std::vector<BlockKey> runs;
+      while (runs.size() < n) runs.insert(runs.end(), 1 + random() % 40, (random() % distinct) * 7919);
+      runs.resize(n);
+      std::vector<BlockKey> shuffled = runs, sorted = runs;
+      std::shuffle(shuffled.begin(), shuffled.end(), random);
+      std::sort(sorted.begin(), sorted.end());
+      for (const std::vector<BlockKey>* keys : {&runs, &shuffled, &sorted}) {
+        std::vector<std::uint32_t> expected(n);
+        std::iota(expected.begin(), expected.end(), std::uint32_t{0});
+        std::stable_sort(expected.begin(), expected.end(),
+                         [&](std::uint32_t a, std::uint32_t b) { return (*keys)[a] < (*keys)[b]; });
+        for (const int threads : {1, 2, 7}) {
+          CAPTURE(n);
+          CAPTURE(threads);
+          tbb::task_arena arena(threads);
+          const KeyOrder got = arena.execute([&] { return sort_keys(*keys); });
+          CHECK(got.identity == (keys == &sorted || std::is_sorted(keys->begin(), keys->end())));
+          CHECK((got.identity ? got.order.empty() : got.order == expected));
+          CHECK(stable_key_order(*keys) == expected);
+          // The distinct keys ascending, each beginning where the sorted sequence reaches it.
+          REQUIRE(got.begin.size() == got.key.size() + 1);
+          CHECK(got.begin.back() == n);
+          bool runs_match = true;
+          for (std::size_t r = 0; r < got.key.size(); ++r) {
+            runs_match = runs_match && got.begin[r] < got.begin[r + 1] && (*keys)[expected[got.begin[r]]] == got.key[r];
+            if (got.begin[r] > 0) runs_match = runs_match && (*keys)[expected[got.begin[r] - 1]] < got.key[r];
+          }
+          CHECK(runs_match);
+        }
+      }
+    }
+  }
 }
