@@ -12,6 +12,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <cassert>
 #include <optional>
 #include <utility>
 
@@ -141,7 +142,7 @@ PatternRows multiply_patterns(const Eigen::SparseMatrix<double, Eigen::RowMajor>
   joined.value.resize(first_entry.back() * static_cast<std::size_t>(K));
   tbb::parallel_for(std::size_t{0}, parts.size(), [&](std::size_t b) {
     const PatternRows& part = parts[b];
-    for (std::size_t r = 0; r < part.start.size(); ++r)
+    for (std::size_t r = 1; r < part.start.size(); ++r)  // entry 0: the previous block's end (or 0)
       joined.start[first_row[b] + r] = static_cast<int>(first_entry[b]) + part.start[r];
     std::copy(part.column.begin(), part.column.end(), joined.column.begin() + std::ptrdiff_t(first_entry[b]));
     std::copy(part.value.begin(), part.value.end(), joined.value.begin() + std::ptrdiff_t(first_entry[b] * K));
@@ -251,6 +252,9 @@ typename ModulatedMultigrid<dim>::Matrix ModulatedMultigrid<dim>::fine_matrix(
   std::vector<double> value;
   start.reserve(static_cast<std::size_t>(n) + 1);
   op.for_each_entry([&](std::int64_t row, std::int64_t col, double v) {
+    [[maybe_unused]] const auto current = static_cast<std::int64_t>(start.size()) - 1;  // the row being filled
+    assert(compact[row] >= current);                                                    // rows ascending
+    assert(compact[row] > current || column.size() == std::size_t(start.back()) || column.back() < compact[col]);
     while (static_cast<std::int64_t>(start.size()) <= compact[row]) start.push_back(static_cast<int>(column.size()));
     column.push_back(static_cast<int>(compact[col]));
     value.push_back(v);

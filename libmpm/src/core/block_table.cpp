@@ -1,6 +1,7 @@
 #include <mpm/core/block_table.h>
 
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
@@ -11,9 +12,9 @@ namespace mpm {
 KeyOrder sort_keys(const std::vector<BlockKey>& keys) {
   const std::size_t n = keys.size();
   KeyOrder result;
-  // Chunks of at least 2^16 keys, a few per thread: the counts cost chunks x ranks.
+  // Chunks of at least 2^16 keys, a few per thread.
   const std::size_t threads = static_cast<std::size_t>(tbb::this_task_arena::max_concurrency());
-  const std::size_t chunks = std::clamp<std::size_t>(n >> 16, 1, 4 * threads);
+  std::size_t chunks = std::clamp<std::size_t>(n >> 16, 1, 4 * threads);
   const auto chunk_range = [&](std::size_t c) { return std::pair{n * c / chunks, n * (c + 1) / chunks}; };
   const auto for_chunks = [&](auto&& f) {
     if (chunks == 1) return f(std::size_t{0});
@@ -35,13 +36,15 @@ KeyOrder sort_keys(const std::vector<BlockKey>& keys) {
     d.erase(std::unique(d.begin(), d.end()), d.end());
   });
   for (const std::vector<BlockKey>& d : distinct) result.key.insert(result.key.end(), d.begin(), d.end());
-  std::sort(result.key.begin(), result.key.end());
+  tbb::parallel_sort(result.key.begin(), result.key.end());  // as long as n for scattered keys
   result.key.erase(std::unique(result.key.begin(), result.key.end()), result.key.end());
   const std::size_t k = result.key.size();
   BlockTable rank;
   rank.reset(k);
   for (std::size_t r = 0; r < k; ++r) rank.insert(result.key[r], static_cast<int>(r));
   result.identity = std::all_of(sorted.begin(), sorted.end(), [](char s) { return s != 0; });
+  // The counts cost chunks x ranks: at most about n (one chunk when every key is distinct).
+  chunks = std::clamp<std::size_t>(n / std::max<std::size_t>(k, 1), 1, chunks);
 
   // Each chunk's count per rank (chunk-major), turned into the first place of its keys of
   // that rank: after the keys of lower ranks and after the earlier chunks' keys of this rank.

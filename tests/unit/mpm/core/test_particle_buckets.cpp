@@ -149,10 +149,12 @@ TEST_CASE("the lowest-indexed bad particle is reported, whatever the thread coun
 }
 
 TEST_CASE("the parallel key sort equals std::stable_sort on every thread count") {
-  // Keys in runs (particles of one block side by side), then shuffled, then sorted: more
-  // than one chunk of 2^16 keys, few and many distinct keys, and the empty and sorted cases.
+  // Keys in runs (particles of one block side by side), then shuffled, then sorted; several
+  // chunks of 2^16 keys (their number set by the thread count at 700 000 keys), few and many
+  // distinct keys, and the empty and sorted cases.
   std::mt19937_64 random(5);
-  for (const std::size_t n : {std::size_t{0}, std::size_t{1}, std::size_t{1000}, std::size_t{300000}}) {
+  for (const std::size_t n :
+       {std::size_t{0}, std::size_t{1}, std::size_t{1000}, std::size_t{300000}, std::size_t{700000}}) {
     for (const BlockKey distinct : {BlockKey{3}, BlockKey{5000}}) {
       std::vector<BlockKey> runs;
       while (runs.size() < n) runs.insert(runs.end(), 1 + random() % 40, (random() % distinct) * 7919);
