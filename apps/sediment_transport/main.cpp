@@ -22,7 +22,8 @@
 // sediment_outflow_mass [kg], fluid_mass_balance_error and sediment_mass_balance_error
 // (|M(0) + M_in - M_out - M| / (M(0) + M_in), round-off), the water's particle spacing, and with
 // `pipeline: {diameter: D}` the comparison with pipeline-scour experiments
-// (coupling/pipeline_scour.h, data/reference/sumer_fredsoe2002.md).
+// (coupling/pipeline_scour.h, data/reference/sumer_fredsoe2002.md), in the bed's time (the flow's
+// times the bed-load closure's morphological_factor, coupling/bed_load.h).
 // --check: both mass balances below 1e-12 and a scour hole formed (max_scour_depth > 0).
 #include <coupling/bed_profile.h>
 #include <coupling/coupled_runner.h>
@@ -144,7 +145,11 @@ int run(const CommandLine& cl, const Config& scene) {
   if (predicted && std::count_if(times.begin(), times.end(), [](double t) { return t > 0.0; }) >= 2) {
     // Against Sumer & Fredsoe (data/reference/sumer_fredsoe2002.md): the scour history fitted
     // by S_eq (1 - exp(-t / T)); a run shorter than T extrapolates S_eq.
-    const coupling::ScourFit fit = coupling::fit_scour_history(times, scour);
+    // With the bed-load closure's morphological factor the bed's time is the flow's times it.
+    const double morphological = flume.bed_load ? flume.bed_load->morphological_factor : 1.0;
+    std::vector<double> bed_times = times;
+    for (double& t : bed_times) t *= morphological;
+    const coupling::ScourFit fit = coupling::fit_scour_history(bed_times, scour);
     results.insert(results.end(), {{"shields_number", predicted->shields_number},
                                    {"predicted_scour_depth", predicted->scour_depth},
                                    {"predicted_time_scale", predicted->time_scale},
@@ -153,7 +158,8 @@ int run(const CommandLine& cl, const Config& scene) {
                                    {"fit_rms_error", fit.rms_error},
                                    {"scour_depth_ratio", fit.equilibrium_depth / predicted->scour_depth},
                                    {"time_scale_ratio", fit.time_scale / predicted->time_scale},
-                                   {"scour_history_error", coupling::scour_history_error(times, scour, *predicted)}});
+                                   {"scour_history_error", coupling::scour_history_error(bed_times, scour, *predicted)},
+                                   {"morphological_factor", morphological}});
   }
   runner.write_summary(results);
   if (!cl.check) return 0;

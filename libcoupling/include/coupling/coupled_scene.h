@@ -11,7 +11,9 @@
 //!   solver's projection) -> boundary (sediment) -> the particle updates of both solvers (fluid:
 //!   its particle update, then g2p; sediment: g2p, explicit with the deformation update and,
 //!   when plastic, the return map: g2p_plasticity) -> reclassify (a continuum sediment with
-//!   `switching`: stages/reclassify_sediment.h)
+//!   `switching`: stages/reclassify_sediment.h). With `bed_load` (coupling/bed_load.h):
+//!   bed_surface before the exchange, bed_shear after it, bed_load after the sediment's g2p.
+#include <coupling/bed_load.h>
 #include <coupling/coupled_state.h>
 #include <coupling/drag/drag_law.h>
 #include <coupling/stages/reclassify_sediment.h>
@@ -68,6 +70,9 @@ struct CoupledScene {
   mpm::geometry::FlowBoundaries<dim> flow;
   //! The emitters of each phase (the inflow's among the fluid's), one source stage each.
   std::vector<typename mpm::stages::ParticleSource<dim>::Settings> fluid_sources, sediment_sources;
+  //! The bed-load closure at the bed surface (coupling/bed_load.h; scene key `bed_load`);
+  //! nullopt: the drag acts at the bed surface as everywhere, and the pipeline has no bed stages.
+  std::optional<BedLoadLaw> bed_load;
 };
 
 //! A scene without particles; a grid is allocated for each phase present. InputError when
@@ -95,6 +100,10 @@ template <int dim>
 void add_sediment_particles(CoupledScene<dim>& scene, const std::vector<mpm::Vec<dim>>& positions, double grain_volume,
                             const mpm::Vec<dim>& velocity, const std::string& where);
 
+//! The axis gravity points down along (y in the shipped scenes); InputError unless gravity lies
+//! along one axis and points towards its negative end.
+template <int dim>
+int vertical_axis(const mpm::SceneSettings<dim>& settings);
 //! The coupled pipeline of the header comment for the phases `scene` holds.
 template <int dim>
 mpm::Pipeline<CoupledState<dim>> make_coupled_pipeline(const CoupledScene<dim>& scene);

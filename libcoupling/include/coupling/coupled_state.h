@@ -3,6 +3,7 @@
 //! per phase, each with its own particles and sparse grid over the same lattice (same origin,
 //! dx and extent, so node k of one grid and the node with the same coordinate of the other
 //! coincide), plus the volume fractions and the shared clock.
+#include <coupling/bed_load.h>
 #include <coupling/volume_fraction.h>
 #include <mpm/core/state.h>
 #include <mpm/core/types.h>
@@ -24,6 +25,9 @@ struct CoupledState {
   //! missing); the mixture projection uses the same, so that the step's steady state is the
   //! drag law's for any dt.
   std::vector<double> drag;
+  //! The bed-surface layer of the bed-load closure (coupling/bed_load.h), rebuilt every step;
+  //! empty in a scene without `bed_load`.
+  BedLayer<dim> bed;
   double time = 0.0;        //!< [s]
   double dt = 0.0;          //!< step being taken [s]
   double dt_limit = 1e300;  //!< largest step allowed now (frame end) [s]

@@ -1,4 +1,5 @@
 #include <coupling/coupled_scene.h>
+#include <coupling/stages/bed_load.h>
 #include <coupling/stages/coupled_time_step.h>
 #include <coupling/stages/exchange_stage.h>
 #include <coupling/stages/mixture_projection.h>
@@ -68,6 +69,7 @@ CoupledScene<dim> make_coupled_scene(mpm::SceneSettings<dim> settings, mpm::geom
           std::move(state),
           {},
           {},
+          {},
           {}};
 }
 
@@ -93,6 +95,17 @@ void add_sediment_particles(CoupledScene<dim>& scene, const std::vector<mpm::Vec
   const std::uint16_t material = scene.sediment->materials.empty() ? discrete_grain : 0;
   for (const mpm::Vec<dim>& x : positions)
     scene.state.sediment.particles.push_back(x, velocity, mass, grain_volume, material);
+}
+
+template <int dim>
+int vertical_axis(const mpm::SceneSettings<dim>& settings) {
+  const mpm::Vec<dim>& g = settings.gravity;
+  int up = -1;
+  for (int a = 0; a < dim; ++a)
+    if (g[a] != 0.0) up = up == -1 ? a : dim;
+  mpm::verify<mpm::InputError>(up >= 0 && up < dim && g[up] < 0.0,
+                               "coupled scene: a bed needs gravity along one axis, pointing down");
+  return up;
 }
 
 template <int dim>
@@ -144,7 +157,10 @@ mpm::Pipeline<CoupledState<dim>> make_coupled_pipeline(const CoupledScene<dim>& 
   if (sandy)
     for (auto& stage : scene.solid_solver->grid_update()) on(Phase::sediment, std::move(stage));
   if (compressible) p.add(std::make_unique<stages::PorePressureShare<dim>>());
+  const bool bed_load = wet && sandy && scene.bed_load.has_value();
+  if (bed_load) p.add(std::make_unique<stages::BedSurface<dim>>(*scene.bed_load, vertical_axis(scene.settings)));
   if (wet && sandy) p.add(std::make_unique<stages::ExchangeStage<dim>>(*scene.drag));
+  if (bed_load) p.add(std::make_unique<stages::BedShear<dim>>());
   both([&] { return std::make_unique<ms::GridBoundary<dim>>(scene.colliders); });
   if (wet && sandy && !compressible) {
     p.add(std::make_unique<stages::MixtureProjection<dim>>(scene.fluid->density, scene.sediment->density,
@@ -164,6 +180,7 @@ mpm::Pipeline<CoupledState<dim>> make_coupled_pipeline(const CoupledScene<dim>& 
   }
   if (sandy)  // g2p first, with the deformation update where the solver tracks F
     for (auto& stage : scene.solid_solver->particle_update()) on(Phase::sediment, std::move(stage));
+  if (bed_load) p.add(std::make_unique<stages::BedLoadDrift<dim>>());
   if (switching)
     p.add(
         std::make_unique<stages::ReclassifySediment<dim>>(*scene.sediment->switching, scene.sediment->density, 0, wet));
@@ -179,7 +196,8 @@ mpm::Pipeline<CoupledState<dim>> make_coupled_pipeline(const CoupledScene<dim>& 
                                     const mpm::Vec<dim>&, const std::string&);                                        \
   template void add_sediment_particles(CoupledScene<dim>&, const std::vector<mpm::Vec<dim>>&, double,                 \
                                        const mpm::Vec<dim>&, const std::string&);                                     \
-  template mpm::Pipeline<CoupledState<dim>> make_coupled_pipeline(const CoupledScene<dim>&);
+  template mpm::Pipeline<CoupledState<dim>> make_coupled_pipeline(const CoupledScene<dim>&);                          \
+  template int vertical_axis(const mpm::SceneSettings<dim>&);
 COUPLED_SCENE(2)
 COUPLED_SCENE(3)
 

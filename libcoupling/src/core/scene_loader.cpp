@@ -116,6 +116,37 @@ void start_geostatic(CoupledScene<dim>& scene, std::size_t first, const std::vec
 }
 }  // namespace
 
+namespace {
+//! The bed-load closure's keys (coupling/bed_load.h); the grains' diameter is the drag law's.
+template <int dim>
+BedLoadLaw parse_bed_load(const mpm::Config& bed, const mpm::Config& scene, const CoupledScene<dim>& out) {
+  using mpm::Range;
+  if (!out.fluid || !out.sediment)
+    bed.fail("morphological_factor", "the bed-load closure needs a fluid and a sediment");
+  try {
+    (void)vertical_axis(out.settings);
+  } catch (const mpm::InputError& e) {
+    scene.fail("gravity", e.what());
+  }
+  BedLoadLaw law;
+  law.grain_diameter = scene.child("drag").number("grain_diameter", Range::positive());
+  law.fluid_density = out.fluid->density;
+  law.sediment_density = out.sediment->density;
+  if (!(law.sediment_density > law.fluid_density))
+    scene.fail("sediment", "the bed-load closure needs grains denser than the fluid");
+  law.gravity = out.settings.gravity.norm();
+  law.critical_shields = bed.number("critical_shields", law.critical_shields, Range::non_negative());
+  law.coefficient = bed.number("coefficient", law.coefficient, Range::positive());
+  law.exponent = bed.number("exponent", law.exponent, Range::positive());
+  // The wall law's reference lies at least dx above the bed: inside the log layer, z > e z_0.
+  const double largest_roughness = 30.0 * out.settings.dx / (std::exp(1.0) * law.grain_diameter);
+  law.roughness = bed.number("roughness", law.roughness, Range::open(0.0, largest_roughness));
+  law.morphological_factor = bed.number("morphological_factor", law.morphological_factor, Range::closed(1.0, 1e6));
+  law.surface_fraction = bed.number("surface_fraction", law.surface_fraction, Range::open(0.0, 1.0));
+  return law;
+}
+}  // namespace
+
 template <int dim>
 CoupledScene<dim> load_coupled_scene(const mpm::Config& scene) {
   using mpm::Range;
@@ -146,6 +177,8 @@ CoupledScene<dim> load_coupled_scene(const mpm::Config& scene) {
   CoupledScene<dim> out =
       make_coupled_scene<dim>(std::move(settings), std::move(colliders), water, pressure, sand, drag, fluid_solver);
   out.flow = std::move(flow);
+  if (const std::optional<mpm::Config> bed = scene.optional_child("bed_load"))
+    out.bed_load = parse_bed_load(*bed, scene, out);
 
   // The grain volume fraction of a body leaves the pore fluid at least n_min.
   std::optional<Range> packing;

@@ -8,4 +8,5 @@ list(APPEND COUPLING_SOURCES
   src/core/bed_profile.cpp
   src/core/pipeline_scour.cpp
   src/core/pressure_probe.cpp
+  src/core/bed_load.cpp
 )

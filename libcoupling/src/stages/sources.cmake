@@ -4,4 +4,5 @@ list(APPEND COUPLING_SOURCES
   src/stages/pore_pressure.cpp
   src/stages/mixture_projection.cpp
   src/stages/reclassify_sediment.cpp
+  src/stages/bed_load.cpp
 )

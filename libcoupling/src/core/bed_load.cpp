@@ -1,0 +1,155 @@
+#include <coupling/bed_load.h>
+#include <mpm/core/error.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace coupling {
+
+namespace {
+constexpr double kKarman = 0.4;  // 1 / 2.5, as Keulegan's depth-averaged law is quoted
+}
+
+bool BedLoadLaw::in_log_layer(double depth) const { return 11.0 * depth > std::exp(1.0) * roughness * grain_diameter; }
+
+double BedLoadLaw::friction_velocity(double speed, double depth) const {
+  mpm::verify<mpm::Error>(in_log_layer(depth), "bed load: a water depth within the roughness height");
+  return kKarman * speed / std::log(11.0 * depth / (roughness * grain_diameter));
+}
+
+double BedLoadLaw::shields_number(double friction_velocity) const {
+  return fluid_density * friction_velocity * friction_velocity /
+         ((sediment_density - fluid_density) * gravity * grain_diameter);
+}
+
+double BedLoadLaw::flux(double shields) const {
+  if (!(shields > critical_shields)) return 0.0;
+  const double s = sediment_density / fluid_density;
+  return coefficient * std::pow(shields - critical_shields, exponent) *
+         std::sqrt((s - 1.0) * gravity * grain_diameter * grain_diameter * grain_diameter);
+}
+
+template <int dim>
+void find_bed_layer(const BedLoadLaw& law, int up, const mpm::SparseGrid<dim>& fluid,
+                    const mpm::SparseGrid<dim>& sediment, const VolumeFractions& fractions, BedLayer<dim>& layer) {
+  mpm::verify<mpm::Error>(fractions.sediment.size() == sediment.node_storage(),
+                          "bed load: no volume fractions of this step");
+  const mpm::IVec<dim>& counts = sediment.node_counts();
+  const auto column_of = [&](const mpm::IVec<dim>& c) {
+    std::int64_t id = 0;
+    for (int a = dim - 1; a >= 0; --a)
+      if (a != up) id = id * counts[a] + c[a];
+    return id;
+  };
+  std::int64_t columns = 1;
+  for (int a = 0; a < dim; ++a)
+    if (a != up) columns *= counts[a];
+  // The surface node of each column: its highest node of n_s >= the surface fraction.
+  std::vector<mpm::IVec<dim>> top(static_cast<std::size_t>(columns), mpm::IVec<dim>::Constant(-1));
+  for (std::size_t k = 0; k < sediment.node_storage(); ++k) {
+    if (!(sediment.mass[k] > 0.0) || fractions.sediment[k] < law.surface_fraction) continue;
+    const mpm::IVec<dim> c = sediment.node_coord(k);
+    mpm::IVec<dim>& t = top[static_cast<std::size_t>(column_of(c))];
+    if (c[up] > t[up]) t = c;
+  }
+
+  layer.up = up;
+  layer.nodes.clear();
+  layer.stress.assign(top.size(), mpm::Vec<dim>::Zero());
+  layer.drift.assign(top.size(), mpm::Vec<dim>::Zero());
+  layer.largest_shields = 0.0;
+  const double dx = sediment.dx(), width = std::pow(dx, dim - 1);
+  const mpm::IVec<dim> step = mpm::IVec<dim>::Unit(up);
+  for (std::size_t col = 0; col < top.size(); ++col) {
+    if (top[col][up] < 0) continue;
+    double mass = 0.0, n_s[2] = {0.0, 0.0};
+    for (int j = 0; j < 2; ++j) {
+      const mpm::IVec<dim> c = top[col] + j * step;
+      const mpm::Index ks = sediment.node_index(c);
+      if (ks < 0 || !(sediment.mass[static_cast<std::size_t>(ks)] > 0.0)) continue;
+      const mpm::Index kw = fluid.node_index(c);
+      BedLayerNode<dim> node;
+      node.sediment = static_cast<std::size_t>(ks);
+      node.fluid = kw >= 0 && fluid.mass[static_cast<std::size_t>(kw)] > 0.0 ? kw : -1;
+      node.column = static_cast<std::int64_t>(col);
+      node.v_s = sediment.velocity[node.sediment];
+      if (node.fluid >= 0) node.v_w = fluid.velocity[static_cast<std::size_t>(node.fluid)];
+      layer.nodes.push_back(node);
+      mass += sediment.mass[node.sediment];
+      n_s[j] = fractions.sediment[node.sediment];
+    }
+    // The water column above the bed: the nodes from the one above the surface node up to the
+    // first without water (the free surface, or a collider such as a pipe over the bed).
+    double water = 0.0;
+    mpm::Vec<dim> momentum = mpm::Vec<dim>::Zero();
+    for (int j = 1;; ++j) {
+      const mpm::Index kw = fluid.node_index(top[col] + j * step);
+      if (kw < 0 || !(fluid.mass[static_cast<std::size_t>(kw)] > 0.0)) break;
+      water += fluid.mass[static_cast<std::size_t>(kw)];
+      momentum += fluid.mass[static_cast<std::size_t>(kw)] * fluid.velocity[static_cast<std::size_t>(kw)];
+    }
+    if (!(water > 0.0)) continue;
+    mpm::Vec<dim> u = momentum / water - sediment.velocity[static_cast<std::size_t>(sediment.node_index(top[col]))];
+    u[up] = 0.0;
+    const double speed = u.norm();
+    // The bed level between the surface node and the node above, where n_s crosses the surface
+    // fraction (n_s[0] >= it > n_s[1]). The nodes from the one above count the water from half a
+    // spacing above the surface node.
+    const double crossing = std::clamp((n_s[0] - law.surface_fraction) / (n_s[0] - n_s[1]), 0.0, 1.0);
+    const double depth = water / (law.fluid_density * width) + (0.5 - crossing) * dx;
+    if (!(speed > 0.0) || !law.in_log_layer(depth)) continue;
+    const double u_star = law.friction_velocity(speed, depth);
+    const double theta = law.shields_number(u_star);
+    layer.largest_shields = std::max(layer.largest_shields, theta);
+    const mpm::Vec<dim> along = u / speed;
+    layer.stress[col] = law.fluid_density * u_star * u_star * along;
+    const double q = law.morphological_factor * law.flux(theta);
+    if (q > 0.0 && mass > 0.0) layer.drift[col] = std::min(law.sediment_density * q * width / mass, speed) * along;
+  }
+}
+
+template <int dim>
+std::size_t limit_bed_shear(const BedLayer<dim>& layer, mpm::SparseGrid<dim>& fluid, mpm::SparseGrid<dim>& sediment,
+                            double dt) {
+  const double width = std::pow(sediment.dx(), dim - 1);
+  const auto tangential = [&](mpm::Vec<dim> v) {
+    v[layer.up] = 0.0;
+    return v;
+  };
+  std::size_t limited = 0;
+  // The nodes of a column are consecutive (find_bed_layer).
+  for (std::size_t first = 0, last = 0; first < layer.nodes.size(); first = last) {
+    const std::int64_t col = layer.nodes[first].column;
+    mpm::Vec<dim> impulse = mpm::Vec<dim>::Zero();
+    for (last = first; last < layer.nodes.size() && layer.nodes[last].column == col; ++last) {
+      const BedLayerNode<dim>& n = layer.nodes[last];
+      impulse += sediment.mass[n.sediment] * tangential(sediment.velocity[n.sediment] - n.v_s);
+    }
+    const double allowed = layer.stress[static_cast<std::size_t>(col)].norm() * width * dt;
+    if (!(impulse.norm() > allowed)) continue;
+    ++limited;
+    // Each node's exchange moved m_w dv_w = -m_s dv_s: scaling both keeps its momentum.
+    const double f = allowed / impulse.norm();
+    for (std::size_t i = first; i < last; ++i) {
+      const BedLayerNode<dim>& n = layer.nodes[i];
+      for (int a = 0; a < dim; ++a) {
+        if (a == layer.up) continue;
+        double& v_s = sediment.velocity[n.sediment][a];
+        v_s = n.v_s[a] + f * (v_s - n.v_s[a]);
+        if (n.fluid < 0) continue;
+        double& v_w = fluid.velocity[static_cast<std::size_t>(n.fluid)][a];
+        v_w = n.v_w[a] + f * (v_w - n.v_w[a]);
+      }
+    }
+  }
+  return limited;
+}
+
+#define BED_LOAD(dim)                                                                                            \
+  template void find_bed_layer(const BedLoadLaw&, int, const mpm::SparseGrid<dim>&, const mpm::SparseGrid<dim>&, \
+                               const VolumeFractions&, BedLayer<dim>&);                                          \
+  template std::size_t limit_bed_shear(const BedLayer<dim>&, mpm::SparseGrid<dim>&, mpm::SparseGrid<dim>&, double);
+BED_LOAD(2)
+BED_LOAD(3)
+
+}  // namespace coupling
