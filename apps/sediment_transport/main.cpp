@@ -23,7 +23,8 @@
 // (|M(0) + M_in - M_out - M| / (M(0) + M_in), round-off), the water's particle spacing, and with
 // `pipeline: {diameter: D}` the comparison with pipeline-scour experiments
 // (coupling/pipeline_scour.h, data/reference/sumer_fredsoe2002.md), in the bed's time (the flow's
-// times the bed-load closure's morphological_factor, coupling/bed_load.h).
+// since sediment.hold_until, times the bed-load closure's morphological_factor,
+// coupling/bed_load.h).
 // --check: both mass balances below 1e-12 and a scour hole formed (max_scour_depth > 0).
 #include <coupling/bed_profile.h>
 #include <coupling/coupled_runner.h>
@@ -145,10 +146,11 @@ int run(const CommandLine& cl, const Config& scene) {
   if (predicted && std::count_if(times.begin(), times.end(), [](double t) { return t > 0.0; }) >= 2) {
     // Against Sumer & Fredsoe (data/reference/sumer_fredsoe2002.md): the scour history fitted
     // by S_eq (1 - exp(-t / T)); a run shorter than T extrapolates S_eq.
-    // With the bed-load closure's morphological factor the bed's time is the flow's times it.
+    // The bed's time: from its release (sediment.hold_until), times the bed-load closure's
+    // morphological factor.
     const double morphological = flume.bed_load ? flume.bed_load->morphological_factor : 1.0;
     std::vector<double> bed_times = times;
-    for (double& t : bed_times) t *= morphological;
+    for (double& t : bed_times) t = std::max(0.0, t - flume.sediment->hold_until) * morphological;
     const coupling::ScourFit fit = coupling::fit_scour_history(bed_times, scour);
     results.insert(results.end(), {{"shields_number", predicted->shields_number},
                                    {"predicted_scour_depth", predicted->scour_depth},

@@ -48,6 +48,8 @@ struct SedimentPhase {
   //! Continuum <-> discrete switching (needs materials); nullopt: every particle keeps its
   //! state and the pipeline has no reclassify stage.
   std::optional<SedimentSwitching> switching;
+  //! The bed is held rigid while the time is below this [s] (stages/hold_sediment.h); 0: never.
+  double hold_until = 0.0;
 };
 
 template <int dim>

@@ -2,6 +2,7 @@
 #include <coupling/stages/bed_load.h>
 #include <coupling/stages/coupled_time_step.h>
 #include <coupling/stages/exchange_stage.h>
+#include <coupling/stages/hold_sediment.h>
 #include <coupling/stages/mixture_projection.h>
 #include <coupling/stages/on_phase.h>
 #include <coupling/stages/pore_pressure.h>
@@ -178,9 +179,11 @@ mpm::Pipeline<CoupledState<dim>> make_coupled_pipeline(const CoupledScene<dim>& 
     for (auto& stage : scene.fluid_solver->particle_update()) on(Phase::fluid, std::move(stage));
     on(Phase::fluid, std::make_unique<ms::GridToParticles<dim>>());
   }
+  if (sandy && scene.sediment->hold_until > 0.0)
+    p.add(std::make_unique<stages::HoldSediment<dim>>(scene.sediment->hold_until));
   if (sandy)  // g2p first, with the deformation update where the solver tracks F
     for (auto& stage : scene.solid_solver->particle_update()) on(Phase::sediment, std::move(stage));
-  if (bed_load) p.add(std::make_unique<stages::BedLoadDrift<dim>>());
+  if (bed_load) p.add(std::make_unique<stages::BedLoadDrift<dim>>(scene.colliders));
   if (switching)
     p.add(
         std::make_unique<stages::ReclassifySediment<dim>>(*scene.sediment->switching, scene.sediment->density, 0, wet));

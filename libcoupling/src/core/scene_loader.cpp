@@ -62,6 +62,7 @@ SedimentPhase<dim> parse_sediment_phase(const mpm::Config& sediment) {
     s.density = sediment.number("density", Range::positive());
   }
   s.min_fluid_fraction = sediment.number("min_fluid_fraction", default_min_fluid_fraction, Range::open(0.0, 1.0));
+  s.hold_until = sediment.number("hold_until", 0.0, Range::non_negative());
   if (const std::optional<mpm::Config> keys = sediment.optional_child("switching")) {
     if (s.materials.empty())
       sediment.fail("switching",
@@ -88,11 +89,12 @@ void start_geostatic(CoupledScene<dim>& scene, std::size_t first, const std::vec
   if (!scene.sediment || scene.sediment->materials.empty() || scene.sediment->solver == "grains")
     body.fail("geostatic", "a geostatic start needs a continuum sediment (sediment.solver: explicit or implicit)");
   const mpm::Vec<dim>& g = scene.settings.gravity;
-  int up = -1;
-  for (int a = 0; a < dim; ++a)
-    if (g[a] != 0.0) up = up == -1 ? a : dim;
-  if (up < 0 || up == dim || g[up] > 0.0)
+  int up = 0;
+  try {
+    up = vertical_axis(scene.settings);
+  } catch (const mpm::InputError&) {
     body.fail("geostatic", "a geostatic start needs gravity along one axis, pointing down (-y in 2D, -z in 3D)");
+  }
   const double spacing =
       scene.settings.dx / mpm::geometry::lattice_points_per_axis<dim>(mpm::geometry::particles_per_cell<dim>(body));
   // The body's top per lattice column (positions rounded to the lattice across the vertical).

@@ -6,8 +6,10 @@
 #include <coupling/bed_load.h>
 #include <coupling/coupled_state.h>
 #include <mpm/core/stage.h>
+#include <mpm/geometry/collider.h>
 
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace coupling::stages {
@@ -50,13 +52,19 @@ private:
   std::vector<double> node_drift_, particle_drift_;
 };
 
+//! Moves each grain by dt times its drift, unless that would put it inside a collider (a grain
+//! rolling against a pipe or a weir stops there).
 template <int dim>
 class BedLoadDrift final : public mpm::Stage<CoupledState<dim>> {
 public:
+  explicit BedLoadDrift(mpm::geometry::ColliderSet<dim> colliders) : colliders_(std::move(colliders)) {}
   std::string name() const override { return "bed_load"; }
   std::vector<std::string> reads() const override { return {"bed", "sediment.particle.x"}; }
   std::vector<std::string> writes() const override { return {"sediment.particle.x"}; }
   void run(CoupledState<dim>& s) override;
+
+private:
+  mpm::geometry::ColliderSet<dim> colliders_;
 };
 
 }  // namespace coupling::stages

@@ -8,6 +8,7 @@
 #include <doctest/doctest.h>
 #include <mpm/core/advance.h>
 #include <mpm/core/error.h>
+#include <mpm/solid/solid_channels.h>
 
 #include <algorithm>
 #include <cmath>
@@ -20,8 +21,8 @@ namespace {
 
 //! A flume as the flagship's at half its size: a bed 0.3 m long and 0.05 m deep between sills,
 //! under 0.07 m of water entering at 0.4 m/s and leaving over a weir 2 cm above the bed;
-//! `bed_load` is the closure's map (empty: none).
-mpm::Config flume(const std::string& bed_load) {
+//! `bed_load` is the closure's map (empty: none), `sediment` more keys of the sediment map.
+mpm::Config flume(const std::string& bed_load, const std::string& sediment = "") {
   return mpm::Config::parse(R"(
 dim: 2
 domain: {lo: [0, -0.01], hi: [0.4, 0.16]}
@@ -33,7 +34,8 @@ fluid: {density: 1000, viscosity: 1.0e-3}
 pressure: {solver: mgpcg, tolerance: 1.0e-9}
 drag: {law: di_felice, grain_diameter: 5.0e-4}
 sediment: {density: 2650, youngs_modulus: 5.0e4, poisson_ratio: 0.3, elasticity: hencky_stvk,
-           plasticity: {model: drucker_prager, friction_angle: 32}}
+           plasticity: {model: drucker_prager, friction_angle: 32})" +
+                            sediment + R"(}
 inflow: {face: x_min, velocity: [0.4, 0], lo: [0, 0.05], hi: [0.02, 0.12], particles_per_cell: 4}
 outflow: {face: x_max}
 colliders:
@@ -210,4 +212,24 @@ bodies:
 bed_load: {}
 )";
   CHECK_THROWS_WITH_AS(load_coupled_scene<2>(mpm::Config::parse(dry)), doctest::Contains("bed_load"), mpm::InputError);
+}
+
+TEST_CASE("sediment.hold_until: the bed keeps every particle while held and moves once released") {
+  // With a drift that would move the surface at once.
+  CoupledScene<2> scene = load_coupled_scene<2>(
+      flume("bed_load: {critical_shields: 0.01, morphological_factor: 100}", ", hold_until: 0.05"));
+  auto pipeline = make_coupled_pipeline(scene);
+  CoupledState<2>& s = scene.state;
+  const std::vector<Vec<2>> x0 = s.sediment.particles.x;
+  const std::vector<mpm::Mat<2>> F0 = mpm::solid::elastic_F(s.sediment.particles);
+  mpm::advance(s, pipeline, 0.05);
+  CHECK(s.sediment.particles.x == x0);
+  CHECK(mpm::solid::elastic_F(s.sediment.particles) == F0);
+  double fluid_speed = 0.0;
+  for (const Vec<2>& v : s.fluid.particles.v) fluid_speed = std::max(fluid_speed, v.norm());
+  CHECK(fluid_speed > 0.3);  // the current runs over the held bed
+  mpm::advance(s, pipeline, 0.06);
+  CHECK(surface_shift(s, x0) > 0.0);  // released: the drift moves the surface downstream
+  CHECK_THROWS_WITH_AS(load_coupled_scene<2>(flume("", ", hold_until: -1")), doctest::Contains("sediment.hold_until"),
+                       mpm::InputError);
 }
