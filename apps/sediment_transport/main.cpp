@@ -143,14 +143,14 @@ int run(const CommandLine& cl, const Config& scene) {
       {"water_spacing_cv", runner.history("water_spacing_cv").back()},
       {"water_empty_share", runner.history("water_empty_share").back()}};
   const std::vector<double> times = runner.history("time");
-  if (predicted && std::count_if(times.begin(), times.end(), [](double t) { return t > 0.0; }) >= 2) {
+  // The bed's time: from its release (sediment.hold_until), times the bed-load closure's
+  // morphological factor.
+  const double morphological = flume.bed_load ? flume.bed_load->morphological_factor : 1.0;
+  std::vector<double> bed_times = times;
+  for (double& t : bed_times) t = std::max(0.0, t - flume.sediment->hold_until) * morphological;
+  if (predicted && std::count_if(bed_times.begin(), bed_times.end(), [](double t) { return t > 0.0; }) >= 2) {
     // Against Sumer & Fredsoe (data/reference/sumer_fredsoe2002.md): the scour history fitted
     // by S_eq (1 - exp(-t / T)); a run shorter than T extrapolates S_eq.
-    // The bed's time: from its release (sediment.hold_until), times the bed-load closure's
-    // morphological factor.
-    const double morphological = flume.bed_load ? flume.bed_load->morphological_factor : 1.0;
-    std::vector<double> bed_times = times;
-    for (double& t : bed_times) t = std::max(0.0, t - flume.sediment->hold_until) * morphological;
     const coupling::ScourFit fit = coupling::fit_scour_history(bed_times, scour);
     results.insert(results.end(), {{"shields_number", predicted->shields_number},
                                    {"predicted_scour_depth", predicted->scour_depth},

@@ -87,8 +87,11 @@ struct BedLayer {
 };
 
 //! Finds the layer (per column the highest sediment node with n_s >= surface_fraction and the
-//! node above it), the wall stress from the water two nodes above the surface node and the
-//! drift, and records the nodes' velocities before the exchange. `up`: the vertical axis.
+//! node above it), the wall stress from the column's depth-averaged water above it and the
+//! drift, and records the nodes' velocities before the exchange. `up`: the vertical axis. A
+//! column without water above its surface node (below a pipe resting on the bed), without
+//! current or shallower than the log layer gets no stress, and limit_bed_shear then takes all
+//! the tangential drag out of its layer: no current, no wall stress.
 template <int dim>
 void find_bed_layer(const BedLoadLaw& law, int up, const mpm::SparseGrid<dim>& fluid,
                     const mpm::SparseGrid<dim>& sediment, const VolumeFractions& fractions, BedLayer<dim>& layer);

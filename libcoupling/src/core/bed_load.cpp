@@ -49,6 +49,8 @@ void find_bed_layer(const BedLoadLaw& law, int up, const mpm::SparseGrid<dim>& f
   for (std::size_t k = 0; k < sediment.node_storage(); ++k) {
     if (!(sediment.mass[k] > 0.0) || fractions.sediment[k] < law.surface_fraction) continue;
     const mpm::IVec<dim> c = sediment.node_coord(k);
+    // Allocated blocks reach past the domain's last node; such nodes have no column.
+    if ((c.array() >= counts.array()).any()) continue;
     mpm::IVec<dim>& t = top[static_cast<std::size_t>(column_of(c))];
     if (c[up] > t[up]) t = c;
   }

@@ -123,8 +123,7 @@ namespace {
 template <int dim>
 BedLoadLaw parse_bed_load(const mpm::Config& bed, const mpm::Config& scene, const CoupledScene<dim>& out) {
   using mpm::Range;
-  if (!out.fluid || !out.sediment)
-    bed.fail("morphological_factor", "the bed-load closure needs a fluid and a sediment");
+  if (!out.fluid || !out.sediment) scene.fail("bed_load", "the bed-load closure needs a fluid and a sediment");
   try {
     (void)vertical_axis(out.settings);
   } catch (const mpm::InputError& e) {
@@ -140,11 +139,17 @@ BedLoadLaw parse_bed_load(const mpm::Config& bed, const mpm::Config& scene, cons
   law.critical_shields = bed.number("critical_shields", law.critical_shields, Range::non_negative());
   law.coefficient = bed.number("coefficient", law.coefficient, Range::positive());
   law.exponent = bed.number("exponent", law.exponent, Range::positive());
-  // The wall law's reference lies at least dx above the bed: inside the log layer, z > e z_0.
-  const double largest_roughness = 30.0 * out.settings.dx / (std::exp(1.0) * law.grain_diameter);
+  // A water column of one cell must lie inside the law's log layer, 11 h / k_s > e.
+  const double largest_roughness = 11.0 * out.settings.dx / (std::exp(1.0) * law.grain_diameter);
   law.roughness = bed.number("roughness", law.roughness, Range::open(0.0, largest_roughness));
   law.morphological_factor = bed.number("morphological_factor", law.morphological_factor, Range::closed(1.0, 1e6));
   law.surface_fraction = bed.number("surface_fraction", law.surface_fraction, Range::open(0.0, 1.0));
+  // A bed packed no denser than the surface fraction would never show a surface.
+  if (const mpm::Config sand = scene.child("sediment"); sand.has("packing_fraction")) {
+    const double packing = sand.number("packing_fraction", Range::open(0.0, 1.0));
+    if (!(law.surface_fraction < packing))
+      bed.fail("surface_fraction", "must lie below sediment.packing_fraction (" + std::to_string(packing) + ")");
+  }
   return law;
 }
 }  // namespace

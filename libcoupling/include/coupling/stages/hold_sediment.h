@@ -4,7 +4,8 @@
 //! the flow is set up (e.g. Liang & Cheng 2005 for pipelines), since a current started at full
 //! speed against an obstacle on the bed strikes it with an impulse no flume's slowly started
 //! pump gives. Until then the sediment's grid velocities are zero before its g2p, so its
-//! particles keep x, F and their state, and the bed-load drift of the step is dropped; the
+//! particles keep x, F and their state (APIC and PIC; a FLIP particle keeps a share of its own
+//! velocity), and the bed-load drift of the step is dropped; the
 //! water still feels the held grains through the drag, as flow through a fixed porous bed.
 #include <coupling/coupled_state.h>
 #include <mpm/core/stage.h>
@@ -24,6 +25,7 @@ public:
   void run(CoupledState<dim>& s) override {
     if (!(s.time < until_)) return;
     for (mpm::Vec<dim>& v : s.sediment.grid.velocity) v.setZero();
+    for (mpm::Vec<dim>& v : s.sediment.grid.velocity_old) v.setZero();  // FLIP's
     s.bed.particle_drift.clear();
   }
 

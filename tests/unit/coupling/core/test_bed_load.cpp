@@ -197,6 +197,8 @@ TEST_CASE("bed load: the keys' errors name the key and the range") {
   };
   refuses("bed_load: {morphological_factor: 0.5}", "bed_load.morphological_factor");
   refuses("bed_load: {surface_fraction: 1.5}", "bed_load.surface_fraction");
+  CHECK_THROWS_WITH_AS(load_coupled_scene<2>(flume("bed_load: {surface_fraction: 0.7}", ", packing_fraction: 0.6")),
+                       doctest::Contains("below sediment.packing_fraction"), mpm::InputError);
   refuses("bed_load: {critical_shields: -0.1}", "bed_load.critical_shields");
   refuses("bed_load: {roughness: 1000}", "bed_load.roughness");
   refuses("bed_load: {exponent: 0}", "bed_load.exponent");
