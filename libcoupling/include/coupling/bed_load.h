@@ -9,8 +9,9 @@
 //! - the wall stress of a rough-wall log law, tau_b = rho_w u_*^2, with u_* from the column's
 //!   depth-averaged water speed U relative to the bed's grains and its depth h by Keulegan's
 //!   U / u_* = ln(11 h / k_s) / kappa (kappa = 0.4, k_s = roughness * d, Nikuradse): the
-//!   column's water is the run of nodes with water above the bed surface, up to the free
-//!   surface or a collider (below a pipe, the gap). The depth average is set by the discharge,
+//!   column's water is the run of nodes with water above the bed surface, up to the first node
+//!   without water (the free surface; below a pipe, the gap and the nodes up to 1.5 dx inside
+//!   the pipe that P2G gives water). The depth average is set by the discharge,
 //!   not by the shape of a boundary layer the grid does not resolve (the water's speed one or two
 //!   nodes above the bed came out about half the log law's in the flume). The tangential drag
 //!   impulse of the bed-surface layer (the surface node and the node above it, per column) is

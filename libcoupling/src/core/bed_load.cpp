@@ -65,6 +65,7 @@ void find_bed_layer(const BedLoadLaw& law, int up, const mpm::SparseGrid<dim>& f
   for (std::size_t col = 0; col < top.size(); ++col) {
     if (top[col][up] < 0) continue;
     double mass = 0.0, n_s[2] = {0.0, 0.0};
+    const std::size_t surface = layer.nodes.size();  // the surface node's entry (it has mass)
     for (int j = 0; j < 2; ++j) {
       const mpm::IVec<dim> c = top[col] + j * step;
       const mpm::Index ks = sediment.node_index(c);
@@ -81,7 +82,7 @@ void find_bed_layer(const BedLoadLaw& law, int up, const mpm::SparseGrid<dim>& f
       n_s[j] = fractions.sediment[node.sediment];
     }
     // The water column above the bed: the nodes from the one above the surface node up to the
-    // first without water (the free surface, or a collider such as a pipe over the bed).
+    // first without water (the free surface; below a pipe, a node inside it beyond the kernel).
     double water = 0.0;
     mpm::Vec<dim> momentum = mpm::Vec<dim>::Zero();
     for (int j = 1;; ++j) {
@@ -91,7 +92,7 @@ void find_bed_layer(const BedLoadLaw& law, int up, const mpm::SparseGrid<dim>& f
       momentum += fluid.mass[static_cast<std::size_t>(kw)] * fluid.velocity[static_cast<std::size_t>(kw)];
     }
     if (!(water > 0.0)) continue;
-    mpm::Vec<dim> u = momentum / water - sediment.velocity[static_cast<std::size_t>(sediment.node_index(top[col]))];
+    mpm::Vec<dim> u = momentum / water - layer.nodes[surface].v_s;
     u[up] = 0.0;
     const double speed = u.norm();
     // The bed level between the surface node and the node above, where n_s crosses the surface
