@@ -127,10 +127,12 @@ const RestartCase kSubmergedCollapse{SUBMERGED_COLLAPSE_APP,
 
 #ifdef SEDIMENT_TRANSPORT_APP
 // 3D, fluid and sediment: the 3D pressure multigrid keeps its hierarchy from solve to solve
-// within a frame (pressure.setup_reuse) and drops it at frame ends, where restarts begin.
+// within a frame (pressure.setup_reuse) and drops it at frame ends, where restarts begin. The
+// bed is released at the second frame's end and carries bed load (a morphological factor that
+// makes the drift matter) before and after the checkpoint the restart starts from.
 const RestartCase kPierScour{SEDIMENT_TRANSPORT_APP,
                              "sediment_transport_3d.yaml",
-                             "",
+                             "--set sediment.hold_until=0.012 --set bed_load.morphological_factor=100",
                              0.006,
                              {"fluid", "sediment"},
                              {"sediment"},

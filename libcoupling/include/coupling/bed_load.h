@@ -33,6 +33,7 @@
 #include <coupling/volume_fraction.h>
 #include <mpm/core/sparse_grid.h>
 #include <mpm/core/types.h>
+#include <mpm/geometry/collider.h>
 
 #include <cstddef>
 #include <cstdint>
@@ -90,12 +91,15 @@ struct BedLayer {
 //! Finds the layer (per column the highest sediment node with n_s >= surface_fraction and the
 //! node above it), the wall stress from the column's depth-averaged water above it and the
 //! drift, and records the nodes' velocities before the exchange. `up`: the vertical axis. A
-//! column without water above its surface node (below a pipe resting on the bed), without
-//! current or shallower than the log layer gets no stress, and limit_bed_shear then takes all
-//! the tangential drag out of its layer: no current, no wall stress.
+//! column whose surface node the obstacles prescribe at `time` (in a wall's layer, inside a
+//! sill: boundary nodes, whose velocities the walls set) has no layer. A column without water
+//! above its surface node (below a pipe resting on the bed), without current or shallower than
+//! the log layer gets no stress, and limit_bed_shear then takes all the tangential drag out of
+//! its layer: no current, no wall stress.
 template <int dim>
 void find_bed_layer(const BedLoadLaw& law, int up, const mpm::SparseGrid<dim>& fluid,
-                    const mpm::SparseGrid<dim>& sediment, const VolumeFractions& fractions, BedLayer<dim>& layer);
+                    const mpm::SparseGrid<dim>& sediment, const VolumeFractions& fractions,
+                    const mpm::geometry::ColliderSet<dim>& obstacles, double time, BedLayer<dim>& layer);
 
 //! After the exchange: scales each column's exchange at its layer nodes, tangential components
 //! only, so that the layer's tangential impulse is at most |stress| dx^(dim-1) dt (momentum

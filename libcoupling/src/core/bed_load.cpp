@@ -31,7 +31,8 @@ double BedLoadLaw::flux(double shields) const {
 
 template <int dim>
 void find_bed_layer(const BedLoadLaw& law, int up, const mpm::SparseGrid<dim>& fluid,
-                    const mpm::SparseGrid<dim>& sediment, const VolumeFractions& fractions, BedLayer<dim>& layer) {
+                    const mpm::SparseGrid<dim>& sediment, const VolumeFractions& fractions,
+                    const mpm::geometry::ColliderSet<dim>& obstacles, double time, BedLayer<dim>& layer) {
   mpm::verify<mpm::Error>(fractions.sediment.size() == sediment.node_storage(),
                           "bed load: no volume fractions of this step");
   const mpm::IVec<dim>& counts = sediment.node_counts();
@@ -63,7 +64,8 @@ void find_bed_layer(const BedLoadLaw& law, int up, const mpm::SparseGrid<dim>& f
   const double dx = sediment.dx(), width = std::pow(dx, dim - 1);
   const mpm::IVec<dim> step = mpm::IVec<dim>::Unit(up);
   for (std::size_t col = 0; col < top.size(); ++col) {
-    if (top[col][up] < 0) continue;
+    if (top[col][up] < 0 || obstacles.prescribes(sediment.origin() + dx * top[col].template cast<double>(), time))
+      continue;
     double mass = 0.0, n_s[2] = {0.0, 0.0};
     const std::size_t surface = layer.nodes.size();  // the surface node's entry (it has mass)
     for (int j = 0; j < 2; ++j) {
@@ -150,7 +152,8 @@ std::size_t limit_bed_shear(const BedLayer<dim>& layer, mpm::SparseGrid<dim>& fl
 
 #define BED_LOAD(dim)                                                                                            \
   template void find_bed_layer(const BedLoadLaw&, int, const mpm::SparseGrid<dim>&, const mpm::SparseGrid<dim>&, \
-                               const VolumeFractions&, BedLayer<dim>&);                                          \
+                               const VolumeFractions&, const mpm::geometry::ColliderSet<dim>&, double,           \
+                               BedLayer<dim>&);                                                                  \
   template std::size_t limit_bed_shear(const BedLayer<dim>&, mpm::SparseGrid<dim>&, mpm::SparseGrid<dim>&, double);
 BED_LOAD(2)
 BED_LOAD(3)

@@ -159,7 +159,8 @@ mpm::Pipeline<CoupledState<dim>> make_coupled_pipeline(const CoupledScene<dim>& 
     for (auto& stage : scene.solid_solver->grid_update()) on(Phase::sediment, std::move(stage));
   if (compressible) p.add(std::make_unique<stages::PorePressureShare<dim>>());
   const bool bed_load = wet && sandy && scene.bed_load.has_value();
-  if (bed_load) p.add(std::make_unique<stages::BedSurface<dim>>(*scene.bed_load, vertical_axis(scene.settings)));
+  if (bed_load)
+    p.add(std::make_unique<stages::BedSurface<dim>>(*scene.bed_load, vertical_axis(scene.settings), scene.colliders));
   if (wet && sandy) p.add(std::make_unique<stages::ExchangeStage<dim>>(*scene.drag));
   if (bed_load) p.add(std::make_unique<stages::BedShear<dim>>());
   both([&] { return std::make_unique<ms::GridBoundary<dim>>(scene.colliders); });

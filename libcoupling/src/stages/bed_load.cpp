@@ -29,7 +29,7 @@ void BedLoadDrift<dim>::run(CoupledState<dim>& s) {
   const auto blocked = [&](const mpm::Vec<dim>& x) {
     for (const mpm::geometry::Collider<dim>& c : colliders_.colliders())
       if (c.phi(x, t) < 0.0) return true;
-    return false;
+    return colliders_.walls() && colliders_.walls()->in_layer(x);
   };
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.size(), 4096), [&](const auto& r) {
     for (std::size_t p = r.begin(); p != r.end(); ++p) {

@@ -123,6 +123,16 @@ void DomainWalls<dim>::project(const Vec<dim>& x, Vec<dim>& v, ContactPoint poin
 }
 
 template <int dim>
+bool DomainWalls<dim>::in_layer(const Vec<dim>& x) const {
+  const double layer = thickness_ * (1.0 + 1e-9);  // as in project
+  for (int axis = 0; axis < dim; ++axis)
+    if ((walls_[index(axis, Side::lower)] && x[axis] - lo_[axis] <= layer) ||
+        (walls_[index(axis, Side::upper)] && hi_[axis] - x[axis] <= layer))
+      return true;
+  return false;
+}
+
+template <int dim>
 void DomainWalls<dim>::fixed_directions(const Vec<dim>& x, const Vec<dim>& v, std::vector<Vec<dim>>& fixed,
                                         ContactPoint point) const {
   const double layer = thickness_ * (1.0 + 1e-9);  // as in project
@@ -133,6 +143,13 @@ void DomainWalls<dim>::fixed_directions(const Vec<dim>& x, const Vec<dim>& v, st
     if (upper && hi_[axis] - x[axis] <= layer)
       contact_directions<dim>(*upper, v, Vec<dim>(-Vec<dim>::Unit(axis)), point, fixed);
   }
+}
+
+template <int dim>
+bool ColliderSet<dim>::prescribes(const Vec<dim>& x, double t) const {
+  for (const Collider<dim>& collider : colliders_)
+    if (collider.phi(x, t) <= 0.0) return true;
+  return walls_ && walls_->in_layer(x);
 }
 
 template <int dim>

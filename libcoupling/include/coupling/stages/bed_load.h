@@ -17,14 +17,15 @@ namespace coupling::stages {
 template <int dim>
 class BedSurface final : public mpm::Stage<CoupledState<dim>> {
 public:
-  BedSurface(BedLoadLaw law, int up) : law_(law), up_(up) {}
+  BedSurface(BedLoadLaw law, int up, mpm::geometry::ColliderSet<dim> obstacles)
+      : law_(law), up_(up), obstacles_(std::move(obstacles)) {}
   std::string name() const override { return "bed_surface"; }
   std::vector<std::string> reads() const override {
     return {"fractions", "fluid.grid.velocity", "sediment.grid.velocity"};
   }
   std::vector<std::string> writes() const override { return {"bed"}; }
   void run(CoupledState<dim>& s) override {
-    find_bed_layer(law_, up_, s.fluid.grid, s.sediment.grid, s.fractions, s.bed);
+    find_bed_layer(law_, up_, s.fluid.grid, s.sediment.grid, s.fractions, obstacles_, s.time + s.dt, s.bed);
     shields_ = s.bed.largest_shields;
   }
   //! The largest Shields number over the columns in the last step.
@@ -33,6 +34,7 @@ public:
 private:
   BedLoadLaw law_;
   int up_;
+  mpm::geometry::ColliderSet<dim> obstacles_;
   double shields_ = 0.0;
 };
 
@@ -52,8 +54,9 @@ private:
   std::vector<double> node_drift_, particle_drift_;
 };
 
-//! Moves each grain by dt times its drift, unless that would put it inside a collider (a grain
-//! rolling against a pipe or a weir stops there).
+//! Moves each grain by dt times its drift, unless that would put it inside a collider or into
+//! the boundary layer of a closed domain wall (a grain rolling against a pipe, a weir or a
+//! flume's side wall stops there).
 template <int dim>
 class BedLoadDrift final : public mpm::Stage<CoupledState<dim>> {
 public:

@@ -102,6 +102,8 @@ public:
   const std::optional<Contact>& wall(int axis, Side side) const { return walls_[index(axis, side)]; }
 
   void project(const Vec<dim>& x, Vec<dim>& v, ContactPoint point = ContactPoint::node) const;
+  //! Whether x lies in the boundary layer of a closed wall (the layer project() acts on).
+  bool in_layer(const Vec<dim>& x) const;
   //! As Collider::fixed_directions, for the closed walls whose layer holds x.
   void fixed_directions(const Vec<dim>& x, const Vec<dim>& v, std::vector<Vec<dim>>& fixed,
                         ContactPoint point = ContactPoint::node) const;
@@ -132,6 +134,9 @@ public:
   //! freedom an implicit solve leaves to the node (Collider::fixed_directions).
   Mat<dim> free_directions(const Vec<dim>& x, double t, const Vec<dim>& v,
                            ContactPoint point = ContactPoint::node) const;
+  //! Whether an obstacle prescribes (part of) the velocity of a node at x at time t: x inside or
+  //! on a collider (phi <= 0, where project() acts) or in the layer of a closed wall.
+  bool prescribes(const Vec<dim>& x, double t) const;
   bool uses_level_sets() const;
   bool empty() const { return colliders_.empty() && !walls_; }
 

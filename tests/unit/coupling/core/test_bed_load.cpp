@@ -5,6 +5,7 @@
 #include <coupling/bed_load.h>
 #include <coupling/momentum_exchange.h>
 #include <coupling/scene_loader.h>
+#include <coupling/stages/bed_load.h>
 #include <doctest/doctest.h>
 #include <mpm/core/advance.h>
 #include <mpm/core/error.h>
@@ -61,6 +62,142 @@ double surface_shift(const CoupledState<2>& s, const std::vector<Vec<2>>& x0) {
   return shift / n;
 }
 
+//! The same flume in 3D, 3 cm wide between closed side walls, at dx = 5 mm.
+mpm::Config flume_3d(const std::string& bed_load) {
+  return mpm::Config::parse(R"(
+dim: 3
+domain: {lo: [0, -0.01, -0.01], hi: [0.4, 0.14, 0.04]}
+grid: {dx: 0.005}
+time: {end: 1}
+gravity: [0, -9.81, 0]
+walls: {contact: sticky}
+fluid: {density: 1000, viscosity: 1.0e-3}
+pressure: {solver: mgpcg, tolerance: 1.0e-9}
+drag: {law: di_felice, grain_diameter: 5.0e-4}
+sediment: {density: 2650, youngs_modulus: 5.0e4, poisson_ratio: 0.3, elasticity: hencky_stvk,
+           plasticity: {model: drucker_prager, friction_angle: 32}}
+inflow: {face: x_min, velocity: [0.4, 0, 0], lo: [0, 0.05, 0], hi: [0.02, 0.12, 0.03], particles_per_cell: 8}
+outflow: {face: x_max}
+colliders:
+  - {type: box, lo: [-0.1, -0.1, -0.1], hi: [0.05, 0.05, 0.1], contact: sticky}
+  - {type: box, lo: [0.35, -0.1, -0.1], hi: [0.5, 0.07, 0.1], contact: sticky}
+bodies:
+  - {phase: sediment, shape: box, lo: [0.05, 0, 0], hi: [0.35, 0.05, 0.03], packing_fraction: 0.6, geostatic: true}
+  - {phase: fluid, shape: box, lo: [0.05, 0, 0], hi: [0.35, 0.05, 0.03]}
+  - {phase: fluid, shape: box, lo: [0.01, 0.05, 0], hi: [0.39, 0.12, 0.03], velocity: [0.4, 0, 0]}
+)" + bed_load);
+}
+
+template <int dim>
+Vec<dim> momentum_of(const mpm::SparseGrid<dim>& g) {
+  Vec<dim> m = Vec<dim>::Zero();
+  for (std::size_t k = 0; k < g.node_storage(); ++k) m += g.mass[k] * g.velocity[k];
+  return m;
+}
+
+//! One step of the flume, then: one layer per bed column (the surface node, n_s >= the surface
+//! fraction and free of the walls and sills, and the node above it, below it), the stress along
+//! the current; the exchange
+//! followed by the limit keeps the grids' momentum, and per column the grains' tangential
+//! impulse is at most the wall stress's, equal to it where limited. `columns`: the fewest
+//! columns expected.
+template <int dim>
+void check_layer_and_limit(const mpm::Config& config, std::size_t columns_expected) {
+  CoupledScene<dim> scene = load_coupled_scene<dim>(config);
+  auto pipeline = make_coupled_pipeline(scene);
+  CoupledState<dim>& s = scene.state;
+  mpm::advance(s, pipeline, 0.01);  // grids, fractions and velocities of a step
+  const BedLoadLaw law = *scene.bed_load;
+
+  BedLayer<dim> layer;
+  find_bed_layer(law, 1, s.fluid.grid, s.sediment.grid, s.fractions, scene.colliders, s.time, layer);
+  REQUIRE(!layer.nodes.empty());
+  std::size_t columns = 0;
+  for (std::size_t i = 0; i < layer.nodes.size(); ++i) {
+    const BedLayerNode<dim>& n = layer.nodes[i];
+    if (i == 0 || layer.nodes[i - 1].column != n.column) {
+      ++columns;
+      CHECK(s.fractions.sediment[n.sediment] >= law.surface_fraction);
+      CHECK_FALSE(scene.colliders.prescribes(s.sediment.grid.node_position(n.sediment), s.time));
+    } else {
+      CHECK(s.fractions.sediment[n.sediment] < law.surface_fraction);
+      CHECK(s.sediment.grid.node_coord(n.sediment) ==
+            s.sediment.grid.node_coord(layer.nodes[i - 1].sediment) + mpm::IVec<dim>::Unit(1));
+    }
+  }
+  CHECK(columns >= columns_expected);
+  const Vec<dim> mid = layer.stress[static_cast<std::size_t>(layer.nodes[layer.nodes.size() / 2].column)];
+  CHECK(mid[0] > 0.0);
+  CHECK(mid[1] == 0.0);
+
+  mpm::SparseGrid<dim> fluid = s.fluid.grid, sediment = s.sediment.grid;
+  const Vec<dim> before = momentum_of(fluid) + momentum_of(sediment);
+  std::vector<double> beta;
+  const double dt = 1e-3;
+  MomentumExchange<dim>(*scene.drag).apply(fluid, sediment, s.fractions.fluid, dt, beta);
+  const std::size_t limited = limit_bed_shear(layer, fluid, sediment, dt);
+  CHECK(limited >= columns_expected / 2);  // the dense bed's drag far exceeds a wall stress of ~0.2 Pa
+  const Vec<dim> after = momentum_of(fluid) + momentum_of(sediment);
+  CHECK((after - before).norm() <= 1e-13 * (momentum_of(fluid).norm() + 1.0));
+  std::vector<Vec<dim>> impulse(layer.stress.size(), Vec<dim>::Zero());
+  for (const BedLayerNode<dim>& n : layer.nodes) {
+    Vec<dim> dv = sediment.velocity[n.sediment] - n.v_s;
+    dv[1] = 0.0;
+    impulse[std::size_t(n.column)] += sediment.mass[n.sediment] * dv;
+  }
+  std::size_t at_stress = 0;
+  for (std::size_t c = 0; c < impulse.size(); ++c) {
+    const double allowed = layer.stress[c].norm() * std::pow(s.sediment.grid.dx(), dim - 1) * dt;
+    CHECK(impulse[c].norm() <= allowed * (1 + 1e-12) + 1e-300);
+    if (allowed > 0.0 && impulse[c].norm() >= allowed * (1 - 1e-12)) ++at_stress;
+  }
+  CHECK(at_stress == limited);
+}
+
+//! One step of the flume with transport: the grains' drift carries the layer's flux (the gather
+//! is the P2G's adjoint), and per column the layer carries the formula's flux, or less where
+//! the drift is capped at the water's speed (at most `capped_at_most` columns: the bed's ends).
+template <int dim>
+void check_drift_flux(const mpm::Config& config, std::size_t capped_at_most) {
+  CoupledScene<dim> scene = load_coupled_scene<dim>(config);
+  auto pipeline = make_coupled_pipeline(scene);
+  CoupledState<dim>& s = scene.state;
+  mpm::advance(s, pipeline, 0.005);
+  // After a step: the grid masses and the drift are the step's (the gather ran before g2p).
+  const BedLayer<dim>& bed = s.bed;
+  REQUIRE(bed.particle_drift.size() == s.sediment.particles.size());
+  // Along the current: the grains' flux and the layer nodes'. Per column: the layer's mass times
+  // the drift speed against the formula's flux.
+  double grains = 0.0, layer = 0.0, carried = 0.0, formula = 0.0;
+  for (std::size_t p = 0; p < bed.particle_drift.size(); ++p)
+    grains += s.sediment.particles.mass[p] * bed.particle_drift[p][0];
+  std::vector<double> mass(bed.stress.size(), 0.0);
+  for (const BedLayerNode<dim>& n : bed.nodes) {
+    layer += s.sediment.grid.mass[n.sediment] * bed.drift[std::size_t(n.column)][0];
+    mass[std::size_t(n.column)] += s.sediment.grid.mass[n.sediment];
+  }
+  const BedLoadLaw& law = *scene.bed_load;
+  const double width = std::pow(s.sediment.grid.dx(), dim - 1);
+  std::size_t capped = 0;
+  for (std::size_t c = 0; c < bed.stress.size(); ++c) {
+    if (!(bed.drift[c].norm() > 0.0)) continue;
+    const double expected = law.sediment_density * law.morphological_factor *
+                            law.flux(law.shields_number(std::sqrt(bed.stress[c].norm() / law.fluid_density))) * width;
+    const double column = mass[c] * bed.drift[c].norm();
+    carried += column;
+    formula += expected;
+    CHECK(column <= expected * (1 + 1e-12));
+    if (column < expected * (1 - 1e-12)) ++capped;
+  }
+  MESSAGE(dim << "D, grain flux of the drift along the current: particles " << grains << ", layer nodes " << layer
+              << " kg/s; over the columns " << carried << " kg/s against the formula's " << formula
+              << " kg/s; largest Shields " << bed.largest_shields << ", " << capped << " columns at the speed cap");
+  REQUIRE(formula > 0.0);
+  CHECK(grains == doctest::Approx(layer).epsilon(1e-12));
+  CHECK(carried > 0.9 * formula);
+  CHECK(capped <= capped_at_most);
+}
+
 }  // namespace
 
 TEST_CASE("bed load: the formula and the wall law give the reference's flume numbers") {
@@ -82,99 +219,17 @@ TEST_CASE("bed load: the formula and the wall law give the reference's flume num
 }
 
 TEST_CASE("bed load: the layer's drag limited to the wall stress, momentum conserved") {
-  CoupledScene<2> scene = load_coupled_scene<2>(flume("bed_load: {}"));
-  auto pipeline = make_coupled_pipeline(scene);
-  CoupledState<2>& s = scene.state;
-  mpm::advance(s, pipeline, 0.01);  // grids, fractions and velocities of a step
-  const BedLoadLaw law = *scene.bed_load;
-
-  // One layer per bed column: the surface node (n_s >= the surface fraction) and the node above
-  // it (below it), the stress along the current.
-  BedLayer<2> layer;
-  find_bed_layer(law, 1, s.fluid.grid, s.sediment.grid, s.fractions, layer);
-  REQUIRE(!layer.nodes.empty());
-  std::size_t columns = 0;
-  for (std::size_t i = 0; i < layer.nodes.size(); ++i) {
-    const BedLayerNode<2>& n = layer.nodes[i];
-    if (i == 0 || layer.nodes[i - 1].column != n.column) {
-      ++columns;
-      CHECK(s.fractions.sediment[n.sediment] >= law.surface_fraction);
-    } else {
-      CHECK(s.fractions.sediment[n.sediment] < law.surface_fraction);
-      CHECK(s.sediment.grid.node_coord(n.sediment)[1] ==
-            s.sediment.grid.node_coord(layer.nodes[i - 1].sediment)[1] + 1);
-    }
-  }
-  CHECK(columns >= 58);  // 0.3 m of bed at dx = 5 mm
-  const Vec<2> mid = layer.stress[static_cast<std::size_t>(layer.nodes[layer.nodes.size() / 2].column)];
-  CHECK(mid[0] > 0.0);
-  CHECK(mid[1] == 0.0);
-
-  // The exchange, then the limit: per column the grains' tangential impulse is the wall stress's
-  // (where the drag would exceed it), and every node keeps the momentum the exchange kept.
-  mpm::SparseGrid<2> fluid = s.fluid.grid, sediment = s.sediment.grid;
-  const auto momentum = [](const mpm::SparseGrid<2>& g) {
-    Vec<2> m = Vec<2>::Zero();
-    for (std::size_t k = 0; k < g.node_storage(); ++k) m += g.mass[k] * g.velocity[k];
-    return m;
-  };
-  const Vec<2> before = momentum(fluid) + momentum(sediment);
-  std::vector<double> beta;
-  const double dt = 1e-3;
-  MomentumExchange<2>(*scene.drag).apply(fluid, sediment, s.fractions.fluid, dt, beta);
-  const std::size_t limited = limit_bed_shear(layer, fluid, sediment, dt);
-  CHECK(limited >= 30);  // the dense bed's drag far exceeds a wall stress of ~0.2 Pa
-  const Vec<2> after = momentum(fluid) + momentum(sediment);
-  CHECK((after - before).norm() <= 1e-13 * (momentum(fluid).norm() + 1.0));
-  std::vector<double> impulse(layer.stress.size(), 0.0);
-  for (const BedLayerNode<2>& n : layer.nodes)
-    impulse[std::size_t(n.column)] += sediment.mass[n.sediment] * (sediment.velocity[n.sediment][0] - n.v_s[0]);
-  std::size_t at_stress = 0;
-  for (std::size_t c = 0; c < impulse.size(); ++c) {
-    const double allowed = layer.stress[c].norm() * s.sediment.grid.dx() * dt;
-    CHECK(std::abs(impulse[c]) <= allowed * (1 + 1e-12) + 1e-300);
-    if (allowed > 0.0 && std::abs(impulse[c]) >= allowed * (1 - 1e-12)) ++at_stress;
-  }
-  CHECK(at_stress == limited);
+  // 0.3 m of bed at dx = 5 mm; in 3D the 3 cm of width hold 5 node columns off the walls' layers.
+  check_layer_and_limit<2>(flume("bed_load: {}"), 58);
+  check_layer_and_limit<3>(flume_3d("bed_load: {}"), 58 * 5);
 }
 
 TEST_CASE("bed load: the grains' drift carries the formula's flux; the current no longer strips the bed") {
-  // A morphological factor large enough for a drift at this Shields number (~0.05-0.1).
-  CoupledScene<2> scene = load_coupled_scene<2>(flume("bed_load: {critical_shields: 0.01, morphological_factor: 100}"));
-  auto pipeline = make_coupled_pipeline(scene);
-  CoupledState<2>& s = scene.state;
-  mpm::advance(s, pipeline, 0.005);
-  // After a step: the grid masses and the drift are the step's (the gather ran before g2p).
-  const BedLayer<2>& bed = s.bed;
-  REQUIRE(bed.particle_drift.size() == s.sediment.particles.size());
-  double grains = 0.0, layer = 0.0, formula = 0.0;
-  for (std::size_t p = 0; p < bed.particle_drift.size(); ++p)
-    grains += s.sediment.particles.mass[p] * bed.particle_drift[p][0];
-  std::vector<double> mass(bed.stress.size(), 0.0);
-  for (const BedLayerNode<2>& n : bed.nodes) {
-    layer += s.sediment.grid.mass[n.sediment] * bed.drift[std::size_t(n.column)][0];
-    mass[std::size_t(n.column)] += s.sediment.grid.mass[n.sediment];
-  }
-  // Per column the layer carries the formula's flux, or less where the drift is capped at the
-  // water's speed (a column whose layer holds little sand: the bed's ends).
-  const BedLoadLaw& law = *scene.bed_load;
-  std::size_t capped = 0;
-  for (std::size_t c = 0; c < bed.stress.size(); ++c) {
-    if (!(bed.drift[c].norm() > 0.0)) continue;
-    const double expected = law.sediment_density * law.morphological_factor *
-                            law.flux(law.shields_number(std::sqrt(bed.stress[c].norm() / law.fluid_density))) * 0.005;
-    const double carried = mass[c] * bed.drift[c][0];
-    formula += expected;
-    CHECK(carried <= expected * (1 + 1e-12));
-    if (carried < expected * (1 - 1e-12)) ++capped;
-  }
-  MESSAGE("grain flux of the drift: particles " << grains << ", layer nodes " << layer << ", formula " << formula
-                                                << " kg/s per m of width; largest Shields " << bed.largest_shields
-                                                << ", " << capped << " columns at the speed cap");
-  REQUIRE(formula > 0.0);
-  CHECK(grains == doctest::Approx(layer).epsilon(1e-12));  // the gather is the P2G's adjoint
-  CHECK(layer > 0.9 * formula);
-  CHECK(capped <= 4);
+  // A threshold and a morphological factor that give a drift at this Shields number (~0.05-0.1),
+  // well below the water's speed.
+  const std::string transport = "bed_load: {critical_shields: 0.01, morphological_factor: 30}";
+  check_drift_flux<2>(flume(transport), 2);
+  check_drift_flux<3>(flume_3d(transport), 2);
 
   // 0.2 s of the current: without the closure the drag moves the top of the bed with the water;
   // with it (and no transport) the bed stays where it is.
@@ -189,6 +244,34 @@ TEST_CASE("bed load: the grains' drift carries the formula's flux; the current n
   MESSAGE("mean shift of the surface grains along the current in 0.2 s: drag alone " << dragged << " m, closure "
                                                                                      << held << " m");
   CHECK(held < 0.1 * dragged);
+}
+
+TEST_CASE("bed load: the drift stops at colliders and at the domain's closed walls") {
+  CoupledScene<2> scene = load_coupled_scene<2>(flume("bed_load: {}"));
+  auto pipeline = make_coupled_pipeline(scene);
+  CoupledState<2>& s = scene.state;
+  mpm::advance(s, pipeline, 0.005);
+  // A drift 3 mm straight down in the step: the bed's lowest grains would enter the floor's
+  // layer (below y = 0), the others move; the grains beside the sills would enter the sills.
+  const mpm::Vec<2> drop(0.0, -0.003);
+  s.bed.particle_drift.assign(s.sediment.particles.size(), drop / s.dt);
+  const std::vector<Vec<2>> before = s.sediment.particles.x;
+  stages::BedLoadDrift<2>(scene.colliders).run(s);
+  std::size_t stopped = 0, moved = 0;
+  for (std::size_t p = 0; p < before.size(); ++p) {
+    const Vec<2>& x = s.sediment.particles.x[p];
+    const Vec<2> target = before[p] + drop;
+    const bool into_wall = target[1] <= 0.0;
+    if (into_wall) {
+      CHECK(x == before[p]);
+      ++stopped;
+    } else if (x != before[p]) {
+      CHECK((x - target).norm() <= 1e-15);
+      ++moved;
+    }
+  }
+  CHECK(stopped >= 60);  // the bed's bottom row: 0.3 m at two grains per 5 mm
+  CHECK(moved > before.size() / 2);
 }
 
 TEST_CASE("bed load: the keys' errors name the key and the range") {
