@@ -10,8 +10,8 @@
 //!   depth-averaged water speed U relative to the bed's grains and its depth h by Keulegan's
 //!   U / u_* = ln(11 h / k_s) / kappa (kappa = 0.4, k_s = roughness * d, Nikuradse): the
 //!   column's water is the run of nodes with water above the bed surface, up to the first node
-//!   without water (the free surface; below a pipe, the gap and the nodes up to 1.5 dx inside
-//!   the pipe that P2G gives water). The depth average is set by the discharge,
+//!   without water (the free surface) or inside an obstacle (below a pipe: the gap). The depth
+//!   average is set by the discharge,
 //!   not by the shape of a boundary layer the grid does not resolve (the water's speed one or two
 //!   nodes above the bed came out about half the log law's in the flume). The tangential drag
 //!   impulse of the bed-surface layer (the surface node and the node above it, per column) is
@@ -90,12 +90,13 @@ struct BedLayer {
 
 //! Finds the layer (per column the highest sediment node with n_s >= surface_fraction and the
 //! node above it), the wall stress from the column's depth-averaged water above it and the
-//! drift, and records the nodes' velocities before the exchange. `up`: the vertical axis. A
-//! column whose surface node the obstacles prescribe at `time` (in a wall's layer, inside a
-//! sill: boundary nodes, whose velocities the walls set) has no layer. A column without water
-//! above its surface node (below a pipe resting on the bed), without current or shallower than
-//! the log layer gets no stress, and limit_bed_shear then takes all the tangential drag out of
-//! its layer: no current, no wall stress.
+//! drift, and records the nodes' velocities before the exchange. `up`: the vertical axis.
+//! Nodes that the obstacles prescribe at `time` (ColliderSet::prescribes: in a wall's layer,
+//! inside a sill or a pipe; boundary nodes, whose velocities the walls and colliders set) are
+//! neither surface nodes nor the column's water, so a column in a wall's layer has no layer. A
+//! column without water above its surface node (below a pipe resting on the bed), without
+//! current or shallower than the log layer gets no stress, and limit_bed_shear then takes all
+//! the tangential drag out of its layer: no current, no wall stress.
 template <int dim>
 void find_bed_layer(const BedLoadLaw& law, int up, const mpm::SparseGrid<dim>& fluid,
                     const mpm::SparseGrid<dim>& sediment, const VolumeFractions& fractions,

@@ -45,13 +45,14 @@ void find_bed_layer(const BedLoadLaw& law, int up, const mpm::SparseGrid<dim>& f
   std::int64_t columns = 1;
   for (int a = 0; a < dim; ++a)
     if (a != up) columns *= counts[a];
-  // The surface node of each column: its highest node of n_s >= the surface fraction.
+  // The surface node of each column: its highest node of n_s >= the surface fraction that no
+  // obstacle prescribes (the sand below a pipe resting on the bed reaches nodes inside it).
   std::vector<mpm::IVec<dim>> top(static_cast<std::size_t>(columns), mpm::IVec<dim>::Constant(-1));
   for (std::size_t k = 0; k < sediment.node_storage(); ++k) {
     if (!(sediment.mass[k] > 0.0) || fractions.sediment[k] < law.surface_fraction) continue;
     const mpm::IVec<dim> c = sediment.node_coord(k);
     // Allocated blocks reach past the domain's last node; such nodes have no column.
-    if ((c.array() >= counts.array()).any()) continue;
+    if ((c.array() >= counts.array()).any() || obstacles.prescribes(sediment.node_position(k), time)) continue;
     mpm::IVec<dim>& t = top[static_cast<std::size_t>(column_of(c))];
     if (c[up] > t[up]) t = c;
   }
@@ -64,8 +65,7 @@ void find_bed_layer(const BedLoadLaw& law, int up, const mpm::SparseGrid<dim>& f
   const double dx = sediment.dx(), width = std::pow(dx, dim - 1);
   const mpm::IVec<dim> step = mpm::IVec<dim>::Unit(up);
   for (std::size_t col = 0; col < top.size(); ++col) {
-    if (top[col][up] < 0 || obstacles.prescribes(sediment.origin() + dx * top[col].template cast<double>(), time))
-      continue;
+    if (top[col][up] < 0) continue;
     double mass = 0.0, n_s[2] = {0.0, 0.0};
     const std::size_t surface = layer.nodes.size();  // the surface node's entry (it has mass)
     for (int j = 0; j < 2; ++j) {
@@ -84,12 +84,16 @@ void find_bed_layer(const BedLoadLaw& law, int up, const mpm::SparseGrid<dim>& f
       n_s[j] = fractions.sediment[node.sediment];
     }
     // The water column above the bed: the nodes from the one above the surface node up to the
-    // first without water (the free surface; below a pipe, a node inside it beyond the kernel).
+    // first without water (the free surface) or inside an obstacle (below a pipe: the gap; P2G
+    // gives water to the nodes up to 1.5 dx inside the pipe, whose velocities the pipe sets).
     double water = 0.0;
     mpm::Vec<dim> momentum = mpm::Vec<dim>::Zero();
     for (int j = 1;; ++j) {
-      const mpm::Index kw = fluid.node_index(top[col] + j * step);
-      if (kw < 0 || !(fluid.mass[static_cast<std::size_t>(kw)] > 0.0)) break;
+      const mpm::IVec<dim> c = top[col] + j * step;
+      const mpm::Index kw = fluid.node_index(c);
+      if (kw < 0 || !(fluid.mass[static_cast<std::size_t>(kw)] > 0.0) ||
+          obstacles.prescribes(fluid.origin() + dx * c.template cast<double>(), time))
+        break;
       water += fluid.mass[static_cast<std::size_t>(kw)];
       momentum += fluid.mass[static_cast<std::size_t>(kw)] * fluid.velocity[static_cast<std::size_t>(kw)];
     }

@@ -26,16 +26,11 @@ void BedLoadDrift<dim>::run(CoupledState<dim>& s) {
   mpm::Particles<dim>& P = s.sediment.particles;
   if (s.bed.particle_drift.size() != P.size()) return;  // no layer this step
   const double dt = s.dt, t = s.time + s.dt;
-  const auto blocked = [&](const mpm::Vec<dim>& x) {
-    for (const mpm::geometry::Collider<dim>& c : colliders_.colliders())
-      if (c.phi(x, t) < 0.0) return true;
-    return colliders_.walls() && colliders_.walls()->in_layer(x);
-  };
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.size(), 4096), [&](const auto& r) {
     for (std::size_t p = r.begin(); p != r.end(); ++p) {
       if (s.bed.particle_drift[p].squaredNorm() == 0.0) continue;
       const mpm::Vec<dim> x = P.x[p] + dt * s.bed.particle_drift[p];
-      if (!blocked(x)) P.x[p] = x;
+      if (!colliders_.prescribes(x, t)) P.x[p] = x;
     }
   });
 }

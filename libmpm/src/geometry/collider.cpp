@@ -111,9 +111,7 @@ void DomainWalls<dim>::set_wall(int axis, Side side, const std::optional<Contact
 
 template <int dim>
 void DomainWalls<dim>::project(const Vec<dim>& x, Vec<dim>& v, ContactPoint point) const {
-  // A node on the inner face of the layer belongs to the wall: its coordinate lo + i dx may
-  // round a few ulps beyond lo + thickness (dx = 1/24 is not exact in binary).
-  const double layer = thickness_ * (1.0 + 1e-9);
+  const double layer = reach();
   for (int axis = 0; axis < dim; ++axis) {
     const std::optional<Contact>& lower = walls_[index(axis, Side::lower)];
     const std::optional<Contact>& upper = walls_[index(axis, Side::upper)];
@@ -124,7 +122,7 @@ void DomainWalls<dim>::project(const Vec<dim>& x, Vec<dim>& v, ContactPoint poin
 
 template <int dim>
 bool DomainWalls<dim>::in_layer(const Vec<dim>& x) const {
-  const double layer = thickness_ * (1.0 + 1e-9);  // as in project
+  const double layer = reach();
   for (int axis = 0; axis < dim; ++axis)
     if ((walls_[index(axis, Side::lower)] && x[axis] - lo_[axis] <= layer) ||
         (walls_[index(axis, Side::upper)] && hi_[axis] - x[axis] <= layer))
@@ -135,7 +133,7 @@ bool DomainWalls<dim>::in_layer(const Vec<dim>& x) const {
 template <int dim>
 void DomainWalls<dim>::fixed_directions(const Vec<dim>& x, const Vec<dim>& v, std::vector<Vec<dim>>& fixed,
                                         ContactPoint point) const {
-  const double layer = thickness_ * (1.0 + 1e-9);  // as in project
+  const double layer = reach();
   for (int axis = 0; axis < dim; ++axis) {
     const std::optional<Contact>& lower = walls_[index(axis, Side::lower)];
     const std::optional<Contact>& upper = walls_[index(axis, Side::upper)];

@@ -54,9 +54,9 @@ private:
   std::vector<double> node_drift_, particle_drift_;
 };
 
-//! Moves each grain by dt times its drift, unless that would put it inside a collider or into
-//! the boundary layer of a closed domain wall (a grain rolling against a pipe, a weir or a
-//! flume's side wall stops there).
+//! Moves each grain by dt times its drift, unless that would put it where the obstacles
+//! prescribe the velocity (ColliderSet::prescribes: inside or on a collider, in a closed wall's
+//! layer): a grain rolling against a pipe, a weir or a flume's side wall stops there.
 template <int dim>
 class BedLoadDrift final : public mpm::Stage<CoupledState<dim>> {
 public:

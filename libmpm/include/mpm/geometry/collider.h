@@ -114,6 +114,10 @@ public:
 
 private:
   static int index(int axis, Side side) { return 2 * axis + (side == Side::upper ? 1 : 0); }
+  //! The layer's depth with room for round-off: a node on the inner face of the layer belongs
+  //! to the wall, and its coordinate lo + i dx may round a few ulps beyond lo + thickness
+  //! (dx = 1/24 is not exact in binary).
+  double reach() const { return thickness_ * (1.0 + 1e-9); }
   Vec<dim> lo_;
   Vec<dim> hi_;
   double thickness_;

@@ -262,6 +262,20 @@ TEST_CASE("domain walls and collider sets") {
   set.project(Vec<2>(0.5, 0.55), 0.0, v);
   CHECK((v - Vec<2>(0.0, 0.3)).norm() == 0.0);
 
+  // Where project() acts: a closed wall's layer (its inner face included, a few ulps of
+  // round-off beyond it too), inside or on a collider; not the open top's layer, not outside.
+  CHECK(walls.in_layer(Vec<2>(0.5, 0.1)));
+  CHECK(walls.in_layer(Vec<2>(0.1 + 1e-12, 0.5)));
+  CHECK(walls.in_layer(Vec<2>(0.95, 0.5)));
+  CHECK_FALSE(walls.in_layer(Vec<2>(0.5, 0.95)));  // open
+  CHECK_FALSE(walls.in_layer(Vec<2>(0.5, 0.5)));
+  CHECK_FALSE(walls.in_layer(Vec<2>(0.1 + 1e-6, 0.5)));
+  CHECK(set.prescribes(Vec<2>(0.5, 0.55), 0.0));  // inside the sphere
+  CHECK(set.prescribes(Vec<2>(0.6, 0.5), 0.0));   // on it
+  CHECK(set.prescribes(Vec<2>(0.05, 0.5), 0.0));  // a wall's layer
+  CHECK_FALSE(set.prescribes(Vec<2>(0.5, 0.65), 0.0));
+  CHECK_FALSE(set.prescribes(Vec<2>(0.5, 0.95), 0.0));
+
   // The directions an implicit solve fixes: a slip floor fixes the normal of a node whatever
   // its motion, but of a material point only while it approaches (contact.h, ContactPoint).
   ColliderSet<2> floor;
