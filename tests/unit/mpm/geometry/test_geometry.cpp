@@ -255,7 +255,7 @@ TEST_CASE("domain walls and collider sets") {
 
   ColliderSet<2> set;
   CHECK(set.empty());
-  set.add(Collider<2>(Sphere<2>(Vec<2>(0.5, 0.5), 0.1), Contact{ContactType::sticky, 0.0}, Vec<2>(0.0, 0.3)));
+  set.add(Collider<2>(Sphere<2>(Vec<2>(0.5, 0.5), 0.125), Contact{ContactType::sticky, 0.0}, Vec<2>(0.0, 0.3)));
   set.set_walls(walls);
   CHECK_FALSE(set.uses_level_sets());
   v = Vec<2>(5.0, 5.0);
@@ -271,7 +271,7 @@ TEST_CASE("domain walls and collider sets") {
   CHECK_FALSE(walls.in_layer(Vec<2>(0.5, 0.5)));
   CHECK_FALSE(walls.in_layer(Vec<2>(0.1 + 1e-6, 0.5)));
   CHECK(set.prescribes(Vec<2>(0.5, 0.55), 0.0));  // inside the sphere
-  CHECK(set.prescribes(Vec<2>(0.6, 0.5), 0.0));   // on it
+  CHECK(set.prescribes(Vec<2>(0.625, 0.5), 0.0));  // on it: phi = 0 exactly
   CHECK(set.prescribes(Vec<2>(0.05, 0.5), 0.0));  // a wall's layer
   CHECK_FALSE(set.prescribes(Vec<2>(0.5, 0.65), 0.0));
   CHECK_FALSE(set.prescribes(Vec<2>(0.5, 0.95), 0.0));
