@@ -52,9 +52,10 @@ void find_bed_layer(const BedLoadLaw& law, int up, const mpm::SparseGrid<dim>& f
     if (!(sediment.mass[k] > 0.0) || fractions.sediment[k] < law.surface_fraction) continue;
     const mpm::IVec<dim> c = sediment.node_coord(k);
     // Allocated blocks reach past the domain's last node; such nodes have no column.
-    if ((c.array() >= counts.array()).any() || obstacles.prescribes(sediment.node_position(k), time)) continue;
+    if ((c.array() >= counts.array()).any()) continue;
     mpm::IVec<dim>& t = top[static_cast<std::size_t>(column_of(c))];
-    if (c[up] > t[up]) t = c;
+    // The obstacles are asked only about a node that would become the top.
+    if (c[up] > t[up] && !obstacles.prescribes(sediment.node_position(k), time)) t = c;
   }
 
   layer.up = up;
@@ -89,10 +90,9 @@ void find_bed_layer(const BedLoadLaw& law, int up, const mpm::SparseGrid<dim>& f
     double water = 0.0;
     mpm::Vec<dim> momentum = mpm::Vec<dim>::Zero();
     for (int j = 1;; ++j) {
-      const mpm::IVec<dim> c = top[col] + j * step;
-      const mpm::Index kw = fluid.node_index(c);
+      const mpm::Index kw = fluid.node_index(top[col] + j * step);
       if (kw < 0 || !(fluid.mass[static_cast<std::size_t>(kw)] > 0.0) ||
-          obstacles.prescribes(fluid.origin() + dx * c.template cast<double>(), time))
+          obstacles.prescribes(fluid.node_position(static_cast<std::size_t>(kw)), time))
         break;
       water += fluid.mass[static_cast<std::size_t>(kw)];
       momentum += fluid.mass[static_cast<std::size_t>(kw)] * fluid.velocity[static_cast<std::size_t>(kw)];

@@ -97,9 +97,8 @@ Vec<dim> momentum_of(const mpm::SparseGrid<dim>& g) {
 
 //! One step of the flume, then: one layer per bed column (the surface node, n_s >= the surface
 //! fraction and free of the walls and sills, and the node above it, below it), the stress along
-//! the current; the exchange
-//! followed by the limit keeps the grids' momentum, and per column the grains' tangential
-//! impulse is at most the wall stress's, equal to it where limited. `columns_expected`: the
+//! the current; the exchange followed by the limit keeps the grids' momentum, and per column the
+//! grains' tangential impulse is at most the wall stress's, equal to it where limited. `columns_expected`: the
 //! bed's node columns off the walls' layers and the sills.
 template <int dim>
 void check_layer_and_limit(const mpm::Config& config, std::size_t columns_expected) {
