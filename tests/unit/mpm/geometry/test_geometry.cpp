@@ -270,9 +270,9 @@ TEST_CASE("domain walls and collider sets") {
   CHECK_FALSE(walls.in_layer(Vec<2>(0.5, 0.95)));  // open
   CHECK_FALSE(walls.in_layer(Vec<2>(0.5, 0.5)));
   CHECK_FALSE(walls.in_layer(Vec<2>(0.1 + 1e-6, 0.5)));
-  CHECK(set.prescribes(Vec<2>(0.5, 0.55), 0.0));  // inside the sphere
+  CHECK(set.prescribes(Vec<2>(0.5, 0.55), 0.0));   // inside the sphere
   CHECK(set.prescribes(Vec<2>(0.625, 0.5), 0.0));  // on it: phi = 0 exactly
-  CHECK(set.prescribes(Vec<2>(0.05, 0.5), 0.0));  // a wall's layer
+  CHECK(set.prescribes(Vec<2>(0.05, 0.5), 0.0));   // a wall's layer
   CHECK_FALSE(set.prescribes(Vec<2>(0.5, 0.65), 0.0));
   CHECK_FALSE(set.prescribes(Vec<2>(0.5, 0.95), 0.0));
 
