@@ -8,9 +8,14 @@
 
 #include "device_solid.h"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <stdexcept>
+#include <string>
 #include <unordered_set>
 
 namespace mpm::cuda {
@@ -137,7 +142,10 @@ public:
 
   //! The host particles from the device (at frame ends and before a checkpoint).
   void synchronize(MpmState<3>& s) override {
-    if (stale_) download(s.particles);
+    if (!stale_) return;
+    const auto start = std::chrono::steady_clock::now();
+    download(s.particles);
+    download_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     stale_ = false;
   }
 
@@ -146,6 +154,7 @@ public:
             {"device_p2g_ms", 1e3 * times_[1]},
             {"device_grid_ms", 1e3 * times_[2]},
             {"device_g2p_ms", 1e3 * times_[3]},
+            {"device_download_ms", 1e3 * download_seconds_},
             {"device_memory_mb", device_->memory_bytes() / 1048576.0},
             {"device_reorders", double(reorders_)}};
   }
@@ -171,18 +180,24 @@ private:
     h.material = P.material;
     device_->upload(h);
     uploaded_ = true;
+    uploaded_count_ = n;
   }
 
   void download(Particles<3>& P) const {
+    if (P.size() != uploaded_count_)
+      throw std::logic_error("device_step: the host holds " + std::to_string(P.size()) + " particles, the device " +
+                             std::to_string(uploaded_count_) + " (host particles changed during a device run)");
     detail::HostParticles h;
     device_->download(h);
     const std::size_t n = h.n;
     auto& F = solid::elastic_F(P);
-    for (std::size_t p = 0; p < n; ++p) {
-      for (int a = 0; a < 3; ++a) P.x[p][a] = h.x[a * n + p], P.v[p][a] = h.v[a * n + p];
-      for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) P.C[p](r, c) = h.C[(3 * r + c) * n + p], F[p](r, c) = h.F[(3 * r + c) * n + p];
-    }
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 16384), [&](const auto& range) {
+      for (std::size_t p = range.begin(); p < range.end(); ++p) {
+        for (int a = 0; a < 3; ++a) P.x[p][a] = h.x[a * n + p], P.v[p][a] = h.v[a * n + p];
+        for (int r = 0; r < 3; ++r)
+          for (int c = 0; c < 3; ++c) P.C[p](r, c) = h.C[(3 * r + c) * n + p], F[p](r, c) = h.F[(3 * r + c) * n + p];
+      }
+    });
     solid::plastic_state(P) = h.plastic;
     // The CPU stages' stress cache is theirs: unknown, so that a CPU step recomputes it.
     if (auto* cache = solid::stress_cache(P)) std::fill(cache->begin(), cache->end(), Mat<3>::Constant(std::nan("")));
@@ -190,9 +205,11 @@ private:
 
   std::unique_ptr<detail::DeviceSolid> device_;
   bool uploaded_ = false;
+  std::size_t uploaded_count_ = 0;
   bool stale_ = false;  //!< the host particles are behind the device's
   std::array<double, 4> times_{};
-  long long reorders_ = 0;  //!< steps that moved the particle data into block order, so far
+  double download_seconds_ = 0;  //!< wall time of the last synchronize [s]
+  long long reorders_ = 0;       //!< steps that moved the particle data into block order, so far
 };
 
 std::unique_ptr<Stage<MpmState<3>>> make_device_step(const solid::SolidScene<3>& solid, const Device& device,

@@ -87,8 +87,9 @@ public:
   virtual ~DeviceSolid() = default;
   //! Copies the particles to the device (replacing any held) and computes their stress.
   virtual void upload(const HostParticles& particles) = 0;
-  //! The particles' current state; their order is the order of upload().
-  virtual void download(HostParticles& particles) const = 0;
+  //! The particles' current state; their order is the order of upload(). Not const: the
+  //! device's spare particle buffer serves as scratch.
+  virtual void download(HostParticles& particles) = 0;
   //! The step the CFL and wave conditions allow for the current velocities [s] (> dt_limit
   //! possible: the caller clips it).
   virtual double stable_dt() = 0;
