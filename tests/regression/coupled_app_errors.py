@@ -25,7 +25,7 @@ CASES = [
     ("sediment.switching.dense_above", r"(dense_above:)\s*[^\s#}]+", r"\1 0.1", ["0.1", "(0.2, 1)"]),
     ("fluid.density", r"(density:)\s*1010", r"\1 -1", ["-1", "> 0"]),
     ("bodies[0].phase", r"(phase:)\s*sediment", r"\1 mud", ["mud", "'fluid'", "'sediment'"]),
-    ("periodic", r"(gravity:[^\n]*\nwalls:\n  contact: sticky)", r"\1\n  x_min: open\n  x_max: open\nperiodic: [true, false]",
+    ("periodic", r"(gravity:[^\n]*\nwalls:\n  contact: sticky[^\n]*(?:\n  thickness:[^\n]*)?)", r"\1\n  x_min: open\n  x_max: open\nperiodic: [true, false]",
      ["coupled scenes have no periodic axes"]),
     ("emitters[0].hi", r"\Z", r"\nemitters:\n  - {phase: fluid, lo: [0.1, 0.12], hi: [0.2, 0.2], velocity: [0, -1]}",
      ["0.2", "must lie inside the domain"]),

@@ -10,9 +10,11 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <limits>
 #include <map>
 #include <optional>
+#include <string>
 #include <unordered_set>
 #include <vector>
 
@@ -104,9 +106,36 @@ void start_geostatic(CoupledScene<dim>& scene, std::size_t first, const std::vec
     return key;
   };
   std::map<std::array<long long, dim>, double> top;
+  std::map<std::array<long long, dim>, mpm::Vec<dim>> bottom;  // the lowest particle per column
   for (const mpm::Vec<dim>& p : x) {
     auto [it, inserted] = top.try_emplace(column(p), p[up]);
     if (!inserted) it->second = std::max(it->second, p[up]);
+    auto [low, first_in_column] = bottom.try_emplace(column(p), p);
+    if (!first_in_column && p[up] < low->second[up]) low->second = p;
+  }
+  // The overburden needs something to rest on: half a cell below the base of every column, a
+  // closed wall's layer or a collider. A floor whose layer ends below the base (the default
+  // layer is 2 dx deep, so a finer grid lowers the floor of a domain drawn for a coarser one)
+  // leaves a gap that the bed falls into on its first steps.
+  for (const auto& [key, p] : bottom) {
+    mpm::Vec<dim> below = p;
+    below[up] -= 0.5 * spacing + 0.5 * scene.settings.dx;
+    if (scene.colliders.prescribes(below, 0.0)) continue;
+    const auto& walls = scene.colliders.walls();
+    char where[160];
+    std::snprintf(where, sizeof where, "nothing holds its base at %s = %.6g m (the column at %s = %.6g m)",
+                  up == 1 ? "y" : "z", p[up] - 0.5 * spacing, "x", p[0]);
+    std::string layer = ": no closed wall below it";
+    if (walls) {
+      char text[200];
+      std::snprintf(text, sizeof text,
+                    ": the closed walls' layer is %.6g m deep (walls.thickness; 2 grid.dx by default), so the "
+                    "floor ends at %.6g m",
+                    walls->thickness(), walls->lo()[up] + walls->thickness());
+      layer = text;
+    }
+    body.fail("geostatic", "a geostatic body must rest on a closed wall or a collider, but " + std::string(where) +
+                               layer + "; set walls.thickness in metres or move the body onto the floor");
   }
   const double buoyant = scene.sediment->density - (scene.fluid ? scene.fluid->density : 0.0);
   const double modulus = scene.sediment->materials.front().lame.p_wave_modulus();  // lambda + 2 mu

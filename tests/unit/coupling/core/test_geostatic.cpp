@@ -1,7 +1,8 @@
 // Geostatic start of a sediment body (scene key `geostatic`, coupling/scene_loader.h): F^E is
 // the uniaxial strain that carries the grains' buoyant overburden, the rest packing of a
 // dilatant sand is the body's packing times det F^E, and a bed wall to wall under water that
-// starts so stays at rest, where the same bed started stress-free consolidates and moves.
+// starts so stays at rest, where the same bed started stress-free consolidates and moves; a
+// geostatic body with nothing below its base (a wall's layer or a collider) is refused.
 #include <coupling/scene_loader.h>
 #include <doctest/doctest.h>
 #include <mpm/core/advance.h>
@@ -18,22 +19,25 @@ namespace {
 
 constexpr double kRhoS = 2500.0, kRhoF = 1010.0, kE = 5e4, kNu = 0.3, kPhi = 0.55;
 
-//! A bed 0.2 m wide wall to wall and 0.05 m high under 0.03 m of liquid, dx = 5 mm.
-mpm::Config bed(bool geostatic) {
-  return mpm::Config::parse(std::string(R"(
+//! A bed 0.2 m wide wall to wall and 0.05 m high under 0.03 m of liquid, dx = 5 mm (by default:
+//! `grid` and `walls` as given).
+mpm::Config bed(bool geostatic, const std::string& grid = "{dx: 0.005}", const std::string& walls = "{contact: sticky}",
+                const std::string& colliders = "[]") {
+  return mpm::Config::parse(R"(
 dim: 2
 domain: {lo: [0, 0], hi: [0.22, 0.12]}
-grid: {dx: 0.005}
+grid: )" + grid + R"(
 time: {end: 1}
 gravity: [0, -9.81]
-walls: {contact: sticky}
+colliders: )" + colliders + R"(
+walls: )" + walls + R"(
 fluid: {density: 1010, viscosity: 1.2e-2}
 pressure: {solver: mgpcg, tolerance: 1.0e-10}
 drag: {law: di_felice, grain_diameter: 2.25e-4}
 sediment: {density: 2500, youngs_modulus: 5.0e4, poisson_ratio: 0.3, elasticity: hencky_stvk,
            plasticity: {model: drucker_prager, friction_angle: 28, dilatancy: 4.09, critical_packing: 0.58}}
 bodies:
-  - {phase: sediment, shape: box, lo: [0.01, 0.01], hi: [0.21, 0.06], packing_fraction: 0.55, geostatic: )") +
+  - {phase: sediment, shape: box, lo: [0.01, 0.01], hi: [0.21, 0.06], packing_fraction: 0.55, geostatic: )" +
                             (geostatic ? "true" : "false") + R"(}
   - {phase: fluid, shape: box, lo: [0.01, 0.01], hi: [0.21, 0.09]}
 )");
@@ -89,4 +93,22 @@ bodies:
 )";
   CHECK_THROWS_WITH_AS(load_coupled_scene<2>(mpm::Config::parse(grains)), doctest::Contains("bodies[0].geostatic"),
                        mpm::InputError);
+}
+
+TEST_CASE("geostatic start: a body that nothing holds is refused") {
+  // The floor's layer is 2 dx deep by default: at dx = 2.5 mm it ends at y = 0.005, 5 mm below
+  // the bed's base (a gap the bed would fall into), at dx = 5 mm at the base itself.
+  CHECK_NOTHROW(load_coupled_scene<2>(bed(true)));
+  CHECK_THROWS_WITH_AS(load_coupled_scene<2>(bed(true, "{dx: 0.0025}")),
+                       doctest::Contains("bodies[0].geostatic' = true: a geostatic body must rest on a closed wall or "
+                                         "a collider, but nothing holds its base at y = 0.01 m"),
+                       mpm::InputError);
+  CHECK_THROWS_WITH_AS(load_coupled_scene<2>(bed(true, "{dx: 0.0025}")), doctest::Contains("floor ends at 0.005 m"),
+                       mpm::InputError);
+  // Held by a layer set in metres, or by a collider under the base.
+  CHECK_NOTHROW(load_coupled_scene<2>(bed(true, "{dx: 0.0025}", "{contact: sticky, thickness: 0.01}")));
+  CHECK_NOTHROW(load_coupled_scene<2>(
+      bed(true, "{dx: 0.0025}", "{contact: sticky}", "[{type: box, lo: [0, -1], hi: [0.22, 0.01], contact: sticky}]")));
+  // A body that does not start geostatic may hang above the floor (it falls).
+  CHECK_NOTHROW(load_coupled_scene<2>(bed(false, "{dx: 0.0025}")));
 }
