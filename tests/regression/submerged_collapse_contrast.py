@@ -35,7 +35,7 @@ work = pathlib.Path(args.work)
 work.mkdir(parents=True, exist_ok=True)
 failures = []
 
-coarse = ["grid.dx=0.01", "time.end=1.5"]
+coarse = ["grid.dx=0.01", "walls.thickness=0.01", "time.end=1.5"]
 dense = ["sediment.packing_fraction=0.60", "bodies.0.hi=[0.07,0.052]"]
 # The control: the same scene without the dilatancy keys (and the rate block, whose suspension
 # viscosity needs the critical packing).

@@ -14,6 +14,7 @@
 #include <limits>
 #include <map>
 #include <optional>
+#include <set>
 #include <string>
 #include <unordered_set>
 #include <vector>
@@ -95,7 +96,7 @@ void start_geostatic(CoupledScene<dim>& scene, std::size_t first, const std::vec
   try {
     up = vertical_axis(scene.settings);
   } catch (const mpm::InputError&) {
-    body.fail("geostatic", "a geostatic start needs gravity along one axis, pointing down (-y in 2D, -z in 3D)");
+    body.fail("geostatic", "a geostatic start needs gravity along one coordinate axis, in its negative direction");
   }
   const double spacing =
       scene.settings.dx / mpm::geometry::lattice_points_per_axis<dim>(mpm::geometry::particles_per_cell<dim>(body));
@@ -106,36 +107,9 @@ void start_geostatic(CoupledScene<dim>& scene, std::size_t first, const std::vec
     return key;
   };
   std::map<std::array<long long, dim>, double> top;
-  std::map<std::array<long long, dim>, mpm::Vec<dim>> bottom;  // the lowest particle per column
   for (const mpm::Vec<dim>& p : x) {
     auto [it, inserted] = top.try_emplace(column(p), p[up]);
     if (!inserted) it->second = std::max(it->second, p[up]);
-    auto [low, first_in_column] = bottom.try_emplace(column(p), p);
-    if (!first_in_column && p[up] < low->second[up]) low->second = p;
-  }
-  // The overburden needs something to rest on: half a cell below the base of every column, a
-  // closed wall's layer or a collider. A floor whose layer ends below the base (the default
-  // layer is 2 dx deep, so a finer grid lowers the floor of a domain drawn for a coarser one)
-  // leaves a gap that the bed falls into on its first steps.
-  for (const auto& [key, p] : bottom) {
-    mpm::Vec<dim> below = p;
-    below[up] -= 0.5 * spacing + 0.5 * scene.settings.dx;
-    if (scene.colliders.prescribes(below, 0.0)) continue;
-    const auto& walls = scene.colliders.walls();
-    char where[160];
-    std::snprintf(where, sizeof where, "nothing holds its base at %s = %.6g m (the column at %s = %.6g m)",
-                  up == 1 ? "y" : "z", p[up] - 0.5 * spacing, "x", p[0]);
-    std::string layer = ": no closed wall below it";
-    if (walls) {
-      char text[200];
-      std::snprintf(text, sizeof text,
-                    ": the closed walls' layer is %.6g m deep (walls.thickness; 2 grid.dx by default), so the "
-                    "floor ends at %.6g m",
-                    walls->thickness(), walls->lo()[up] + walls->thickness());
-      layer = text;
-    }
-    body.fail("geostatic", "a geostatic body must rest on a closed wall or a collider, but " + std::string(where) +
-                               layer + "; set walls.thickness in metres or move the body onto the floor");
   }
   const double buoyant = scene.sediment->density - (scene.fluid ? scene.fluid->density : 0.0);
   const double modulus = scene.sediment->materials.front().lame.p_wave_modulus();  // lambda + 2 mu
@@ -143,6 +117,72 @@ void start_geostatic(CoupledScene<dim>& scene, std::size_t first, const std::vec
   for (std::size_t p = first, i = 0; p < F.size(); ++p, ++i) {
     const double depth = top.at(column(x[i])) + 0.5 * spacing - x[i][up];
     F[p](up, up) = std::exp(-buoyant * std::abs(g[up]) * depth / modulus);
+  }
+}
+
+//! A number for a message, as %.6g.
+std::string number_text(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.6g", value);
+  return text;
+}
+
+//! The overburden of a geostatic body needs something to rest on: below the base of each of its
+//! lattice columns, the highest grid node at or below the base must be one an obstacle
+//! prescribes (a closed wall's layer, a collider), or a grain of another sediment body must lie
+//! within two cells below the base. The default wall layer is counted in cells, so a finer grid
+//! lowers the floor of a domain drawn for a coarser one, and a bed would fall into the gap.
+//! `owner[p]`: the body index of sediment particle p.
+template <int dim>
+void require_support(const CoupledScene<dim>& scene, const mpm::Config& body, std::size_t first, std::size_t end,
+                     const std::vector<std::size_t>& owner) {
+  const int up = vertical_axis(scene.settings);
+  const double dx = scene.settings.dx;
+  const mpm::Vec<dim>& lo = scene.settings.domain_lo;
+  const mpm::Particles<dim>& P = scene.state.sediment.particles;
+  using Cell = std::array<long long, dim>;
+  const auto cell_of = [&](const mpm::Vec<dim>& x) {
+    Cell c{};
+    for (int a = 0; a < dim; ++a) c[a] = static_cast<long long>(std::floor((x[a] - lo[a]) / dx));
+    return c;
+  };
+  // The cells that hold grains of another body.
+  std::set<Cell> others;
+  for (std::size_t p = 0; p < P.size(); ++p)
+    if (owner[p] != owner[first]) others.insert(cell_of(P.x[p]));
+  // The lowest grain of each lattice column (rounded to half the grid spacing across the vertical).
+  std::map<Cell, mpm::Vec<dim>> bottom;
+  for (std::size_t p = first; p < end; ++p) {
+    Cell key{};
+    for (int a = 0; a < dim; ++a) key[a] = a == up ? 0 : std::llround(P.x[p][a] / (0.5 * dx));
+    auto [it, inserted] = bottom.try_emplace(key, P.x[p]);
+    if (!inserted && P.x[p][up] < it->second[up]) it->second = P.x[p];
+  }
+  const double spacing = dx / mpm::geometry::lattice_points_per_axis<dim>(mpm::geometry::particles_per_cell<dim>(body));
+  for (const auto& [key, p] : bottom) {
+    const double base = p[up] - 0.5 * spacing;
+    mpm::Vec<dim> node = p;
+    node[up] = lo[up] + std::floor((base - lo[up]) / dx + 1e-9) * dx;
+    if (scene.colliders.prescribes(node, 0.0)) continue;
+    mpm::Vec<dim> below = p;
+    below[up] = base - 1e-9 * dx;
+    Cell c = cell_of(below);
+    if (others.count(c)) continue;
+    --c[up];
+    if (others.count(c)) continue;
+    const char* axis = "xyz";
+    std::string where =
+        "nothing holds its base at " + std::string(1, axis[up]) + " = " + number_text(base) + " m (the column at";
+    for (int a = 0; a < dim; ++a)
+      if (a != up) where += " " + std::string(1, axis[a]) + " = " + number_text(p[a]) + " m";
+    where += ")";
+    const auto& walls = scene.colliders.walls();
+    if (walls && walls->wall(up, mpm::geometry::Side::lower))
+      where += ": the floor's wall layer is " + number_text(walls->thickness()) +
+               " m deep (walls.thickness; (support - 1) grid.dx by default), so its top node is at " +
+               number_text(lo[up] + std::floor(walls->thickness() / dx + 1e-9) * dx) + " m";
+    body.fail("geostatic", "a geostatic body must rest on a closed wall, a collider or another sediment body, but " +
+                               where + "; set walls.thickness in metres or move the body onto its support");
   }
 }
 }  // namespace
@@ -234,6 +274,8 @@ CoupledScene<dim> load_coupled_scene(const mpm::Config& scene) {
   }
   // Sediment first, so that every fluid body sees every pore.
   std::vector<Pores<dim>> pores;
+  std::vector<std::pair<std::size_t, std::size_t>> geostatic;  // (body, its first particle)
+  std::vector<std::size_t> owner;                              // each sediment particle's body
   for (std::size_t n = 0; n < bodies.size(); ++n) {
     if (phase[n] != "sediment") continue;
     const mpm::Config& body = bodies[n];
@@ -242,14 +284,21 @@ CoupledScene<dim> load_coupled_scene(const mpm::Config& scene) {
     const mpm::geometry::BodyParticles<dim> b = mpm::geometry::seed_body_shape<dim>(body, out.settings);
     const std::size_t first = out.state.sediment.particles.size();
     add_sediment_particles(out, b.x, phi * b.volume, body.vector<dim>("velocity", Vec::Zero()), body.path());
-    if (body.flag("geostatic", false)) start_geostatic(out, first, b.x, body);
+    if (body.flag("geostatic", false)) {
+      start_geostatic(out, first, b.x, body);
+      geostatic.push_back({n, first});
+    }
     if (std::vector<double>* rest = mpm::solid::rest_packing(out.state.sediment.particles)) {
       const std::vector<mpm::Mat<dim>>& F = mpm::solid::elastic_F(out.state.sediment.particles);
       for (std::size_t p = first; p < rest->size(); ++p) (*rest)[p] = phi * F[p].determinant();
     }
     const int k = mpm::geometry::lattice_points_per_axis<dim>(mpm::geometry::particles_per_cell<dim>(body));
     pores.emplace_back(b.x, out.settings.dx / k, phi);
+    owner.resize(out.state.sediment.particles.size(), n);
   }
+  for (const auto& [n, first] : geostatic)  // every sediment body seeded: a bed may rest on another
+    require_support(out, bodies[n], first, first + static_cast<std::size_t>(std::count(owner.begin(), owner.end(), n)),
+                    owner);
   for (std::size_t n = 0; n < bodies.size(); ++n) {
     if (phase[n] != "fluid") continue;
     const mpm::Config& body = bodies[n];

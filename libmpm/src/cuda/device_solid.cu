@@ -811,14 +811,15 @@ public:
   void download(HostParticles& h) override {
     h.n = n_;
     // The device keeps the particles in its own order: host_index_ maps them back. Each component
-    // goes into the host's order and precision on the device, in the spare buffer (not in use
-    // between steps, and at least 2 n values of T >= n doubles), and is copied as one block: the
-    // host's scatter of ten million particles took seconds per frame.
+    // goes into the host's order and precision on the device, in the spare buffer (the target of
+    // a reordering only, not in use between steps: 33 n values of T >= n doubles), and is copied
+    // as one block: the host's scatter of ten million particles took seconds per frame.
     double* scratch = reinterpret_cast<double*>(spare_.get());
     const auto get = [&](std::vector<double>& values, std::size_t at, int components) {
       values.resize(components * n_);
       for (int c = 0; c < components && n_ > 0; ++c) {
         to_host_order_kernel<<<blocks_for(n_), 256>>>(particles_.get() + (at + c) * n_, scratch, host_index_.get(), n_);
+        check(cudaGetLastError(), "copying particles from the device");
         check(cudaMemcpy(values.data() + c * n_, scratch, n_ * sizeof(double), cudaMemcpyDeviceToHost),
               "copying particles from the device");
       }

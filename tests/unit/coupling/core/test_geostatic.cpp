@@ -20,9 +20,9 @@ namespace {
 constexpr double kRhoS = 2500.0, kRhoF = 1010.0, kE = 5e4, kNu = 0.3, kPhi = 0.55;
 
 //! A bed 0.2 m wide wall to wall and 0.05 m high under 0.03 m of liquid, dx = 5 mm (by default:
-//! `grid` and `walls` as given).
+//! `grid`, `walls`, `colliders` as given, and `more_bodies` appended to the list).
 mpm::Config bed(bool geostatic, const std::string& grid = "{dx: 0.005}", const std::string& walls = "{contact: sticky}",
-                const std::string& colliders = "[]") {
+                const std::string& colliders = "[]", const std::string& more_bodies = "") {
   return mpm::Config::parse(R"(
 dim: 2
 domain: {lo: [0, 0], hi: [0.22, 0.12]}
@@ -40,7 +40,7 @@ bodies:
   - {phase: sediment, shape: box, lo: [0.01, 0.01], hi: [0.21, 0.06], packing_fraction: 0.55, geostatic: )" +
                             (geostatic ? "true" : "false") + R"(}
   - {phase: fluid, shape: box, lo: [0.01, 0.01], hi: [0.21, 0.09]}
-)");
+)" + more_bodies);
 }
 
 //! The grains' mean speed [m/s].
@@ -100,15 +100,22 @@ TEST_CASE("geostatic start: a body that nothing holds is refused") {
   // the bed's base (a gap the bed would fall into), at dx = 5 mm at the base itself.
   CHECK_NOTHROW(load_coupled_scene<2>(bed(true)));
   CHECK_THROWS_WITH_AS(load_coupled_scene<2>(bed(true, "{dx: 0.0025}")),
-                       doctest::Contains("bodies[0].geostatic' = true: a geostatic body must rest on a closed wall or "
-                                         "a collider, but nothing holds its base at y = 0.01 m"),
+                       doctest::Contains("bodies[0].geostatic' = true: a geostatic body must rest on a closed wall, a "
+                                         "collider or another sediment body, but nothing holds its base at y = 0.01 m "
+                                         "(the column at x = 0.010625 m)"),
                        mpm::InputError);
-  CHECK_THROWS_WITH_AS(load_coupled_scene<2>(bed(true, "{dx: 0.0025}")), doctest::Contains("floor ends at 0.005 m"),
+  CHECK_THROWS_WITH_AS(load_coupled_scene<2>(bed(true, "{dx: 0.0025}")),
+                       doctest::Contains("wall layer is 0.005 m deep (walls.thickness; (support - 1) grid.dx by "
+                                         "default), so its top node is at 0.005 m"),
                        mpm::InputError);
   // Held by a layer set in metres, or by a collider under the base.
   CHECK_NOTHROW(load_coupled_scene<2>(bed(true, "{dx: 0.0025}", "{contact: sticky, thickness: 0.01}")));
   CHECK_NOTHROW(load_coupled_scene<2>(
       bed(true, "{dx: 0.0025}", "{contact: sticky}", "[{type: box, lo: [0, -1], hi: [0.22, 0.01], contact: sticky}]")));
+  // Or by another sediment body that rests on the floor (listed after it).
+  CHECK_NOTHROW(load_coupled_scene<2>(
+      bed(true, "{dx: 0.0025}", "{contact: sticky}", "[]",
+          "  - {phase: sediment, shape: box, lo: [0.01, 0.005], hi: [0.21, 0.01], packing_fraction: 0.55}\n")));
   // A body that does not start geostatic may hang above the floor (it falls).
   CHECK_NOTHROW(load_coupled_scene<2>(bed(false, "{dx: 0.0025}")));
 }
