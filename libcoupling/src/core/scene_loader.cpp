@@ -128,7 +128,7 @@ std::string number_text(double value) {
 }
 
 //! The overburden of a geostatic body needs something to rest on: below the base of each of its
-//! lattice columns, the highest grid node at or below the base must be one an obstacle
+//! columns of grid cells, the highest grid node at or below the base must be one an obstacle
 //! prescribes (a closed wall's layer, a collider), or a grain of another sediment body must lie
 //! within two cells below the base. The default wall layer is counted in cells, so a finer grid
 //! lowers the floor of a domain drawn for a coarser one, and a bed would fall into the gap.
@@ -150,11 +150,11 @@ void require_support(const CoupledScene<dim>& scene, const mpm::Config& body, st
   std::set<Cell> others;
   for (std::size_t p = 0; p < P.size(); ++p)
     if (owner[p] != owner[first]) others.insert(cell_of(P.x[p]));
-  // The lowest grain of each lattice column (rounded to half the grid spacing across the vertical).
+  // The lowest grain of each column of grid cells (jittered seeding keeps its grains in it).
   std::map<Cell, mpm::Vec<dim>> bottom;
   for (std::size_t p = first; p < end; ++p) {
-    Cell key{};
-    for (int a = 0; a < dim; ++a) key[a] = a == up ? 0 : std::llround(P.x[p][a] / (0.5 * dx));
+    Cell key = cell_of(P.x[p]);
+    key[up] = 0;
     auto [it, inserted] = bottom.try_emplace(key, P.x[p]);
     if (!inserted && P.x[p][up] < it->second[up]) it->second = P.x[p];
   }

@@ -20,9 +20,11 @@ namespace {
 constexpr double kRhoS = 2500.0, kRhoF = 1010.0, kE = 5e4, kNu = 0.3, kPhi = 0.55;
 
 //! A bed 0.2 m wide wall to wall and 0.05 m high under 0.03 m of liquid, dx = 5 mm (by default:
-//! `grid`, `walls`, `colliders` as given, and `more_bodies` appended to the list).
+//! `grid`, `walls`, `colliders` as given, `more_bodies` appended to the list, `bed_keys` to the
+//! bed's keys).
 mpm::Config bed(bool geostatic, const std::string& grid = "{dx: 0.005}", const std::string& walls = "{contact: sticky}",
-                const std::string& colliders = "[]", const std::string& more_bodies = "") {
+                const std::string& colliders = "[]", const std::string& more_bodies = "",
+                const std::string& bed_keys = "") {
   return mpm::Config::parse(R"(
 dim: 2
 domain: {lo: [0, 0], hi: [0.22, 0.12]}
@@ -38,7 +40,7 @@ sediment: {density: 2500, youngs_modulus: 5.0e4, poisson_ratio: 0.3, elasticity:
            plasticity: {model: drucker_prager, friction_angle: 28, dilatancy: 4.09, critical_packing: 0.58}}
 bodies:
   - {phase: sediment, shape: box, lo: [0.01, 0.01], hi: [0.21, 0.06], packing_fraction: 0.55, geostatic: )" +
-                            (geostatic ? "true" : "false") + R"(}
+                            (geostatic ? "true" : "false") + bed_keys + R"(}
   - {phase: fluid, shape: box, lo: [0.01, 0.01], hi: [0.21, 0.09]}
 )" + more_bodies);
 }
@@ -116,6 +118,8 @@ TEST_CASE("geostatic start: a body that nothing holds is refused") {
   CHECK_NOTHROW(load_coupled_scene<2>(
       bed(true, "{dx: 0.0025}", "{contact: sticky}", "[]",
           "  - {phase: sediment, shape: box, lo: [0.01, 0.005], hi: [0.21, 0.01], packing_fraction: 0.55}\n")));
+  // A jittered lattice rests on the floor as well (its columns are the grid's).
+  CHECK_NOTHROW(load_coupled_scene<2>(bed(true, "{dx: 0.005}", "{contact: sticky}", "[]", "", ", jitter: 0.9")));
   // A body that does not start geostatic may hang above the floor (it falls).
   CHECK_NOTHROW(load_coupled_scene<2>(bed(false, "{dx: 0.0025}")));
 }
