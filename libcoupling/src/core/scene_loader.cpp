@@ -1,6 +1,7 @@
 #include <coupling/scene_loader.h>
 #include <coupling/stages/reclassify_sediment.h>
 #include <mpm/core/error.h>
+#include <mpm/core/number_text.h>
 #include <mpm/geometry/body_config.h>
 #include <mpm/geometry/collider_config.h>
 #include <mpm/geometry/seeding.h>
@@ -10,7 +11,6 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
-#include <cstdio>
 #include <limits>
 #include <map>
 #include <optional>
@@ -120,13 +120,6 @@ void start_geostatic(CoupledScene<dim>& scene, std::size_t first, const std::vec
   }
 }
 
-//! A number for a message, as %.6g.
-std::string number_text(double value) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.6g", value);
-  return text;
-}
-
 //! The overburden of a geostatic body needs something to rest on: below the base of each of its
 //! columns of grid cells, the highest grid node at or below the base must be one an obstacle
 //! prescribes (a closed wall's layer, a collider), or a grain of another sediment body must lie
@@ -172,15 +165,15 @@ void require_support(const CoupledScene<dim>& scene, const mpm::Config& body, st
     if (others.count(c)) continue;
     const char* axis = "xyz";
     std::string where =
-        "nothing holds its base at " + std::string(1, axis[up]) + " = " + number_text(base) + " m (the column at";
+        "nothing holds its base at " + std::string(1, axis[up]) + " = " + mpm::number_text(base) + " m (the column at";
     for (int a = 0; a < dim; ++a)
-      if (a != up) where += " " + std::string(1, axis[a]) + " = " + number_text(p[a]) + " m";
+      if (a != up) where += " " + std::string(1, axis[a]) + " = " + mpm::number_text(p[a]) + " m";
     where += ")";
     const auto& walls = scene.colliders.walls();
     if (walls && walls->wall(up, mpm::geometry::Side::lower))
-      where += ": the floor's wall layer is " + number_text(walls->thickness()) +
+      where += ": the floor's wall layer is " + mpm::number_text(walls->thickness()) +
                " m deep (walls.thickness; (support - 1) grid.dx by default), so its top node is at " +
-               number_text(lo[up] + std::floor(walls->thickness() / dx + 1e-9) * dx) + " m";
+               mpm::number_text(lo[up] + std::floor(walls->thickness() / dx + 1e-9) * dx) + " m";
     body.fail("geostatic", "a geostatic body must rest on a closed wall, a collider or another sediment body, but " +
                                where + "; set walls.thickness in metres or move the body onto its support");
   }
@@ -274,8 +267,8 @@ CoupledScene<dim> load_coupled_scene(const mpm::Config& scene) {
   }
   // Sediment first, so that every fluid body sees every pore.
   std::vector<Pores<dim>> pores;
-  std::vector<std::pair<std::size_t, std::size_t>> geostatic;  // (body, its first particle)
-  std::vector<std::size_t> owner;                              // each sediment particle's body
+  std::vector<std::array<std::size_t, 3>> geostatic;  // (body, its first particle, one past its last)
+  std::vector<std::size_t> owner;                     // each sediment particle's body
   for (std::size_t n = 0; n < bodies.size(); ++n) {
     if (phase[n] != "sediment") continue;
     const mpm::Config& body = bodies[n];
@@ -286,7 +279,7 @@ CoupledScene<dim> load_coupled_scene(const mpm::Config& scene) {
     add_sediment_particles(out, b.x, phi * b.volume, body.vector<dim>("velocity", Vec::Zero()), body.path());
     if (body.flag("geostatic", false)) {
       start_geostatic(out, first, b.x, body);
-      geostatic.push_back({n, first});
+      geostatic.push_back({n, first, out.state.sediment.particles.size()});
     }
     if (std::vector<double>* rest = mpm::solid::rest_packing(out.state.sediment.particles)) {
       const std::vector<mpm::Mat<dim>>& F = mpm::solid::elastic_F(out.state.sediment.particles);
@@ -296,9 +289,8 @@ CoupledScene<dim> load_coupled_scene(const mpm::Config& scene) {
     pores.emplace_back(b.x, out.settings.dx / k, phi);
     owner.resize(out.state.sediment.particles.size(), n);
   }
-  for (const auto& [n, first] : geostatic)  // every sediment body seeded: a bed may rest on another
-    require_support(out, bodies[n], first, first + static_cast<std::size_t>(std::count(owner.begin(), owner.end(), n)),
-                    owner);
+  for (const auto& [n, first, end] : geostatic)  // every sediment body seeded: a bed may rest on another
+    require_support(out, bodies[n], first, end, owner);
   for (std::size_t n = 0; n < bodies.size(); ++n) {
     if (phase[n] != "fluid") continue;
     const mpm::Config& body = bodies[n];

@@ -1,5 +1,5 @@
 #include <mpm/adaptive/refinement.h>
-#include "../geometry/number_text.h"
+#include <mpm/core/number_text.h>
 
 #include <mpm/core/memory_budget.h>
 
@@ -33,12 +33,11 @@ std::optional<RefinementSettings<dim>> parse_refinement(const Config& scene, con
       for (int a = 0; a < dim; ++a) {
         if (!(region.lo[a] < region.hi[a])) box->fail("hi", "every component must exceed the one of lo");
         if (region.lo[a] < settings.domain_lo[a] || region.lo[a] >= settings.domain_hi[a])
-          box->fail("lo", "the box must start inside the domain [" +
-                              geometry::detail::number_text(settings.domain_lo[a]) + ", " +
-                              geometry::detail::number_text(settings.domain_hi[a]) + ") on axis " + std::to_string(a));
+          box->fail("lo", "the box must start inside the domain [" + number_text(settings.domain_lo[a]) + ", " +
+                              number_text(settings.domain_hi[a]) + ") on axis " + std::to_string(a));
         if (region.hi[a] > settings.domain_hi[a])
-          box->fail("hi", "the box must end inside the domain (<= " +
-                              geometry::detail::number_text(settings.domain_hi[a]) + ") on axis " + std::to_string(a));
+          box->fail("hi", "the box must end inside the domain (<= " + number_text(settings.domain_hi[a]) +
+                              ") on axis " + std::to_string(a));
       }
     } else if (entry.has("near_colliders")) {
       region.kind = RefinementRegion<dim>::Kind::near_colliders;
@@ -57,11 +56,11 @@ std::optional<RefinementSettings<dim>> parse_refinement(const Config& scene, con
     rs.d_large = resample->number("d_large", Range::positive());
     rs.every = resample->integer("every", 1, 1, 1000000);
     if (!(rs.d_small < rs.d_medium))
-      resample->fail("d_medium", "must exceed d_small = " + geometry::detail::number_text(rs.d_small) +
-                                     " (0 <= d_small < d_medium < d_large)");
+      resample->fail("d_medium",
+                     "must exceed d_small = " + number_text(rs.d_small) + " (0 <= d_small < d_medium < d_large)");
     if (!(rs.d_medium < rs.d_large))
-      resample->fail("d_large", "must exceed d_medium = " + geometry::detail::number_text(rs.d_medium) +
-                                    " (0 <= d_small < d_medium < d_large)");
+      resample->fail("d_large",
+                     "must exceed d_medium = " + number_text(rs.d_medium) + " (0 <= d_small < d_medium < d_large)");
     if (r.levels < 2) cfg->fail("levels", "resampling needs two levels or more");
     if (!r.follow_particles)
       cfg->fail("follow_particles", "resampling changes the particle types: the grid must follow them (true)");
@@ -117,11 +116,10 @@ void check_refinement_memory(const Config& scene, const RefinementSettings<dim>&
     if (count > cap)
       entries[i].fail(region.kind == RefinementRegion<dim>::Kind::box ? "box" : "near_colliders",
                       "refining to level " + std::to_string(region.level) + " (dx " +
-                          geometry::detail::number_text(settings.dx * (1 << (r.levels - 1 - region.level))) +
-                          " m) refines more than " + geometry::detail::number_text(count) +
-                          " cells with the regions before it, a tree of more than " +
-                          geometry::detail::number_text(count * kBytesPerRefinedCell / 1e9) +
-                          " GB: the tree may take half of the " + geometry::detail::number_text(2.0 * budget / 1e9) +
+                          number_text(settings.dx * (1 << (r.levels - 1 - region.level))) + " m) refines more than " +
+                          number_text(count) + " cells with the regions before it, a tree of more than " +
+                          number_text(count * kBytesPerRefinedCell / 1e9) + " GB: the tree may take half of the " +
+                          number_text(2.0 * budget / 1e9) +
                           " GB that still fit (the memory available, or --max-memory, less what is held): shrink the "
                           "region, lower its level or coarsen grid.dx");
   }

@@ -2,11 +2,10 @@
 //! updated velocity v_i inside an obstacle moving at v_c:
 //!   phi(x_i, t) = phi0(x_i - v_c t) <= 0   (phi0(x_i) for a fixed shape, Motion::fixed)
 //!   v_i <- v_c + contact(v_i - v_c, n(x_i, t))      (contact.h: sticky, slip, separate + Coulomb)
+#include <mpm/core/number_text.h>
 #include <mpm/geometry/collider.h>
 
 #include <mpm/core/error.h>
-
-#include "number_text.h"
 
 #include <Eigen/Geometry>
 
@@ -20,7 +19,7 @@ namespace {
 
 void verify_friction(const Contact& contact) {
   verify<InputError>(std::isfinite(contact.friction) && contact.friction >= 0.0,
-                     "collider: the friction coefficient must be >= 0, got " + detail::number_text(contact.friction));
+                     "collider: the friction coefficient must be >= 0, got " + number_text(contact.friction));
 }
 
 }  // namespace
@@ -97,7 +96,7 @@ DomainWalls<dim>::DomainWalls(const Vec<dim>& lo, const Vec<dim>& hi, double thi
     : lo_(lo), hi_(hi), thickness_(thickness) {
   verify<InputError>((hi.array() > lo.array()).all(), "domain walls: hi must exceed lo in every component");
   verify<InputError>(std::isfinite(thickness) && thickness > 0.0,
-                     "domain walls: the thickness must be > 0, got " + detail::number_text(thickness));
+                     "domain walls: the thickness must be > 0, got " + number_text(thickness));
   verify_friction(contact);
   walls_.fill(contact);
 }

@@ -1,11 +1,10 @@
+#include <mpm/core/number_text.h>
 #include <mpm/geometry/flow_boundary_config.h>
 
 #include <mpm/core/error.h>
 #include <mpm/core/kernels.h>
 #include <mpm/geometry/body_config.h>
 #include <mpm/geometry/seeding.h>
-
-#include "number_text.h"
 
 #include <cmath>
 
@@ -146,7 +145,7 @@ void require_inside_domain(const Config& at, const Vec<dim>& lo, const Vec<dim>&
   const auto box = [&] {
     std::string text = "must lie inside the domain, from";
     for (const Vec<dim>* corner : {&settings.domain_lo, &settings.domain_hi}) {
-      for (int a = 0; a < dim; ++a) text += (a == 0 ? " [" : ", ") + detail::number_text((*corner)[a]);
+      for (int a = 0; a < dim; ++a) text += (a == 0 ? " [" : ", ") + number_text((*corner)[a]);
       text += corner == &settings.domain_lo ? "] to" : "]";
     }
     return text;

@@ -5,10 +5,10 @@
 //!   mesh file  -> tools::meshToLevelSet on a linear transform of the caller's voxel size;
 //!   phi(x)     -> tools::BoxSampler (trilinear) at the index-space position of x.
 #include <mpm/core/error.h>
+#include <mpm/core/number_text.h>
 #include <mpm/geometry/triangle_mesh.h>
 
 #include "level_set_grid.h"
-#include "number_text.h"
 #include "openvdb_plugin.h"
 
 #include <openvdb/io/File.h>
@@ -110,9 +110,9 @@ std::shared_ptr<const detail::LevelSetGrid> grid_from_vdb(const std::string& fil
 std::shared_ptr<const detail::LevelSetGrid> grid_from_mesh(const std::string& file, double voxel_size,
                                                            double half_width) {
   verify<InputError>(std::isfinite(voxel_size) && voxel_size > 0.0,
-                     file + ": the voxel size must be > 0, got " + detail::number_text(voxel_size));
+                     file + ": the voxel size must be > 0, got " + number_text(voxel_size));
   verify<InputError>(std::isfinite(half_width) && half_width >= 3.0,
-                     file + ": the narrow band must be >= 3 voxels wide, got " + detail::number_text(half_width));
+                     file + ": the narrow band must be >= 3 voxels wide, got " + number_text(half_width));
   const TriangleMesh mesh = read_triangle_mesh(file);
   check_closed(mesh, file);  // an open surface has no inside to convert
 
@@ -126,9 +126,9 @@ std::shared_ptr<const detail::LevelSetGrid> grid_from_mesh(const std::string& fi
   }
   const double voxels_across = (hi - lo).maxCoeff() / voxel_size;
   verify<InputError>(voxels_across <= kMaxVoxelsAcross,
-                     file + ": voxel size " + detail::number_text(voxel_size) + " m gives " +
-                         detail::number_text(voxels_across) + " voxels across the mesh (at most " +
-                         detail::number_text(kMaxVoxelsAcross) + "); is the mesh in metres?");
+                     file + ": voxel size " + number_text(voxel_size) + " m gives " + number_text(voxels_across) +
+                         " voxels across the mesh (at most " + number_text(kMaxVoxelsAcross) +
+                         "); is the mesh in metres?");
   std::vector<openvdb::Vec3I> triangles;
   triangles.reserve(mesh.triangles.size());
   for (const auto& t : mesh.triangles) triangles.emplace_back(t[0], t[1], t[2]);

@@ -1,10 +1,9 @@
+#include <mpm/core/number_text.h>
 #include <mpm/geometry/seeding.h>
 
 #include <mpm/core/error.h>
 #include <mpm/core/memory_budget.h>
 #include <mpm/geometry/signed_distance.h>
-
-#include "number_text.h"
 
 #include <algorithm>
 #include <cmath>
@@ -43,9 +42,8 @@ template <int dim>
 std::vector<Vec<dim>> seed_lattice(const Vec<dim>& lo, const Vec<dim>& hi, double dx, int particles_per_cell,
                                    double jitter, std::uint64_t seed,
                                    const std::function<bool(const Vec<dim>&)>& inside) {
-  verify<InputError>(std::isfinite(dx) && dx > 0.0, "seeding: dx must be > 0, got " + detail::number_text(dx));
-  verify<InputError>(jitter >= 0.0 && jitter < 1.0,
-                     "seeding: jitter must be in [0, 1), got " + detail::number_text(jitter));
+  verify<InputError>(std::isfinite(dx) && dx > 0.0, "seeding: dx must be > 0, got " + number_text(dx));
+  verify<InputError>(jitter >= 0.0 && jitter < 1.0, "seeding: jitter must be in [0, 1), got " + number_text(jitter));
   const double h = dx / lattice_points_per_axis<dim>(particles_per_cell);
 
   // Lattice indices i with lo <= (i + 1/2) h < hi.
@@ -58,12 +56,12 @@ std::vector<Vec<dim>> seed_lattice(const Vec<dim>& lo, const Vec<dim>& hi, doubl
   }
   verify<InputError>(first_index.cwiseAbs().maxCoeff() < 2e9 && end_index.cwiseAbs().maxCoeff() < 2e9,
                      "seeding: the body lies beyond 2e9 sub-spacings from the origin; check its bounds");
-  verify<InputError>(candidates <= kMaxLatticePoints,
-                     "seeding: " + detail::number_text(candidates) + " lattice points (at most " +
-                         detail::number_text(kMaxLatticePoints) + "); check dx and the extent of the body");
+  verify<InputError>(candidates <= kMaxLatticePoints, "seeding: " + number_text(candidates) +
+                                                          " lattice points (at most " + number_text(kMaxLatticePoints) +
+                                                          "); check dx and the extent of the body");
   if (const std::string why = memory_shortfall(candidates * kBytesPerParticle<dim>); !why.empty())
-    throw InputError("seeding: up to " + detail::number_text(candidates) + " particles at grid spacing dx = " +
-                     detail::number_text(dx) + " m, " + std::to_string(particles_per_cell) + " per cell, need " + why +
+    throw InputError("seeding: up to " + number_text(candidates) + " particles at grid spacing dx = " +
+                     number_text(dx) + " m, " + std::to_string(particles_per_cell) + " per cell, need " + why +
                      ": coarsen the grid or lower particles_per_cell");
   const IVec<dim> first = first_index.template cast<int>(), end = end_index.template cast<int>();
   std::vector<Vec<dim>> points;

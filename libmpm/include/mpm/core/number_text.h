@@ -4,7 +4,7 @@
 #include <sstream>
 #include <string>
 
-namespace mpm::geometry::detail {
+namespace mpm {
 
 inline std::string number_text(double value) {
   std::ostringstream text;
@@ -12,4 +12,4 @@ inline std::string number_text(double value) {
   return text.str();
 }
 
-}  // namespace mpm::geometry::detail
+}  // namespace mpm
