@@ -187,7 +187,7 @@ private:
     if (P.size() != uploaded_count_)
       throw std::logic_error("device_step: the host holds " + std::to_string(P.size()) + " particles, the device " +
                              std::to_string(uploaded_count_) + " (host particles changed during a device run)");
-    detail::HostParticles h;
+    detail::HostParticles& h = staging_;  // kept: ten million particles' pages are touched once per run
     device_->download(h);
     const std::size_t n = h.n;
     auto& F = solid::elastic_F(P);
@@ -204,6 +204,7 @@ private:
   }
 
   std::unique_ptr<detail::DeviceSolid> device_;
+  mutable detail::HostParticles staging_;  //!< the download's buffers, reused frame after frame
   bool uploaded_ = false;
   std::size_t uploaded_count_ = 0;
   bool stale_ = false;  //!< the host particles are behind the device's
