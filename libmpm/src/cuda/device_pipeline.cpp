@@ -183,7 +183,7 @@ private:
     uploaded_count_ = n;
   }
 
-  void download(Particles<3>& P) const {
+  void download(Particles<3>& P) {
     if (P.size() != uploaded_count_)
       throw std::logic_error("device_step: the host holds " + std::to_string(P.size()) + " particles, the device " +
                              std::to_string(uploaded_count_) + " (host particles changed during a device run)");
@@ -204,7 +204,7 @@ private:
   }
 
   std::unique_ptr<detail::DeviceSolid> device_;
-  mutable detail::HostParticles staging_;  //!< the download's buffers, reused frame after frame
+  detail::HostParticles staging_;  //!< the download's buffers, reused frame after frame
   bool uploaded_ = false;
   std::size_t uploaded_count_ = 0;
   bool stale_ = false;  //!< the host particles are behind the device's
