@@ -20,6 +20,7 @@
 #include <cstdint>
 #include <deque>
 #include <string>
+#include <tuple>
 #include <type_traits>
 #include <utility>
 #include <variant>
@@ -160,7 +161,13 @@ struct Particles {
   //! Reorders every channel so that new index i holds old index order[i]; an `order` shorter
   //! than size() keeps only the particles it lists.
   void permute(const std::vector<std::uint32_t>& order) {
-    for_each_channel([&](const ChannelInfo&, auto& values) { apply_permutation(values, order); });
+    // One buffer per element type: each channel's old storage, swapped out, receives the next
+    // channel of its type, so a move allocates (and the kernel first-touches) one array per
+    // type instead of one per channel.
+    std::tuple<std::vector<double>, std::vector<Vec<dim>>, std::vector<Mat<dim>>, std::vector<std::uint16_t>> spare;
+    for_each_channel([&](const ChannelInfo&, auto& values) {
+      apply_permutation(values, order, std::get<std::decay_t<decltype(values)>>(spare));
+    });
   }
 
   //! Removes every particle p with flagged[p] != 0 (flagged.size() == size()) from every
@@ -278,8 +285,8 @@ private:
   //! A parallel gather: the reads are random when the order is scattered, so the memory
   //! latency of both cores overlaps (bench_transfer, shuffled input).
   template <class T>
-  static void apply_permutation(std::vector<T>& a, const std::vector<std::uint32_t>& order) {
-    std::vector<T> out(order.size());
+  static void apply_permutation(std::vector<T>& a, const std::vector<std::uint32_t>& order, std::vector<T>& out) {
+    out.resize(order.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, order.size(), 8192), [&](const auto& r) {
       for (std::size_t i = r.begin(); i != r.end(); ++i) out[i] = a[order[i]];
     });
