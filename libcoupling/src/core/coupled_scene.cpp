@@ -83,6 +83,7 @@ void add_fluid_particles(CoupledScene<dim>& scene, const std::vector<mpm::Vec<di
   if (const std::string why = mpm::first_outside_domain(scene.settings, positions).why; !why.empty())
     throw mpm::InputError(where + ": " + why);
   const double mass = fluid_fraction * scene.fluid->density * volume;
+  scene.state.fluid.particles.reserve_more(positions.size());
   for (const mpm::Vec<dim>& x : positions) scene.state.fluid.particles.push_back(x, velocity, mass, volume, 0);
 }
 
@@ -94,6 +95,7 @@ void add_sediment_particles(CoupledScene<dim>& scene, const std::vector<mpm::Vec
     throw mpm::InputError(where + ": " + why);
   const double mass = scene.sediment->density * grain_volume;
   const std::uint16_t material = scene.sediment->materials.empty() ? discrete_grain : 0;
+  scene.state.sediment.particles.reserve_more(positions.size());
   for (const mpm::Vec<dim>& x : positions)
     scene.state.sediment.particles.push_back(x, velocity, mass, grain_volume, material);
 }

@@ -77,6 +77,7 @@ void add_fluid_particles(FluidScene<dim>& scene, const std::vector<Vec<dim>>& po
   if (const std::string why = mpm::first_outside_domain(scene.settings, positions).why; !why.empty())
     throw mpm::InputError(where + ": " + why);
   const double mass = scene.fluid.density * volume;
+  scene.state.particles.reserve_more(positions.size());
   for (const Vec<dim>& x : positions) scene.state.particles.push_back(x, velocity, mass, volume, 0);
 }
 

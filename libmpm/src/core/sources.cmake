@@ -12,6 +12,7 @@ list(APPEND MPM_CORE_SOURCES
   src/core/runner.cpp
   src/core/stop_signals.cpp
   src/core/memory_budget.cpp
+  src/core/huge_pages.cpp
   src/core/stages/sort_particles.cpp
   src/core/stages/particles_to_grid.cpp
   src/core/stages/grid_velocity_update.cpp

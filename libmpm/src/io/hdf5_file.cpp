@@ -1,13 +1,12 @@
 #include "hdf5_file.h"
 
 #include <mpm/core/error.h>
+#include <mpm/core/huge_pages.h>
 #include <mpm/io/atomic_file.h>
 
-#include <sys/mman.h>
-
 #include <algorithm>
-#include <cstdlib>
 #include <memory>
+#include <new>
 
 namespace mpm::io::detail {
 namespace {
@@ -43,20 +42,12 @@ std::string take_reason() {
 }
 
 //! Room for a file image of `size` bytes, not zero-filled (the image is copied over all of
-//! it). A checkpoint's image is hundreds of MB: in 2 MiB pages where the kernel offers them
-//! on request (transparent huge pages in "madvise" mode), the first touch takes one page
-//! fault per 2 MiB instead of one per 4 KiB, which on a virtual machine cost more than the copy.
-struct FreeImage {
-  void operator()(char* p) const { std::free(p); }
-};
-std::unique_ptr<char[], FreeImage> image_buffer(std::size_t size) {
-  constexpr std::size_t huge = std::size_t{1} << 21;
-  const std::size_t rounded = (size + huge - 1) / huge * huge;
-  char* p = static_cast<char*>(std::aligned_alloc(huge, rounded));
-#ifdef MADV_HUGEPAGE
-  if (p) ::madvise(p, rounded, MADV_HUGEPAGE);  // advice only: ignored where unsupported
-#endif
-  return std::unique_ptr<char[], FreeImage>(p);
+//! it) and advised for huge pages: a checkpoint's image is hundreds of MB, and its first touch
+//! page by page cost more than the copy (huge_pages.h).
+std::unique_ptr<char[]> image_buffer(std::size_t size) {
+  std::unique_ptr<char[]> image(new (std::nothrow) char[size]);
+  advise_huge_pages(image.get(), size);
+  return image;
 }
 
 std::string describe(const Shape& shape) {
@@ -99,7 +90,7 @@ Hdf5File::~Hdf5File() {
 void Hdf5File::close() {
   const hid_t file = file_;
   file_ = H5I_INVALID_HID;
-  std::unique_ptr<char[], FreeImage> image;
+  std::unique_ptr<char[]> image;
   std::size_t size = 0;
   if (H5Fflush(file, H5F_SCOPE_GLOBAL) >= 0) {
     const ssize_t bytes = H5Fget_file_image(file, nullptr, 0);

@@ -57,6 +57,7 @@ void add_particles(SolidScene<dim>& scene, const std::vector<Vec<dim>>& position
   Particles<dim>& P = scene.state.particles;
   const double density = scene.materials.at(m).density;
   if (!scene.state.adaptive) {
+    P.reserve_more(positions.size());
     for (const Vec<dim>& x : positions) P.push_back(x, velocity, density * volume, volume, m);
     return;
   }
@@ -71,6 +72,7 @@ void add_particles(SolidScene<dim>& scene, const std::vector<Vec<dim>>& position
   const int surface_steps = static_cast<int>(std::ceil(scene.refinement->surface_band * k / scene.settings.dx));
   const auto levelled =
       adaptive::match_particles_to_leaves(scene.state.adaptive->tree(), positions, volume, k, surface_steps);
+  P.reserve_more(levelled.x.size());
   std::vector<std::uint16_t>& level = P.template channel<std::uint16_t>(adaptive::kParticleLevel);
   for (std::size_t i = 0; i < levelled.x.size(); ++i) {
     P.push_back(levelled.x[i], velocity, density * levelled.volume[i], levelled.volume[i], m);

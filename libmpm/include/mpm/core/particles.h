@@ -10,11 +10,13 @@
 //! the particle frames and the checkpoints all go through it, so a new channel is one add_channel
 //! call plus the stage that uses it (docs/architecture.md, "Adding a particle channel").
 #include <mpm/core/error.h>
+#include <mpm/core/huge_pages.h>
 #include <mpm/core/types.h>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -81,9 +83,19 @@ struct Particles {
     material[p] = mat;
   }
 
-  //! Room for n particles in every channel without reallocation.
+  //! Room for n particles in every channel without reallocation, advised for huge pages
+  //! (huge_pages.h): the room is touched first by the particles added next.
   void reserve(std::size_t n) {
-    visit_channels(*this, [n](const ChannelInfo&, auto& values, const auto&) { values.reserve(n); });
+    visit_channels(*this, [n](const ChannelInfo&, auto& values, const auto&) {
+      if (values.capacity() >= n) return;
+      values.reserve(n);
+      advise_huge_pages(values.data() + values.size(), (n - values.size()) * sizeof(values[0]));
+    });
+  }
+  //! Room for `more` particles beyond size(), at least doubling the room when it grows (seeding
+  //! body after body stays linear).
+  void reserve_more(std::size_t more) {
+    if (size() + more > capacity()) reserve(std::max(size() + more, 2 * capacity()));
   }
   std::size_t capacity() const { return x.capacity(); }
 
@@ -286,6 +298,7 @@ private:
   //! latency of both cores overlaps (bench_transfer, shuffled input).
   template <class T>
   static void apply_permutation(std::vector<T>& a, const std::vector<std::uint32_t>& order, std::vector<T>& out) {
+    reserve_advised(out, order.size());
     out.resize(order.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, order.size(), 8192), [&](const auto& r) {
       for (std::size_t i = r.begin(); i != r.end(); ++i) out[i] = a[order[i]];
