@@ -201,6 +201,33 @@ TEST_CASE_TEMPLATE("an extra channel of each type stays aligned through push_bac
   CHECK(holds(1, kept[1]));
 }
 
+TEST_CASE("reserve gives every channel room without changing a value; reserve_more grows the room geometrically") {
+  Particles<3> P;
+  std::vector<Mat<3>>& strain = P.add_channel<Mat<3>>("strain", Mat<3>::Identity(), kStored);
+  for (int id = 0; id < 10; ++id) P.push_back(Vec<3>::Constant(id), Vec<3>::Zero(), 1.0, 1.0, 0);
+  strain[4] = Mat<3>::Constant(4.0);
+  const auto before = channel_bytes(P);
+
+  P.reserve(1 << 18);  // 18 MiB of strain: whole huge pages to advise
+  P.for_each_channel([&](const ChannelInfo& info, const auto& values) {
+    INFO(info.name);
+    CHECK(values.capacity() >= std::size_t{1} << 18);
+  });
+  CHECK(channel_bytes(P) == before);
+
+  // Seeding body after body: the room at least doubles when it grows, so the copies stay linear.
+  Particles<3> Q;
+  Q.reserve_more(100);
+  CHECK(Q.capacity() == 100);
+  Q.resize(100);
+  Q.reserve_more(10);
+  CHECK(Q.capacity() == 200);
+  Q.reserve_more(50);  // fits: nothing moves
+  CHECK(Q.capacity() == 200);
+  Q.reserve_more(500);
+  CHECK(Q.capacity() == 600);
+}
+
 TEST_CASE("add_channel is idempotent for the same name and type and refuses a type clash") {
   Particles<2> P;
   P.push_back(Vec<2>::Zero(), Vec<2>::Zero(), 1.0, 1.0, 0);
