@@ -97,7 +97,12 @@ void Hdf5File::close() {
     if (bytes > 0) {
       size = static_cast<std::size_t>(bytes);
       image = image_buffer(size);
-      if (image && H5Fget_file_image(file, image.get(), size) != bytes) image.reset();
+      if (!image) {
+        H5Fclose(file);
+        throw IoError("HDF5 file '" + reported_.string() + "': no memory for its image of " + std::to_string(size) +
+                      " bytes");
+      }
+      if (H5Fget_file_image(file, image.get(), size) != bytes) image.reset();
     }
   }
   if (H5Fclose(file) < 0 || !image) fail("cannot flush and close it");

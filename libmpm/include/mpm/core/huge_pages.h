@@ -14,8 +14,9 @@ namespace mpm {
 //! no-op where the advice is not supported. Never fails: it is only advice.
 void advise_huge_pages(void* p, std::size_t bytes);
 
-//! Makes `v` hold room for n elements, advised for huge pages when it has to allocate anew
-//! (the elements are not constructed: resize() afterwards).
+//! Makes `v` hold room for n elements, for a buffer about to be overwritten: when it has to
+//! allocate anew it drops what `v` holds (nothing is copied) and advises the new room for huge
+//! pages. resize() afterwards.
 template <class T>
 void reserve_advised(std::vector<T>& v, std::size_t n) {
   if (v.capacity() >= n) return;
