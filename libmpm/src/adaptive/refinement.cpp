@@ -3,7 +3,12 @@
 
 #include <mpm/core/memory_budget.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
+
+#include <tbb/parallel_for.h>
 
 namespace mpm::adaptive {
 
@@ -49,6 +54,7 @@ std::optional<RefinementSettings<dim>> parse_refinement(const Config& scene, con
   }
   r.surface_band = cfg->number("surface_band", 0.0, Range::non_negative());
   r.follow_particles = cfg->flag("follow_particles", true);
+  r.padding = cfg->flag("padding", true);
   if (const std::optional<Config> resample = cfg->optional_child("resample")) {
     ResampleSettings rs;
     rs.d_small = resample->number("d_small", 0.0, Range::non_negative());
@@ -138,9 +144,123 @@ CellTree<dim> build_tree(const RefinementSettings<dim>& r, const SceneSettings<d
   return tree;
 }
 
+namespace {
+
+//! A cell of one level as a sortable key: 21 bits per axis (2^21 cells per axis and level).
+template <int dim>
+std::uint64_t cell_key(const IVec<dim>& cell) {
+  std::uint64_t key = 0;
+  for (int a = dim - 1; a >= 0; --a) key = (key << 21) | static_cast<std::uint64_t>(cell[a]);
+  return key;
+}
+
+template <int dim>
+IVec<dim> key_cell(std::uint64_t key) {
+  IVec<dim> cell;
+  for (int a = 0; a < dim; ++a, key >>= 21) cell[a] = static_cast<int>(key & ((std::uint64_t{1} << 21) - 1));
+  return cell;
+}
+
+//! Collects distinct keys: a direct-mapped cache of the keys added last drops most repeats
+//! (particles of a cell come in runs, interleaved with a few other cells' runs) before the
+//! sort that drops the rest.
+class DistinctKeys {
+public:
+  DistinctKeys() { recent_.fill(~std::uint64_t{0}); }
+  void add(std::uint64_t key) {
+    std::uint64_t& slot = recent_[(key * 0x9e3779b97f4a7c15ull) >> 54];
+    if (slot != key) keys_.push_back(slot = key);
+  }
+  //! Adds the keys `other` holds.
+  void absorb(const DistinctKeys& other) { keys_.insert(keys_.end(), other.keys_.begin(), other.keys_.end()); }
+  //! The keys added, sorted, each once.
+  std::vector<std::uint64_t> take() {
+    std::sort(keys_.begin(), keys_.end());
+    keys_.erase(std::unique(keys_.begin(), keys_.end()), keys_.end());
+    return std::move(keys_);
+  }
+
+private:
+  std::array<std::uint64_t, 1024> recent_;
+  std::vector<std::uint64_t> keys_;
+};
+
+//! Padding at level q >= 1: every level-(q-1) cell next to (3^dim neighbourhood) the level-(q-1)
+//! cell of a type-q particle is refined to level q, unless a coarser particle's box (taken as
+//! its whole cell of its level around it: the box is never wider) reaches into it or into the
+//! coarser leaf that would have to be split for it. So the fine region reaches one cell of the
+//! next coarser level past its particles into empty space, and their stencils (1.5 level-q
+//! cells wide) end on real level-q nodes: no ghost nodes there. No particle lands in a finer
+//! leaf than before, so none becomes irregular.
+template <int dim>
+void pad_level(CellTree<dim>& tree, const std::vector<Vec<dim>>& x, const std::vector<std::uint16_t>& type, int q) {
+  const double h = tree.dx(q - 1);
+  IVec<dim> cells;  // of level q - 1 in the domain
+  for (int a = 0; a < dim; ++a) cells[a] = tree.base_cells()[a] << (q - 1);
+  // The level-(q-1) cell of y; with `upper`, the last one an open box ending at y meets.
+  const auto cell_at = [&](const Vec<dim>& y, bool upper = false) {
+    IVec<dim> c;
+    for (int a = 0; a < dim; ++a) {
+      const double s = (y[a] - tree.origin()[a]) / h;
+      c[a] = std::clamp(static_cast<int>(upper ? std::ceil(s) - 1.0 : std::floor(s)), 0, cells[a] - 1);
+    }
+    return c;
+  };
+  // reached[l]: the level-l cells (l < q) that hold or meet a coarser particle's open box.
+  std::vector<std::vector<std::uint64_t>> reached(static_cast<std::size_t>(q));
+  // Per chunk of particles, in parallel: the level-(q-1) cells with type-q particles, and
+  // reached[q - 1]. The sets do not depend on the chunks.
+  constexpr std::size_t chunk = 16384;
+  std::vector<std::array<DistinctKeys, 2>> found((x.size() + chunk - 1) / chunk);
+  tbb::parallel_for(std::size_t{0}, found.size(), [&](std::size_t k) {
+    auto& [holding, near_coarser] = found[k];
+    for (std::size_t p = k * chunk; p < std::min(x.size(), (k + 1) * chunk); ++p) {
+      if (type[p] == q) {
+        holding.add(cell_key<dim>(cell_at(x[p])));
+      } else if (type[p] < q) {
+        const double r = 0.5 * tree.dx(type[p]);
+        for_each_in_box<dim>(cell_at(Vec<dim>(x[p].array() - r)), cell_at(Vec<dim>(x[p].array() + r), true),
+                             [&](const IVec<dim>& c) { near_coarser.add(cell_key<dim>(c)); });
+      }
+    }
+  });
+  DistinctKeys holding, near_coarser;
+  for (const auto& [cells_with, cells_near] : found) {
+    holding.absorb(cells_with);
+    near_coarser.absorb(cells_near);
+  }
+  reached[q - 1] = near_coarser.take();
+  for (int l = q - 2; l >= 0; --l) {
+    DistinctKeys parents;
+    for (const std::uint64_t key : reached[l + 1]) parents.add(cell_key<dim>(IVec<dim>(key_cell<dim>(key) / 2)));
+    reached[l] = parents.take();
+  }
+  const auto is_reached = [&](int level, const IVec<dim>& c) {
+    return std::binary_search(reached[level].begin(), reached[level].end(), cell_key<dim>(c));
+  };
+  DistinctKeys padded;
+  for (const std::uint64_t key : holding.take()) {
+    const IVec<dim> cell = key_cell<dim>(key);
+    for_each_in_box<dim>(IVec<dim>(cell.array() - 1).cwiseMax(0),
+                         IVec<dim>(cell.array() + 1).cwiseMin(IVec<dim>(cells.array() - 1)), [&](const IVec<dim>& c) {
+                           if (tree.is_refined(q - 1, c) || is_reached(q - 1, c)) return;
+                           const CellId<dim> leaf = tree.leaf_of(IVec<dim>(c * tree.scale(q - 1)));
+                           if (leaf.level == q - 1 || !is_reached(leaf.level, leaf.cell)) padded.add(cell_key<dim>(c));
+                         });
+  }
+  // In key order (the same tree whatever the particles' order), each from its leaf down.
+  for (const std::uint64_t key : padded.take()) {
+    const IVec<dim> cell = key_cell<dim>(key);
+    for (int level = tree.leaf_of(IVec<dim>(cell * tree.scale(q - 1))).level; level < q; ++level)
+      tree.refine(level, IVec<dim>(cell / (1 << (q - 1 - level))));
+  }
+}
+
+}  // namespace
+
 template <int dim>
 void refine_around_particles(CellTree<dim>& tree, const std::vector<Vec<dim>>& x,
-                             const std::vector<std::uint16_t>& type) {
+                             const std::vector<std::uint16_t>& type, bool padding) {
   CellId<dim> leaf;  // the previous particle's leaf while no refinement has split it
   for (std::size_t p = 0; p < x.size(); ++p) {
     leaf = tree.leaf_at(x[p], leaf);
@@ -149,10 +269,14 @@ void refine_around_particles(CellTree<dim>& tree, const std::vector<Vec<dim>>& x
       leaf = {};
     }
   }
+  if (padding)
+    for (int q = 1; q <= tree.finest(); ++q) pad_level(tree, x, type, q);
 }
 
-template void refine_around_particles(CellTree<2>&, const std::vector<Vec<2>>&, const std::vector<std::uint16_t>&);
-template void refine_around_particles(CellTree<3>&, const std::vector<Vec<3>>&, const std::vector<std::uint16_t>&);
+template void refine_around_particles(CellTree<2>&, const std::vector<Vec<2>>&, const std::vector<std::uint16_t>&,
+                                      bool);
+template void refine_around_particles(CellTree<3>&, const std::vector<Vec<3>>&, const std::vector<std::uint16_t>&,
+                                      bool);
 template std::optional<RefinementSettings<2>> parse_refinement(const Config&, const SceneSettings<2>&);
 template std::optional<RefinementSettings<3>> parse_refinement(const Config&, const SceneSettings<3>&);
 template CellTree<2> build_tree(const RefinementSettings<2>&, const SceneSettings<2>&, const geometry::ColliderSet<2>&);

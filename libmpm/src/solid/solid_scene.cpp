@@ -300,7 +300,7 @@ Pipeline<MpmState<dim>> make_solid_pipeline(const SolidScene<dim>& scene) {
   p.add(std::make_unique<stages::TimeStepControl<dim>>(dt_settings));
   if (scene.refinement && scene.refinement->follow_particles)
     p.add(std::make_unique<stages::RefineGrid<dim>>(
-        adaptive::build_tree(*scene.refinement, scene.settings, scene.colliders)));
+        adaptive::build_tree(*scene.refinement, scene.settings, scene.colliders), scene.refinement->padding));
   // Particle domains replace sort, p2g, the explicit stress forces and g2p (with the deformation
   // update) by the two transfers through the corners (domain_transfer.h).
   if (scene.state.domains) {

@@ -11,6 +11,8 @@
 //!                                #   surface; the others are regrouped to the leaves' levels
 //!     follow_particles: true     # every step, refine the cells that hold a particle of a finer
 //!                                #   type (the grid follows moving fine particles, sec. 7.1)
+//!     padding: true              # and the cells one coarser cell around them that hold no
+//!                                #   coarser particle (refine_around_particles)
 //!     resample:                  # split and merge particles by their distance from the free
 //!       d_small: 0.005           #   surface (resampling.h, sec. 7.2) [m]: nothing within d_small,
 //!       d_medium: 0.01           #   split coarse particles up to d_medium, merge fine ones
@@ -43,6 +45,7 @@ struct RefinementSettings {
   std::vector<RefinementRegion<dim>> regions;
   double surface_band = 0.0;  //!< [m]
   bool follow_particles = true;
+  bool padding = true;                       //!< refine_around_particles' padding
   std::optional<ResampleSettings> resample;  //!< dynamic refinement by particle resampling
   //! Coarsest spacing dx_0 = dx 2^(levels-1) [m] for the finest spacing dx.
   double coarsest_dx(double finest_dx) const { return finest_dx * static_cast<double>(1 << (levels - 1)); }
@@ -78,9 +81,11 @@ CellTree<dim> build_tree(const RefinementSettings<dim>& refinement, const SceneS
                          const geometry::ColliderSet<dim>& colliders);
 
 //! Refines `tree` so that every particle (positions x, types `type`) lies in a leaf of at
-//! least its type's level.
+//! least its type's level; with `padding`, also the cells of the next coarser level around
+//! those of each level's particles that no coarser particle reaches (the fine region padded by
+//! one coarser cell into empty space: no ghost nodes in the fine particles' stencils there).
 template <int dim>
 void refine_around_particles(CellTree<dim>& tree, const std::vector<Vec<dim>>& x,
-                             const std::vector<std::uint16_t>& type);
+                             const std::vector<std::uint16_t>& type, bool padding);
 
 }  // namespace mpm::adaptive

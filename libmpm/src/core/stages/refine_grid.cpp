@@ -11,7 +11,8 @@ void RefineGrid<dim>::run(MpmState<dim>& s) {
   adaptive::CellTree<dim>& tree = s.adaptive->tree();
   tree = static_tree_;
   adaptive::refine_around_particles(
-      tree, s.particles.x, std::as_const(s.particles).template channel<std::uint16_t>(adaptive::kParticleLevel));
+      tree, s.particles.x, std::as_const(s.particles).template channel<std::uint16_t>(adaptive::kParticleLevel),
+      padding_);
 }
 
 template class RefineGrid<2>;

@@ -13,7 +13,8 @@ namespace mpm::stages {
 template <int dim>
 class RefineGrid final : public Stage<MpmState<dim>> {
 public:
-  explicit RefineGrid(adaptive::CellTree<dim> static_tree) : static_tree_(std::move(static_tree)) {}
+  RefineGrid(adaptive::CellTree<dim> static_tree, bool padding)
+      : static_tree_(std::move(static_tree)), padding_(padding) {}
   std::string name() const override { return "refine"; }
   std::vector<std::string> reads() const override { return {"particle.x", "particle.level"}; }
   std::vector<std::string> writes() const override { return {"grid.tree"}; }
@@ -21,6 +22,7 @@ public:
 
 private:
   adaptive::CellTree<dim> static_tree_;
+  bool padding_;  //!< adaptive::refine_around_particles' padding
 };
 
 }  // namespace mpm::stages

@@ -1,0 +1,131 @@
+// Type-driven refinement (adaptive/refinement.h, refine_around_particles), with and without
+// padding, on a slab of finest particles between empty space (above) and coarse particles
+// (below), in 2D and 3D on three levels:
+//  - every particle lies in a leaf of at least its type's level, with and without padding;
+//  - padding only adds refinement, and no particle's transfer level (the finest leaf its box
+//    meets) changes: no particle becomes irregular;
+//  - with padding, every finest particle away from the coarse ones has only finest cells within
+//    1.5 finest cells of it (its stencil has no embedded node), which is not so without;
+//  - the tree does not depend on the particles' order.
+#include <mpm/adaptive/refinement.h>
+
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <random>
+
+using namespace mpm;
+using namespace mpm::adaptive;
+
+namespace {
+
+constexpr int kLevels = 3;
+
+//! Level-0 cells of size 1 over [0, 8)^dim. Finest particles (type 2, two per finest cell per
+//! axis) fill y in [4, 4.5); coarse particles (type 0, one per level-0 cell) sit below, in
+//! y in [1, 3), and three nearer the slab.
+template <int dim>
+void build(std::vector<Vec<dim>>& x, std::vector<std::uint16_t>& type) {
+  const double fine = 0.125;  // half a finest cell
+  IVec<dim> n = IVec<dim>::Constant(64);
+  n[1] = 4;
+  for_each_in_box<dim>(IVec<dim>::Zero(), IVec<dim>(n.array() - 1), [&](const IVec<dim>& i) {
+    Vec<dim> p = (i.template cast<double>().array() + 0.5) * fine;
+    p[1] += 4.0;
+    x.push_back(p);
+    type.push_back(2);
+  });
+  IVec<dim> m = IVec<dim>::Constant(8);
+  m[1] = 2;
+  for_each_in_box<dim>(IVec<dim>::Zero(), IVec<dim>(m.array() - 1), [&](const IVec<dim>& i) {
+    Vec<dim> p = i.template cast<double>().array() + 0.5;
+    p[1] += 1.0;
+    x.push_back(p);
+    type.push_back(0);
+  });
+  // Coarse particles near the slab: two below it; one on the corner of its level-0 cell, which
+  // padding must not split for the empty level-1 cell next to the slab that it holds; one on
+  // the slab, in a level-1 leaf next to it.
+  for (const auto& [along, height] :
+       {std::pair{1.5, 3.4}, std::pair{5.5, 3.4}, std::pair{6.0, 3.0}, std::pair{6.5, 4.75}}) {
+    Vec<dim> p = Vec<dim>::Constant(2.5);
+    p[0] = along;
+    p[1] = height;
+    x.push_back(p);
+    type.push_back(0);
+  }
+}
+
+template <int dim>
+CellTree<dim> refined(const std::vector<Vec<dim>>& x, const std::vector<std::uint16_t>& type, bool padding) {
+  CellTree<dim> tree(Vec<dim>::Zero(), IVec<dim>::Constant(8), 1.0, kLevels);
+  refine_around_particles(tree, x, type, padding);
+  return tree;
+}
+
+//! The finest level of the leaves a particle's box (half a cell of its type per axis) meets.
+template <int dim>
+int transfer_level(const CellTree<dim>& tree, const Vec<dim>& x, int type) {
+  const double half = 0.25 * tree.dx(type);
+  return tree.finest_level_in(Vec<dim>(x.array() - half), Vec<dim>(x.array() + half));
+}
+
+//! Whether every finest cell within 1.5 finest cells of x lies in a finest leaf.
+template <int dim>
+bool stencil_on_finest_leaves(const CellTree<dim>& tree, const Vec<dim>& x) {
+  const double h = tree.dx(tree.finest());
+  IVec<dim> lo, hi;
+  for (int a = 0; a < dim; ++a) {
+    lo[a] = static_cast<int>(std::floor(x[a] / h - 1.5));
+    hi[a] = static_cast<int>(std::floor(x[a] / h + 1.5));
+  }
+  bool all = true;
+  for_each_in_box<dim>(lo, hi, [&](const IVec<dim>& f) { all = all && tree.leaf_of(f).level == tree.finest(); });
+  return all;
+}
+
+template <int dim>
+void check_padding() {
+  std::vector<Vec<dim>> x;
+  std::vector<std::uint16_t> type;
+  build<dim>(x, type);
+  const CellTree<dim> plain = refined<dim>(x, type, false), padded = refined<dim>(x, type, true);
+  CHECK_FALSE(plain == padded);
+  for (const CellId<dim>& c : plain.refined_difference(padded))  // padding only adds refined cells
+    CHECK(padded.is_refined(c.level, c.cell));
+  int ghost_free_plain = 0, ghost_free_padded = 0, away = 0;
+  for (std::size_t p = 0; p < x.size(); ++p) {
+    CHECK(padded.leaf_at(x[p]).level >= type[p]);
+    CHECK(transfer_level(padded, x[p], type[p]) == transfer_level(plain, x[p], type[p]));
+    // Finest particles 1.5 level-0 cells or more (in x) from the coarse ones below the slab, and
+    // a level-0 cell or more from the domain's sides.
+    const bool inside = dim == 2 || (x[p][dim - 1] > 1.0 && x[p][dim - 1] < 7.0);
+    if (type[p] == 2 && x[p][0] > 3.0 && x[p][0] < 4.0 && inside) {
+      ++away;
+      ghost_free_plain += stencil_on_finest_leaves(plain, x[p]);
+      ghost_free_padded += stencil_on_finest_leaves(padded, x[p]);
+    }
+  }
+  REQUIRE(away > 0);
+  CHECK(ghost_free_padded == away);
+  CHECK(ghost_free_plain < away / 2);  // without padding, the slab's top and bottom rows see coarse cells
+
+  // The particles in another order refine the same tree.
+  std::vector<std::size_t> order(x.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::shuffle(order.begin(), order.end(), std::mt19937(7));
+  std::vector<Vec<dim>> xs;
+  std::vector<std::uint16_t> ts;
+  for (std::size_t i : order) {
+    xs.push_back(x[i]);
+    ts.push_back(type[i]);
+  }
+  CHECK(refined<dim>(xs, ts, true) == padded);
+}
+
+}  // namespace
+
+TEST_CASE("padding refines around the finest particles into empty space only, in 2D and 3D") {
+  check_padding<2>();
+  check_padding<3>();
+}
