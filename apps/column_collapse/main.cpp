@@ -9,7 +9,9 @@
 // profile.csv: the final deposit height per dx-wide slab.
 // summary.json: runout L_inf (deposit front distance from the back wall), final_height,
 // normalized_runout (L_inf - L0)/L0, duration (time until the kinetic energy falls below 1e-6
-// of its peak), runout_law_error |normalized - law| / law, particles (the final count).
+// of its peak), runout_law_error |normalized - law| / law, particles (the final count), and
+// with the key reference_profile (a profile.csv of another run, e.g. a finer uniform grid)
+// profile_error: the mean |h - h_reference| over both deposits' extent, over the column height.
 // --check compares normalized_runout with the 2D runout law of Lube et al. 2005 (PRE 72,
 // 041301): 1.2 a for a < 2.3, 1.9 a^(2/3) above, within +-25 % (data/reference/lube2005.md:
 // the smoke run a = 1, 10 cells per width is 15 % below the law at friction angle 32 deg and
@@ -26,8 +28,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <optional>
+#include <sstream>
 #include <string>
+#include <utility>
+#include <vector>
 
 using namespace mpm;
 
@@ -57,19 +63,61 @@ double deposit_front(const Particles<dim>& P, double dx, double layer) {
   return front;
 }
 
-//! The deposit's top per dx-wide slab from the back wall, "x,height" rows [m].
+//! The deposit's top per dx-wide slab from the back wall: (slab centre, height) [m].
 template <int dim>
-std::string height_profile(const Particles<dim>& P, double dx) {
+std::vector<std::pair<double, double>> height_profile(const Particles<dim>& P, double dx) {
   std::vector<double> top;
   for (const Vec<dim>& x : P.x) {
     const auto slab = static_cast<std::size_t>(std::max(0.0, x[0] / dx));
     if (slab >= top.size()) top.resize(slab + 1, 0.0);
     top[slab] = std::max(top[slab], x[1]);
   }
-  std::string csv = "x,height\n";
-  for (std::size_t i = 0; i < top.size(); ++i)
-    csv += std::to_string((static_cast<double>(i) + 0.5) * dx) + "," + std::to_string(top[i]) + "\n";
-  return csv;
+  std::vector<std::pair<double, double>> profile;
+  for (std::size_t i = 0; i < top.size(); ++i) profile.emplace_back((static_cast<double>(i) + 0.5) * dx, top[i]);
+  return profile;
+}
+
+//! A profile's height at x: linear between its points, the first point's before them, 0 past them.
+double height_at(const std::vector<std::pair<double, double>>& profile, double x) {
+  const auto after = std::lower_bound(profile.begin(), profile.end(), std::pair{x, -1e308});
+  if (after == profile.end()) return 0.0;
+  if (after == profile.begin()) return after->second;
+  const auto& [x0, h0] = *(after - 1);
+  return h0 + (after->second - h0) * (x - x0) / (after->first - x0);
+}
+
+//! Mean |h - h_reference| over the extent of both deposits, sampled at 2000 points.
+double profile_difference(const std::vector<std::pair<double, double>>& profile,
+                          const std::vector<std::pair<double, double>>& reference) {
+  const double extent = std::max(profile.back().first, reference.back().first);
+  constexpr int samples = 2000;
+  double sum = 0.0;
+  for (int i = 0; i < samples; ++i) {
+    const double x = (i + 0.5) * extent / samples;
+    sum += std::fabs(height_at(profile, x) - height_at(reference, x));
+  }
+  return sum / samples;
+}
+
+//! A profile.csv ("x,height" rows, x increasing) given by `key` of the scene.
+std::vector<std::pair<double, double>> read_profile(const Config& scene, const std::string& key) {
+  std::ifstream in(scene.input_file(key));
+  if (!in) scene.fail(key, "cannot open the file");
+  std::string line;
+  if (!std::getline(in, line) || line != "x,height") scene.fail(key, "the file does not start with 'x,height'");
+  std::vector<std::pair<double, double>> profile;
+  for (int row = 2; std::getline(in, line); ++row) {
+    double x = 0.0, h = 0.0;
+    char comma = 0;
+    std::istringstream fields(line);
+    if (!(fields >> x >> comma >> h) || comma != ',' || !std::isfinite(x) || !std::isfinite(h) ||
+        (!profile.empty() && x <= profile.back().first))
+      scene.fail(key, "line " + std::to_string(row) + " is not 'x,height' with finite numbers and x increasing: '" +
+                          line + "'");
+    profile.emplace_back(x, h);
+  }
+  if (profile.empty()) scene.fail(key, "the file has no profile rows");
+  return profile;
 }
 
 template <int dim>
@@ -110,6 +158,8 @@ int run(const CommandLine& cl, const Config& scene) {
   solid::add_particles<dim>(solid, seeded, geometry::particle_volume<dim>(dx, ppc), std::uint16_t{0}, Vec<dim>::Zero(),
                             "column");
   const cuda::Device device = cuda::parse_device(scene);
+  std::optional<std::vector<std::pair<double, double>>> reference;
+  if (scene.has("reference_profile")) reference = read_profile(scene, "reference_profile");
   scene.reject_unknown_keys();
 
   // 3. Run (on the CPU, or on a GPU with `device: cuda`).
@@ -130,18 +180,24 @@ int run(const CommandLine& cl, const Config& scene) {
   const int k = geometry::lattice_points_per_axis<dim>(ppc);
   const double row = dim == 2 ? k : k * k * depth / dx;  // particles per lattice row of a slab
   const double runout = deposit_front(solid.state.particles, dx, row * geometry::particle_volume<dim>(dx, ppc));
-  io::write_file_atomically(runner.out_dir() / "profile.csv", height_profile(solid.state.particles, dx));
+  const std::vector<std::pair<double, double>> profile = height_profile(solid.state.particles, dx);
+  std::string csv = "x,height\n";
+  for (const auto& [x, h] : profile) csv += std::to_string(x) + "," + std::to_string(h) + "\n";
+  io::write_file_atomically(runner.out_dir() / "profile.csv", csv);
   double height = 0.0;
   for (const Vec<dim>& x : solid.state.particles.x) height = std::max(height, x[1]);
   const double normalized = (runout - L0) / L0;
-  runner.write_summary({{"runout", runout},
-                        {"final_height", height},
-                        {"normalized_runout", normalized},
-                        {"duration", duration},
-                        {"at_rest", at_rest ? 1.0 : 0.0},
-                        {"particles", static_cast<double>(solid.state.particles.size())},
-                        {"runout_law_lube2005", lube_runout_law(a)},
-                        {"runout_law_error", std::fabs(normalized - lube_runout_law(a)) / lube_runout_law(a)}});
+  std::vector<std::pair<std::string, double>> results{
+      {"runout", runout},
+      {"final_height", height},
+      {"normalized_runout", normalized},
+      {"duration", duration},
+      {"at_rest", at_rest ? 1.0 : 0.0},
+      {"particles", static_cast<double>(solid.state.particles.size())},
+      {"runout_law_lube2005", lube_runout_law(a)},
+      {"runout_law_error", std::fabs(normalized - lube_runout_law(a)) / lube_runout_law(a)}};
+  if (reference) results.emplace_back("profile_error", profile_difference(profile, *reference) / H0);
+  runner.write_summary(results);
   if (cl.check) {
     const double law = lube_runout_law(a);
     return check_value("normalized_runout", normalized, law, runout_tolerance * law) ? 0 : 1;

@@ -13,6 +13,8 @@
 //   set: [time.end=0.4]           (overrides for every case)
 //   parameter: {key: bar.cells, values: [16, 32, 64], spacing: inverse}   (h ~ 1/value)
 //   methods: [{name: cubic, set: [grid.kernel=cubic], min_order: 0.9}, ...]
+//   (a method's per_value: [{key: adaptive.surface_band, values: [...]}]: keys whose value
+//    follows the parameter, one per parameter value, e.g. lengths held at a number of cells)
 //   notes: |                      (optional Markdown printed under the tables: what the numbers
 //     ...                          mean, what limits them)
 #include <mpm/core/app.h>
@@ -40,6 +42,8 @@ struct Method {
   std::string name;
   std::vector<std::string> overrides;
   double min_order;  // NaN: no assertion
+  //! Keys set to their i-th value in the case of the parameter's i-th value.
+  std::vector<std::pair<std::string, std::vector<double>>> per_value;
 };
 
 struct Case {
@@ -168,8 +172,15 @@ int run(const CommandLine& cl) {
   const std::vector<double> values = parameter.numbers("values", Range::positive());
   const std::string spacing = parameter.choice("spacing", "inverse", {"inverse", "direct", "none"});
   std::vector<Method> methods;
-  for (const Config& m : sweep.list("methods"))
-    methods.push_back({m.text("name"), m.texts("set"), m.number("min_order", std::nan(""), Range::any())});
+  for (const Config& m : sweep.list("methods")) {
+    methods.push_back({m.text("name"), m.texts("set"), m.number("min_order", std::nan(""), Range::any()), {}});
+    for (const Config& k : m.list("per_value")) {
+      methods.back().per_value.emplace_back(k.text("key"), k.numbers("values"));
+      if (methods.back().per_value.back().second.size() != values.size())
+        k.fail("values", "needs one value per parameter value (" + std::to_string(values.size()) + "), has " +
+                             std::to_string(methods.back().per_value.back().second.size()));
+    }
+  }
   if (methods.empty()) sweep.fail("methods", "at least one method is required");
   if (!fs::exists(scene)) sweep.fail("scene", "no such file: " + scene.string());
   if (!fs::exists(reference)) sweep.fail("reference", "no such file: " + reference.string());
@@ -181,9 +192,12 @@ int run(const CommandLine& cl) {
   fs::create_directories(out / "cases");
   std::vector<Case> cases;
   for (const Method& method : methods)
-    for (double value : values) {
+    for (std::size_t v = 0; v < values.size(); ++v) {
+      const double value = values[v];
       std::vector<std::string> overrides = common;
       overrides.insert(overrides.end(), method.overrides.begin(), method.overrides.end());
+      for (const auto& [follower, its_values] : method.per_value)
+        overrides.push_back(follower + "=" + number(its_values[v]));
       overrides.push_back(key + "=" + number(value));
       overrides.push_back("output.png=false");
       overrides.push_back("output.particles=false");
