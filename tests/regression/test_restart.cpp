@@ -143,6 +143,19 @@ const RestartCase kPierScour{SEDIMENT_TRANSPORT_APP,
                              false,
                              false,
                              3};
+// 2D, the flagship's flume: the bed is released at the third frame's end and carries bed load
+// (the stages of coupling/bed_load.h read the bed surface and the current afresh each step) on
+// both sides of the checkpoint.
+const RestartCase kPipelineScour{SEDIMENT_TRANSPORT_APP,
+                                 "sediment_transport.yaml",
+                                 "--set sediment.hold_until=0.05 --set bed_load.morphological_factor=100",
+                                 0.02,
+                                 {"fluid", "sediment"},
+                                 {"sediment"},
+                                 {"fluid", "sediment"},
+                                 {},
+                                 false,
+                                 true};
 #endif
 
 //! Runs the case's app; its stderr goes to <out>.log. Returns the exit status.
@@ -375,6 +388,7 @@ TEST_CASE("a run continued from a checkpoint is bit-identical to the uninterrupt
   SUBCASE("coupled 3D: pier scour (the pressure multigrid kept within frames)") {
     check_restart(kPierScour, "pier_scour");
   }
+  SUBCASE("coupled 2D: pipeline scour with bed load") { check_restart(kPipelineScour, "pipeline_scour"); }
 #endif
 #ifdef SUBMERGED_COLLAPSE_APP
   SUBCASE("coupled: dilatant sediment, continuum and discrete, under a liquid") {
