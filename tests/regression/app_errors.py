@@ -57,8 +57,9 @@ material:
 walls: {{contact: separate, y_min: sticky, y_max: open}}
 time: {{end: 0.1}}
 gravity: [0, -9.81]
+{reference}
 """
-COLUMN_DEFAULTS = dict(cells_key="cells_per_width", friction_angle=32)
+COLUMN_DEFAULTS = dict(cells_key="cells_per_width", friction_angle=32, reference="")
 
 GOO = """\
 dim: 2
@@ -171,6 +172,10 @@ CASES = [
     case("mesh_garbage", "goo_slits", GOO, {}, {"mesh": "garbage.obj"}, "garbage.obj",
          ["key 'colliders[0].file' = garbage.obj", "garbage.obj:3: face corner '7' refers to a missing vertex"],
          files={"garbage.obj": "v 0 0 0\nv 1 0 0\nf 1 2 7\n"}),
+    case("reference_profile_unordered", "column_collapse", COLUMN, COLUMN_DEFAULTS,
+         {"reference": "reference_profile: deposit.csv"}, "reference_profile: deposit.csv",
+         ["key 'reference_profile' = deposit.csv", "line 3 is not 'x,height' with finite numbers and x increasing"],
+         files={"deposit.csv": "x,height\n0.1,0.2\n0.05,0.1\n"}),
 ]
 
 
