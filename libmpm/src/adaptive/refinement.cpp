@@ -185,15 +185,25 @@ private:
   std::vector<std::uint64_t> keys_;
 };
 
-//! Padding at level q >= 1: every level-(q-1) cell next to (3^dim neighbourhood) the level-(q-1)
-//! cell of a type-q particle is refined to level q, unless a coarser particle's box (taken as
-//! its whole cell of its level around it: the box is never wider) reaches into it or into the
-//! coarser leaf that would have to be split for it. So the fine region reaches one cell of the
-//! next coarser level past its particles into empty space, and their stencils (1.5 level-q
-//! cells wide) end on real level-q nodes: no ghost nodes there. No particle lands in a finer
-//! leaf than before, so none becomes irregular.
+//! Refines from the leaf that holds level-q cell `cell` down to `cell` itself.
 template <int dim>
-void pad_level(CellTree<dim>& tree, const std::vector<Vec<dim>>& x, const std::vector<std::uint16_t>& type, int q) {
+void refine_down_to(CellTree<dim>& tree, const IVec<dim>& cell, int q) {
+  for (int level = tree.leaf_of(IVec<dim>(cell * tree.scale(q))).level; level <= q; ++level)
+    tree.refine(level, IVec<dim>(cell / (1 << (q - level))));
+}
+
+//! Level q >= 1 of refine_around_particles: the level-(q-1) cell of every type-q particle (types
+//! beyond the finest level count as the finest) is refined, with the coarser leaf that holds
+//! it. With `padding`, so is every level-(q-1) cell next to one of those (3^dim neighbourhood)
+//! unless a coarser particle's box (taken as its whole cell of its level around it: the box is
+//! never wider) reaches into it or into the coarser leaf that would have to be split for it.
+//! So the fine region reaches one cell of the next coarser level past its particles into empty
+//! space, and their stencils (1.5 level-q cells wide) end on real level-q nodes: no ghost nodes
+//! there. No particle lands in a finer leaf than without padding, so none becomes irregular.
+//! Particles outside the domain (or not finite) are left alone, as prepare() reports them.
+template <int dim>
+void refine_level(CellTree<dim>& tree, const std::vector<Vec<dim>>& x, const std::vector<std::uint16_t>& type, int q,
+                  bool padding) {
   const double h = tree.dx(q - 1);
   IVec<dim> cells;  // of level q - 1 in the domain
   for (int a = 0; a < dim; ++a) cells[a] = tree.base_cells()[a] << (q - 1);
@@ -206,6 +216,13 @@ void pad_level(CellTree<dim>& tree, const std::vector<Vec<dim>>& x, const std::v
     }
     return c;
   };
+  const auto inside = [&](const Vec<dim>& y) {
+    for (int a = 0; a < dim; ++a) {
+      const double s = (y[a] - tree.origin()[a]) / h;
+      if (!(s >= 0.0 && s < cells[a])) return false;  // also false for NaN
+    }
+    return true;
+  };
   // reached[l]: the level-l cells (l < q) that hold or meet a coarser particle's open box.
   std::vector<std::vector<std::uint64_t>> reached(static_cast<std::size_t>(q));
   // Per chunk of particles, in parallel: the level-(q-1) cells with type-q particles, and
@@ -215,10 +232,13 @@ void pad_level(CellTree<dim>& tree, const std::vector<Vec<dim>>& x, const std::v
   tbb::parallel_for(std::size_t{0}, found.size(), [&](std::size_t k) {
     auto& [holding, near_coarser] = found[k];
     for (std::size_t p = k * chunk; p < std::min(x.size(), (k + 1) * chunk); ++p) {
-      if (type[p] == q) {
+      const int t = std::min<int>(type[p], tree.finest());
+      if (t < q && !padding) continue;
+      if (t > q || !inside(x[p])) continue;
+      if (t == q) {
         holding.add(cell_key<dim>(cell_at(x[p])));
-      } else if (type[p] < q) {
-        const double r = 0.5 * tree.dx(type[p]);
+      } else {
+        const double r = 0.5 * tree.dx(t);
         for_each_in_box<dim>(cell_at(Vec<dim>(x[p].array() - r)), cell_at(Vec<dim>(x[p].array() + r), true),
                              [&](const IVec<dim>& c) { near_coarser.add(cell_key<dim>(c)); });
       }
@@ -229,6 +249,10 @@ void pad_level(CellTree<dim>& tree, const std::vector<Vec<dim>>& x, const std::v
     holding.absorb(cells_with);
     near_coarser.absorb(cells_near);
   }
+  const std::vector<std::uint64_t> held = holding.take();
+  for (const std::uint64_t key : held) refine_down_to(tree, key_cell<dim>(key), q - 1);  // the particles' cells
+  if (!padding) return;
+
   reached[q - 1] = near_coarser.take();
   for (int l = q - 2; l >= 0; --l) {
     DistinctKeys parents;
@@ -239,7 +263,7 @@ void pad_level(CellTree<dim>& tree, const std::vector<Vec<dim>>& x, const std::v
     return std::binary_search(reached[level].begin(), reached[level].end(), cell_key<dim>(c));
   };
   DistinctKeys padded;
-  for (const std::uint64_t key : holding.take()) {
+  for (const std::uint64_t key : held) {
     const IVec<dim> cell = key_cell<dim>(key);
     for_each_in_box<dim>(IVec<dim>(cell.array() - 1).cwiseMax(0),
                          IVec<dim>(cell.array() + 1).cwiseMin(IVec<dim>(cells.array() - 1)), [&](const IVec<dim>& c) {
@@ -248,12 +272,8 @@ void pad_level(CellTree<dim>& tree, const std::vector<Vec<dim>>& x, const std::v
                            if (leaf.level == q - 1 || !is_reached(leaf.level, leaf.cell)) padded.add(cell_key<dim>(c));
                          });
   }
-  // In key order (the same tree whatever the particles' order), each from its leaf down.
-  for (const std::uint64_t key : padded.take()) {
-    const IVec<dim> cell = key_cell<dim>(key);
-    for (int level = tree.leaf_of(IVec<dim>(cell * tree.scale(q - 1))).level; level < q; ++level)
-      tree.refine(level, IVec<dim>(cell / (1 << (q - 1 - level))));
-  }
+  // In key order: the same tree whatever the particles' order.
+  for (const std::uint64_t key : padded.take()) refine_down_to(tree, key_cell<dim>(key), q - 1);
 }
 
 }  // namespace
@@ -261,16 +281,8 @@ void pad_level(CellTree<dim>& tree, const std::vector<Vec<dim>>& x, const std::v
 template <int dim>
 void refine_around_particles(CellTree<dim>& tree, const std::vector<Vec<dim>>& x,
                              const std::vector<std::uint16_t>& type, bool padding) {
-  CellId<dim> leaf;  // the previous particle's leaf while no refinement has split it
-  for (std::size_t p = 0; p < x.size(); ++p) {
-    leaf = tree.leaf_at(x[p], leaf);
-    if (leaf.level >= 0 && leaf.level < std::min<int>(type[p], tree.finest())) {
-      tree.refine_to(x[p], type[p]);
-      leaf = {};
-    }
-  }
-  if (padding)
-    for (int q = 1; q <= tree.finest(); ++q) pad_level(tree, x, type, q);
+  // Coarse to fine: a level's pass finds the coarser cells its particles need already split.
+  for (int q = 1; q <= tree.finest(); ++q) refine_level(tree, x, type, q, padding);
 }
 
 template void refine_around_particles(CellTree<2>&, const std::vector<Vec<2>>&, const std::vector<std::uint16_t>&,

@@ -6,12 +6,14 @@
 //    meets) changes: no particle becomes irregular;
 //  - with padding, every finest particle away from the coarse ones has only finest cells within
 //    1.5 finest cells of it (its stencil has no embedded node), which is not so without;
-//  - the tree does not depend on the particles' order.
+//  - the tree does not depend on the particles' order; particles outside the domain or not
+//    finite refine nothing.
 #include <mpm/adaptive/refinement.h>
 
 #include <doctest/doctest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <random>
 
 using namespace mpm;
@@ -121,6 +123,13 @@ void check_padding() {
     ts.push_back(type[i]);
   }
   CHECK(refined<dim>(xs, ts, true) == padded);
+
+  // Particles outside the domain or not finite refine nothing (prepare() reports them).
+  xs.push_back(Vec<dim>::Constant(-0.5));
+  xs.push_back(Vec<dim>::Constant(std::nan("")));
+  ts.insert(ts.end(), {2, 0});
+  CHECK(refined<dim>(xs, ts, true) == padded);
+  CHECK(refined<dim>(xs, ts, false) == plain);
 }
 
 }  // namespace
