@@ -20,6 +20,7 @@
 #include <mpm/core/app.h>
 #include <mpm/core/config.h>
 #include <mpm/core/error.h>
+#include <mpm/core/number_text.h>
 
 #include <nlohmann/json.hpp>
 
@@ -197,8 +198,8 @@ int run(const CommandLine& cl) {
       std::vector<std::string> overrides = common;
       overrides.insert(overrides.end(), method.overrides.begin(), method.overrides.end());
       for (const auto& [follower, its_values] : method.per_value)
-        overrides.push_back(follower + "=" + number(its_values[v]));
-      overrides.push_back(key + "=" + number(value));
+        overrides.push_back(follower + "=" + exact_number_text(its_values[v]));
+      overrides.push_back(key + "=" + exact_number_text(value));
       overrides.push_back("output.png=false");
       overrides.push_back("output.particles=false");
       const fs::path case_dir = out / "cases" / (method.name + "_" + number(value));

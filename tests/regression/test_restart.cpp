@@ -143,7 +143,8 @@ const RestartCase kPierScour{SEDIMENT_TRANSPORT_APP,
                              false,
                              false,
                              3};
-// 2D, the flagship's flume: the bed is released at the third frame's end and carries bed load
+// 2D, the flagship's flume: the bed is released at 0.05 s (within the third frame, before the
+// checkpoint at 0.08 s) and carries bed load
 // (the stages of coupling/bed_load.h read the bed surface and the current afresh each step) on
 // both sides of the checkpoint.
 const RestartCase kPipelineScour{SEDIMENT_TRANSPORT_APP,

@@ -172,7 +172,8 @@ public:
     if (slot != key) keys_.push_back(slot = key);
   }
   //! Adds the keys `other` holds.
-  void absorb(const DistinctKeys& other) { keys_.insert(keys_.end(), other.keys_.begin(), other.keys_.end()); }
+  void absorb(const DistinctKeys& other) { absorb_keys(other.keys_); }
+  void absorb_keys(const std::vector<std::uint64_t>& keys) { keys_.insert(keys_.end(), keys.begin(), keys.end()); }
   //! The keys added, sorted, each once.
   std::vector<std::uint64_t> take() {
     std::sort(keys_.begin(), keys_.end());
@@ -196,7 +197,7 @@ void refine_down_to(CellTree<dim>& tree, const IVec<dim>& cell, int q) {
 //! beyond the finest level count as the finest) is refined, with the coarser leaf that holds
 //! it. With `padding`, so is every level-(q-1) cell next to one of those (3^dim neighbourhood)
 //! unless a coarser particle's box (taken as its whole cell of its level around it: the box is
-//! never wider) reaches into it or into the coarser leaf that would have to be split for it.
+//! never wider) may reach into it or into the coarser leaf that would have to be split for it.
 //! So the fine region reaches one cell of the next coarser level past its particles into empty
 //! space, and their stencils (1.5 level-q cells wide) end on real level-q nodes: no ghost nodes
 //! there. No particle lands in a finer leaf than without padding, so none becomes irregular.
@@ -204,72 +205,88 @@ void refine_down_to(CellTree<dim>& tree, const IVec<dim>& cell, int q) {
 template <int dim>
 void refine_level(CellTree<dim>& tree, const std::vector<Vec<dim>>& x, const std::vector<std::uint16_t>& type, int q,
                   bool padding) {
-  const double h = tree.dx(q - 1);
-  IVec<dim> cells;  // of level q - 1 in the domain
-  for (int a = 0; a < dim; ++a) cells[a] = tree.base_cells()[a] << (q - 1);
-  // The level-(q-1) cell of y; with `upper`, the last one an open box ending at y meets.
-  const auto cell_at = [&](const Vec<dim>& y, bool upper = false) {
+  // The level-l cell of y; with `upper`, the last one an open box ending at y meets.
+  const auto cell_at = [&](int level, const Vec<dim>& y, bool upper = false) {
     IVec<dim> c;
     for (int a = 0; a < dim; ++a) {
-      const double s = (y[a] - tree.origin()[a]) / h;
-      c[a] = std::clamp(static_cast<int>(upper ? std::ceil(s) - 1.0 : std::floor(s)), 0, cells[a] - 1);
+      const double s = (y[a] - tree.origin()[a]) / tree.dx(level);
+      c[a] = std::clamp(static_cast<int>(upper ? std::ceil(s) - 1.0 : std::floor(s)), 0,
+                        (tree.base_cells()[a] << level) - 1);
     }
     return c;
   };
   const auto inside = [&](const Vec<dim>& y) {
     for (int a = 0; a < dim; ++a) {
-      const double s = (y[a] - tree.origin()[a]) / h;
-      if (!(s >= 0.0 && s < cells[a])) return false;  // also false for NaN
+      const double s = (y[a] - tree.origin()[a]) / tree.dx(0);
+      if (!(s >= 0.0 && s < tree.base_cells()[a])) return false;  // also false for NaN
     }
     return true;
   };
-  // reached[l]: the level-l cells (l < q) that hold or meet a coarser particle's open box.
-  std::vector<std::vector<std::uint64_t>> reached(static_cast<std::size_t>(q));
-  // Per chunk of particles, in parallel: the level-(q-1) cells with type-q particles, and
-  // reached[q - 1]. The sets do not depend on the chunks.
+  // Per chunk of particles, in parallel: the level-(q-1) cells with type-q particles, and per
+  // level l < q the level-l cells that the boxes of the type-(l-1) particles meet (3^dim at
+  // most: a box of a type-t particle is no wider than two cells of level t + 1), those of type
+  // q - 2 and below on level q - 1. The sets do not depend on the chunks.
+  struct Found {
+    DistinctKeys holding;
+    std::vector<DistinctKeys> met;
+  };
   constexpr std::size_t chunk = 16384;
-  std::vector<std::array<DistinctKeys, 2>> found((x.size() + chunk - 1) / chunk);
+  std::vector<Found> found((x.size() + chunk - 1) / chunk);
   tbb::parallel_for(std::size_t{0}, found.size(), [&](std::size_t k) {
-    auto& [holding, near_coarser] = found[k];
+    Found& f = found[k];
+    f.met.resize(static_cast<std::size_t>(q));
     for (std::size_t p = k * chunk; p < std::min(x.size(), (k + 1) * chunk); ++p) {
       const int t = std::min<int>(type[p], tree.finest());
-      if (t < q && !padding) continue;
-      if (t > q || !inside(x[p])) continue;
+      if (t > q || (t < q && !padding) || !inside(x[p])) continue;
       if (t == q) {
-        holding.add(cell_key<dim>(cell_at(x[p])));
+        f.holding.add(cell_key<dim>(cell_at(q - 1, x[p])));
       } else {
+        const int level = std::min(t + 1, q - 1);
         const double r = 0.5 * tree.dx(t);
-        for_each_in_box<dim>(cell_at(Vec<dim>(x[p].array() - r)), cell_at(Vec<dim>(x[p].array() + r), true),
-                             [&](const IVec<dim>& c) { near_coarser.add(cell_key<dim>(c)); });
+        for_each_in_box<dim>(cell_at(level, Vec<dim>(x[p].array() - r)),
+                             cell_at(level, Vec<dim>(x[p].array() + r), true),
+                             [&](const IVec<dim>& c) { f.met[level].add(cell_key<dim>(c)); });
       }
     }
   });
-  DistinctKeys holding, near_coarser;
-  for (const auto& [cells_with, cells_near] : found) {
-    holding.absorb(cells_with);
-    near_coarser.absorb(cells_near);
-  }
+  DistinctKeys holding;
+  for (const Found& f : found) holding.absorb(f.holding);
   const std::vector<std::uint64_t> held = holding.take();
   for (const std::uint64_t key : held) refine_down_to(tree, key_cell<dim>(key), q - 1);  // the particles' cells
-  if (!padding) return;
+  if (!padding || held.empty()) return;
 
-  reached[q - 1] = near_coarser.take();
-  for (int l = q - 2; l >= 0; --l) {
-    DistinctKeys parents;
-    for (const std::uint64_t key : reached[l + 1]) parents.add(cell_key<dim>(IVec<dim>(key_cell<dim>(key) / 2)));
-    reached[l] = parents.take();
+  // met[l]: the level-l cells a coarser box meets; reached[l]: those and the level-l cells
+  // that hold one of them (a leaf not to be split).
+  std::vector<std::vector<std::uint64_t>> met(static_cast<std::size_t>(q)), reached(static_cast<std::size_t>(q));
+  for (int l = q - 1; l >= 0; --l) {
+    DistinctKeys level_met, level_reached;
+    for (const Found& f : found) level_met.absorb(f.met[l]);
+    met[l] = level_met.take();
+    level_reached.absorb_keys(met[l]);
+    if (l + 1 < q)
+      for (const std::uint64_t key : reached[l + 1])
+        level_reached.add(cell_key<dim>(IVec<dim>(key_cell<dim>(key) / 2)));
+    reached[l] = level_reached.take();
   }
-  const auto is_reached = [&](int level, const IVec<dim>& c) {
-    return std::binary_search(reached[level].begin(), reached[level].end(), cell_key<dim>(c));
+  const auto listed = [](const std::vector<std::uint64_t>& keys, const IVec<dim>& c) {
+    return std::binary_search(keys.begin(), keys.end(), cell_key<dim>(c));
   };
+  const auto box_may_meet = [&](const IVec<dim>& c) {  // c of level q - 1
+    for (int l = 0; l < q; ++l)
+      if (listed(met[l], IVec<dim>(c / (1 << (q - 1 - l))))) return true;
+    return false;
+  };
+  IVec<dim> last;  // of level q - 1 in the domain
+  for (int a = 0; a < dim; ++a) last[a] = (tree.base_cells()[a] << (q - 1)) - 1;
   DistinctKeys padded;
   for (const std::uint64_t key : held) {
     const IVec<dim> cell = key_cell<dim>(key);
-    for_each_in_box<dim>(IVec<dim>(cell.array() - 1).cwiseMax(0),
-                         IVec<dim>(cell.array() + 1).cwiseMin(IVec<dim>(cells.array() - 1)), [&](const IVec<dim>& c) {
-                           if (tree.is_refined(q - 1, c) || is_reached(q - 1, c)) return;
+    for_each_in_box<dim>(IVec<dim>(cell.array() - 1).cwiseMax(0), IVec<dim>(cell.array() + 1).cwiseMin(last),
+                         [&](const IVec<dim>& c) {
+                           if (tree.is_refined(q - 1, c) || box_may_meet(c)) return;
                            const CellId<dim> leaf = tree.leaf_of(IVec<dim>(c * tree.scale(q - 1)));
-                           if (leaf.level == q - 1 || !is_reached(leaf.level, leaf.cell)) padded.add(cell_key<dim>(c));
+                           if (leaf.level == q - 1 || !listed(reached[leaf.level], leaf.cell))
+                             padded.add(cell_key<dim>(c));
                          });
   }
   // In key order: the same tree whatever the particles' order.

@@ -1,4 +1,5 @@
 #include <mpm/core/config.h>
+#include <mpm/core/number_text.h>
 
 #include <mpm/core/error.h>
 
@@ -18,13 +19,6 @@ namespace mpm {
 namespace {
 
 constexpr double kUnbounded = 1e308;
-
-//! Shortest text that reads back to the same double ("0.5", "90", "1e+09").
-std::string format_number(double value) {
-  char buffer[32];
-  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
-  return std::string(buffer, result.ptr);
-}
 
 std::string join(const std::string& path, const std::string& key) { return path.empty() ? key : path + "." + key; }
 
@@ -101,9 +95,9 @@ bool Range::contains(double value) const {
 std::string Range::describe() const {
   const bool bounded_below = lo > -kUnbounded, bounded_above = hi < kUnbounded;
   if (!bounded_below && !bounded_above) return "any number";
-  if (!bounded_above) return (lo_open ? "> " : ">= ") + format_number(lo);
-  if (!bounded_below) return (hi_open ? "< " : "<= ") + format_number(hi);
-  return std::string("in ") + (lo_open ? "(" : "[") + format_number(lo) + ", " + format_number(hi) +
+  if (!bounded_above) return (lo_open ? "> " : ">= ") + exact_number_text(lo);
+  if (!bounded_below) return (hi_open ? "< " : "<= ") + exact_number_text(hi);
+  return std::string("in ") + (lo_open ? "(" : "[") + exact_number_text(lo) + ", " + exact_number_text(hi) +
          (hi_open ? ")" : "]");
 }
 
@@ -320,7 +314,7 @@ double Config::number(const std::string& key, double fallback, Range range) cons
   double value = fallback;
   if (has(key))
     if (const auto problem = number_problem(lookup(*node_, key), range, value)) fail(key, *problem);
-  shared_->record(join(path_, key), format_number(value));
+  shared_->record(join(path_, key), exact_number_text(value));
   return value;
 }
 
@@ -400,7 +394,7 @@ Vec<dim> Config::vector(const std::string& key, const Vec<dim>& fallback, Range 
     }
   }
   std::string text = "[";
-  for (int i = 0; i < dim; ++i) text += (i ? ", " : "") + format_number(value[i]);
+  for (int i = 0; i < dim; ++i) text += (i ? ", " : "") + exact_number_text(value[i]);
   shared_->record(full, text + "]");
   return value;
 }
@@ -423,7 +417,7 @@ std::vector<double> Config::numbers(const std::string& key, Range range) const {
       throw InputError(shared_->position(entry_path, node[i]) + ": key '" + entry_path + "' = " + yaml_text(node[i]) +
                        ": " + *problem);
     }
-    text += (i ? ", " : "") + format_number(values[i]);
+    text += (i ? ", " : "") + exact_number_text(values[i]);
   }
   shared_->record(full, text + "]");
   return values;

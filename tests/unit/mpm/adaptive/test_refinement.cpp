@@ -8,6 +8,9 @@
 //    1.5 finest cells of it (its stencil has no embedded node), which is not so without;
 //  - the tree does not depend on the particles' order; particles outside the domain or not
 //    finite refine nothing.
+// And on random particles of random types (beyond the finest too) over five levels with a
+// static refinement box: without padding the tree is the one of refining each particle's leaf
+// in turn (the loop the library ran before), and padding changes no transfer level.
 #include <mpm/adaptive/refinement.h>
 
 #include <doctest/doctest.h>
@@ -25,7 +28,7 @@ constexpr int kLevels = 3;
 
 //! Level-0 cells of size 1 over [0, 8)^dim. Finest particles (type 2, two per finest cell per
 //! axis) fill y in [4, 4.5); coarse particles (type 0, one per level-0 cell) sit below, in
-//! y in [1, 3), and three nearer the slab.
+//! y in [1, 3), and four nearer the slab.
 template <int dim>
 void build(std::vector<Vec<dim>>& x, std::vector<std::uint16_t>& type) {
   const double fine = 0.125;  // half a finest cell
@@ -97,6 +100,7 @@ void check_padding() {
     CHECK(padded.is_refined(c.level, c.cell));
   int ghost_free_plain = 0, ghost_free_padded = 0, away = 0;
   for (std::size_t p = 0; p < x.size(); ++p) {
+    CHECK(plain.leaf_at(x[p]).level >= type[p]);
     CHECK(padded.leaf_at(x[p]).level >= type[p]);
     CHECK(transfer_level(padded, x[p], type[p]) == transfer_level(plain, x[p], type[p]));
     // Finest particles 1.5 level-0 cells or more (in x) from the coarse ones below the slab, and
@@ -110,7 +114,7 @@ void check_padding() {
   }
   REQUIRE(away > 0);
   CHECK(ghost_free_padded == away);
-  CHECK(ghost_free_plain < away / 2);  // without padding, the slab's top and bottom rows see coarse cells
+  CHECK(ghost_free_plain == 0);  // without padding every row's stencil reaches a coarse cell (slab 4 cells thick)
 
   // The particles in another order refine the same tree.
   std::vector<std::size_t> order(x.size());
@@ -124,12 +128,47 @@ void check_padding() {
   }
   CHECK(refined<dim>(xs, ts, true) == padded);
 
-  // Particles outside the domain or not finite refine nothing (prepare() reports them).
-  xs.push_back(Vec<dim>::Constant(-0.5));
-  xs.push_back(Vec<dim>::Constant(std::nan("")));
-  ts.insert(ts.end(), {2, 0});
+  // Particles outside the domain or not finite refine nothing (prepare() reports them): a
+  // finest one and a coarse one next to the slab, beyond the domain's side, and a finest NaN.
+  Vec<dim> beside = Vec<dim>::Constant(2.5);
+  beside[0] = -0.1;
+  beside[1] = 4.25;
+  xs.insert(xs.end(), {beside, beside, Vec<dim>::Constant(std::nan(""))});
+  ts.insert(ts.end(), {2, 0, 2});
   CHECK(refined<dim>(xs, ts, true) == padded);
   CHECK(refined<dim>(xs, ts, false) == plain);
+}
+
+//! Random particles over [0, 4)^dim on five levels (a static box refined to level 2): the tree
+//! without padding against refining each particle's leaf in turn; with padding, the same
+//! transfer level for every particle.
+template <int dim>
+bool check_random(unsigned seed) {
+  constexpr int levels = 5;
+  CellTree<dim> unrefined(Vec<dim>::Zero(), IVec<dim>::Constant(4), 1.0, levels);
+  unrefined.refine_where([](const Vec<dim>& lo, const Vec<dim>&) { return lo.maxCoeff() < 1.0 ? 2 : 0; });
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> position(0.0, 4.0);
+  std::vector<Vec<dim>> x;
+  std::vector<std::uint16_t> type;
+  for (int p = 0; p < 300; ++p) {
+    Vec<dim> y;
+    for (int a = 0; a < dim; ++a) y[a] = position(rng);
+    if (p % 3 == 0) y = (y / 2.0).array() + 1.0;  // clusters: coarse and fine particles meet
+    x.push_back(y);
+    type.push_back(static_cast<std::uint16_t>(rng() % (levels + 2)));
+  }
+  CellTree<dim> serial = unrefined;
+  for (std::size_t p = 0; p < x.size(); ++p) serial.refine_to(x[p], type[p]);  // clamped to the finest
+  CellTree<dim> plain = unrefined, padded = unrefined;
+  refine_around_particles(plain, x, type, false);
+  refine_around_particles(padded, x, type, true);
+  CHECK(plain == serial);
+  for (std::size_t p = 0; p < x.size(); ++p) {
+    const int t = std::min<int>(type[p], levels - 1);
+    CHECK(transfer_level(padded, x[p], t) == transfer_level(plain, x[p], t));
+  }
+  return !(padded == plain);  // whether padding refined anything
 }
 
 }  // namespace
@@ -137,4 +176,16 @@ void check_padding() {
 TEST_CASE("padding refines around the finest particles into empty space only, in 2D and 3D") {
   check_padding<2>();
   check_padding<3>();
+}
+
+TEST_CASE(
+    "on random particles and five levels, refinement equals the particle-by-particle loop, padding keeps "
+    "transfer levels") {
+  int padded_2d = 0, padded_3d = 0;
+  for (unsigned seed = 1; seed <= 4; ++seed) {
+    padded_2d += check_random<2>(seed);
+    padded_3d += check_random<3>(seed);
+  }
+  CHECK(padded_2d > 0);  // the random scenes do leave room to pad
+  CHECK(padded_3d > 0);
 }
