@@ -176,10 +176,11 @@ int run(const CommandLine& cl) {
   for (const Config& m : sweep.list("methods")) {
     methods.push_back({m.text("name"), m.texts("set"), m.number("min_order", std::nan(""), Range::any()), {}});
     for (const Config& k : m.list("per_value")) {
-      methods.back().per_value.emplace_back(k.text("key"), k.numbers("values"));
-      if (methods.back().per_value.back().second.size() != values.size())
+      const std::vector<double> follower_values = k.numbers("values");
+      if (follower_values.size() != values.size())
         k.fail("values", "needs one value per parameter value (" + std::to_string(values.size()) + "), has " +
-                             std::to_string(methods.back().per_value.back().second.size()));
+                             std::to_string(follower_values.size()));
+      methods.back().per_value.emplace_back(k.text("key"), follower_values);
     }
   }
   if (methods.empty()) sweep.fail("methods", "at least one method is required");

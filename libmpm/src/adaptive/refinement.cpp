@@ -222,10 +222,10 @@ void refine_level(CellTree<dim>& tree, const std::vector<Vec<dim>>& x, const std
     }
     return true;
   };
-  // Per chunk of particles, in parallel: the level-(q-1) cells with type-q particles, and per
-  // level l < q the level-l cells that the boxes of the type-(l-1) particles meet (3^dim at
-  // most: a box of a type-t particle is no wider than two cells of level t + 1), those of type
-  // q - 2 and below on level q - 1. The sets do not depend on the chunks.
+  // Per chunk of particles, in parallel: the level-(q-1) cells with type-q particles, and the
+  // cells that each coarser particle's box meets on level min(t + 1, q - 1) for its type t
+  // (3^dim at most: the box is no wider than two cells of level t + 1). The sets do not depend
+  // on the chunks.
   struct Found {
     DistinctKeys holding;
     std::vector<DistinctKeys> met;
