@@ -27,6 +27,9 @@ CASES = [
     ("bodies[0].phase", r"(phase:)\s*sediment", r"\1 mud", ["mud", "'fluid'", "'sediment'"]),
     ("periodic", r"(gravity:[^\n]*\nwalls:\n  contact: sticky[^\n]*(?:\n  thickness:[^\n]*)?)", r"\1\n  x_min: open\n  x_max: open\nperiodic: [true, false]",
      ["coupled scenes have no periodic axes"]),
+    ("colliders[0].sediment.friction", r"\Z",
+     r"\ncolliders:\n  - {type: box, lo: [0.5, 0.5], hi: [0.6, 0.6], contact: sticky, sediment: {contact: slip, friction: 0.4}}",
+     ["0.4", "Coulomb friction applies to 'contact: separate' only"]),
     ("emitters[0].hi", r"\Z", r"\nemitters:\n  - {phase: fluid, lo: [0.1, 0.12], hi: [0.2, 0.2], velocity: [0, -1]}",
      ["0.2", "must lie inside the domain"]),
 ]

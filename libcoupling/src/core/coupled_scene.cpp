@@ -23,6 +23,24 @@
 
 namespace coupling {
 
+namespace {
+// The obstacles with the sediment's own contacts (SedimentPhase::contacts) where it has them.
+template <int dim>
+mpm::geometry::ColliderSet<dim> with_contacts(const mpm::geometry::ColliderSet<dim>& colliders,
+                                              const std::vector<std::optional<mpm::geometry::Contact>>& contacts) {
+  mpm::verify<mpm::InputError>(contacts.size() <= colliders.colliders().size(),
+                               "coupled scene: more sediment contacts than colliders");
+  mpm::geometry::ColliderSet<dim> out;
+  for (std::size_t i = 0; i < colliders.colliders().size(); ++i) {
+    mpm::geometry::Collider<dim> c = colliders.colliders()[i];
+    if (i < contacts.size() && contacts[i]) c.set_contact(*contacts[i]);
+    out.add(std::move(c));
+  }
+  if (colliders.walls()) out.set_walls(*colliders.walls());
+  return out;
+}
+}  // namespace
+
 template <int dim>
 CoupledScene<dim> make_coupled_scene(mpm::SceneSettings<dim> settings, mpm::geometry::ColliderSet<dim> colliders,
                                      std::optional<fluid::FluidMaterial> fluid,
@@ -52,15 +70,18 @@ CoupledScene<dim> make_coupled_scene(mpm::SceneSettings<dim> settings, mpm::geom
       state.fluid.particles.template add_channel<double>(fluid::kLiquidVolumeRatio, 1.0, {.checkpoint = true});
   }
   std::shared_ptr<const mpm::solid::SolidSolver<dim>> solid;
+  mpm::geometry::ColliderSet<dim> sediment_colliders =
+      sediment ? with_contacts(colliders, sediment->contacts) : colliders;
   if (sediment) {
     state.sediment = mpm::initial_state(settings);
     solid = mpm::solid::make_solid_solver<dim>(sediment->solver, sediment->materials, sediment->switching.has_value(),
-                                               colliders, sediment->implicit);
+                                               sediment_colliders, sediment->implicit);
     solid->add_channels(state.sediment.particles);
   }
   if (!(fluid && sediment)) drag.reset();
   return {std::move(settings),
           std::move(colliders),
+          std::move(sediment_colliders),
           fluid,
           std::move(pressure),
           std::move(sediment),
@@ -165,7 +186,8 @@ mpm::Pipeline<CoupledState<dim>> make_coupled_pipeline(const CoupledScene<dim>& 
     p.add(std::make_unique<stages::BedSurface<dim>>(*scene.bed_load, vertical_axis(scene.settings), scene.colliders));
   if (wet && sandy) p.add(std::make_unique<stages::ExchangeStage<dim>>(*scene.drag));
   if (bed_load) p.add(std::make_unique<stages::BedShear<dim>>());
-  both([&] { return std::make_unique<ms::GridBoundary<dim>>(scene.colliders); });
+  if (wet) on(Phase::fluid, std::make_unique<ms::GridBoundary<dim>>(scene.colliders));
+  if (sandy) on(Phase::sediment, std::make_unique<ms::GridBoundary<dim>>(scene.sediment_colliders));
   if (wet && sandy && !compressible) {
     p.add(std::make_unique<stages::MixtureProjection<dim>>(scene.fluid->density, scene.sediment->density,
                                                            scene.colliders, scene.pressure));
@@ -173,7 +195,7 @@ mpm::Pipeline<CoupledState<dim>> make_coupled_pipeline(const CoupledScene<dim>& 
       on(Phase::fluid, std::make_unique<fluid::stages::SurfaceVelocityExtension<dim>>(scene.colliders));
     // The sediment correction reaches nodes next to walls that the fluid's prescribed
     // nodes do not shield: impose the sediment's wall conditions again.
-    on(Phase::sediment, std::make_unique<ms::GridBoundary<dim>>(scene.colliders));
+    on(Phase::sediment, std::make_unique<ms::GridBoundary<dim>>(scene.sediment_colliders));
   } else if (wet) {  // a clear fluid's own projection (none for an equation of state)
     for (auto& stage : scene.fluid_solver->projection()) on(Phase::fluid, std::move(stage));
   }

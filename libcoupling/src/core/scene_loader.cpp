@@ -239,6 +239,12 @@ CoupledScene<dim> load_coupled_scene(const mpm::Config& scene) {
   const std::optional<mpm::Config> sediment = scene.optional_child("sediment");
   std::optional<SedimentPhase<dim>> sand;
   if (sediment) sand = parse_sediment_phase<dim>(*sediment);
+  // A collider's own contact for the sediment (collider key `sediment`: contact, friction).
+  for (const mpm::Config& entry : scene.list("colliders")) {
+    const std::optional<mpm::Config> own = entry.optional_child("sediment");
+    if (own && !sand) entry.fail("sediment", "the scene has no `sediment` map");
+    if (sand) sand->contacts.push_back(own ? std::optional(mpm::geometry::parse_contact(*own)) : std::nullopt);
+  }
   if (!water && !sand) scene.fail("fluid", "a coupled scene needs a `fluid` map, a `sediment` map or both");
   std::optional<drag::DragLaw> drag;
   if (water && sand) drag = drag::parse_drag_law(scene);

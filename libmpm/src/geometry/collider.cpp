@@ -31,6 +31,12 @@ Collider<dim>::Collider(Shape<dim> shape, const Contact& contact, const Vec<dim>
 }
 
 template <int dim>
+void Collider<dim>::set_contact(const Contact& contact) {
+  verify_friction(contact);
+  contact_ = contact;
+}
+
+template <int dim>
 Vec<dim> Collider<dim>::shape_position(const Vec<dim>& x, double t) const {
   return motion_ == Motion::translating ? Vec<dim>(x - t * velocity_) : x;
 }

@@ -23,14 +23,6 @@ ContactType contact_type(const std::string& name) {
 
 std::string contact_name(ContactType type) { return kContactNames[static_cast<std::size_t>(type)]; }
 
-Contact parse_contact(const Config& c) {
-  const Contact contact{contact_type(c.choice("contact", "separate", kContactNames)),
-                        c.number("friction", 0.0, Range::non_negative())};
-  if (contact.friction > 0.0 && contact.type != ContactType::separate)
-    c.fail("friction", "Coulomb friction applies to 'contact: separate' only");
-  return contact;
-}
-
 template <int dim>
 Vec<dim> direction(const Config& c, const std::string& key) {
   const Vec<dim> v = c.vector<dim>(key);
@@ -70,6 +62,14 @@ Shape<dim> parse_shape(const Config& entry) {
 }
 
 }  // namespace
+
+Contact parse_contact(const Config& c) {
+  const Contact contact{contact_type(c.choice("contact", "separate", kContactNames)),
+                        c.number("friction", 0.0, Range::non_negative())};
+  if (contact.friction > 0.0 && contact.type != ContactType::separate)
+    c.fail("friction", "Coulomb friction applies to 'contact: separate' only");
+  return contact;
+}
 
 template <int dim>
 LevelSetShape<dim> parse_level_set(const Config& entry) {

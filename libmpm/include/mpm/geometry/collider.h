@@ -40,6 +40,9 @@ public:
 
   //! A hollow obstacle is the outside of its shape: material sits inside (a drum, a tank).
   void set_hollow(bool hollow) { hollow_ = hollow; }
+  //! Another contact condition for the same obstacle (a second phase meeting it differently).
+  //! Throws InputError as the constructor.
+  void set_contact(const Contact& contact);
   //! The obstacle exists until time `t` [s] and is gone after it (a grip that releases a body).
   void set_until(double t) { until_ = t; }
   double until() const { return until_; }

@@ -31,6 +31,10 @@
 
 namespace mpm::geometry {
 
+//! The `contact` and `friction` keys of a map (a collider's, the walls', or a phase's own
+//! contact with a collider in a coupled scene).
+Contact parse_contact(const Config& c);
+
 //! The level set of an entry with keys file (.vdb, .obj or .stl; relative to the scene file),
 //! voxel_size and half_width (meshes), grid_name (.vdb) and slice_z (2D). Shared by
 //! `type: level_set` colliders and `shape: level_set` bodies.
