@@ -51,8 +51,8 @@ struct SedimentPhase {
   //! The bed is held rigid while the time is below this [s] (stages/hold_sediment.h); 0: never.
   double hold_until = 0.0;
   //! The sediment's own contact with each collider of the scene, in order (scene key
-  //! `colliders[i].sediment`): grains slide along and leave a pipe that holds the water by no
-  //! slip. nullopt, or past the end: the collider's contact.
+  //! `colliders[i].sediment`): grains slide along and leave an obstacle whatever its contact
+  //! with the water. nullopt, or past the end: the collider's contact.
   std::vector<std::optional<mpm::geometry::Contact>> contacts;
 };
 
@@ -60,7 +60,9 @@ template <int dim>
 struct CoupledScene {
   mpm::SceneSettings<dim> settings;
   mpm::geometry::ColliderSet<dim> colliders;
-  //! The obstacles as the sediment meets them: `colliders` with SedimentPhase::contacts.
+  //! The obstacles as the sediment meets them: `colliders` with SedimentPhase::contacts (equal
+  //! to `colliders` without a sediment). Kept next to `colliders`: make_coupled_scene
+  //! initialises the members in this order.
   mpm::geometry::ColliderSet<dim> sediment_colliders;
   std::optional<fluid::FluidMaterial> fluid;  //!< nullopt: dry scene
   fluid::stages::PressureSettings pressure;

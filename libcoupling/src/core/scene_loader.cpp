@@ -239,7 +239,8 @@ CoupledScene<dim> load_coupled_scene(const mpm::Config& scene) {
   const std::optional<mpm::Config> sediment = scene.optional_child("sediment");
   std::optional<SedimentPhase<dim>> sand;
   if (sediment) sand = parse_sediment_phase<dim>(*sediment);
-  // A collider's own contact for the sediment (collider key `sediment`: contact, friction).
+  // A collider's own contact for the sediment (collider key `sediment`: contact, friction), by
+  // the list's index: parse_colliders adds the list first, add_flow_boundaries appends after it.
   for (const mpm::Config& entry : scene.list("colliders")) {
     const std::optional<mpm::Config> own = entry.optional_child("sediment");
     if (own && !sand) entry.fail("sediment", "the scene has no `sediment` map");

@@ -25,7 +25,8 @@
 //! inflow/outflow (flow_boundary_config.h): the sink and source stages exist only with them. Walls act
 //! on the fluid as prescribed node velocities; use `contact: sticky` (no-slip): the pressure
 //! does not act on nodes inside a wall, so the tangential velocity a slip wall leaves there
-//! would not be corrected.
+//! would not be corrected. The exception, a compromise: an obstacle a few cells across in a
+//! current, whose sticky nodes would hold a cell of dead water around it (user guide 4.16).
 #include <fluid/solver/fluid_solver.h>
 #include <fluid/stages/pressure_projection.h>
 
