@@ -48,8 +48,9 @@ void MixtureProjection<dim>::run(CoupledState<dim>& s) {
   projection_.set_mixture(&mixture_);
   projection_.run(s.fluid);
 
-  // The rest of the corrections, with D^T p = impulse / beta_i where the operator acted
-  // (beta_i = 0: a prescribed or massless node, which the projection leaves alone).
+  // The rest of the corrections, with P D^T p = impulse / beta_i where the operator acted
+  // (beta_i = 0: a held or massless node, which the projection leaves alone; P = I - n n^T on
+  // a node slipping along an obstacle, so both phases move along it only).
   const fluid::CellOperator<dim>& op = projection_.cell_operator();
   impulse_.assign(static_cast<std::size_t>(op.node_count()), mpm::Vec<dim>::Zero());
   op.subtract_gradient(projection_.pressure(), impulse_);

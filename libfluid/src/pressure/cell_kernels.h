@@ -4,7 +4,7 @@
 //! scratch for the nodal gradient so that iterative solvers do not reallocate it. The product
 //! hands every cell's (A x)_c to an output functor, so that a Jacobi sweep or a residual is
 //! fused into the same pass over memory (the multigrid smoother is bandwidth-bound).
-//! NodeCell: pass 1 forms u_n = beta_n (D^T x)_n on every node from its 2^dim surrounding
+//! NodeCell: pass 1 forms u_n = beta_n P_n (D^T x)_n on every node from its 2^dim surrounding
 //! cells, pass 2 forms (A x)_c = -(D u)_c from the 2^dim corners of each fluid cell.
 //! Poisson: the 2*dim+1-point stencil with p = 0 outside the box and in empty cells.
 //! Operators with a periodic axis take separate loops that wrap every index (apply_*_periodic),
@@ -111,7 +111,8 @@ void apply_node_cell(const CellOperator<dim>& op, const std::vector<double>& x, 
       }
   const CellType* type = op.type.data();
   const double* beta = op.beta.data();
-  // Pass 1: u_n = beta_n (D^T x)_n, stored axis-major (u[a * node_count + n]).
+  const Vec<dim>* slip = op.has_slip() ? op.slip_normal.data() : nullptr;
+  // Pass 1: u_n = beta_n P_n (D^T x)_n, stored axis-major (u[a * node_count + n]).
   parallel_for_lines<dim>(nodes, [&](const IVec<dim>& n, std::int64_t node_base) {
     // Corners whose cell is inside the box along axes 1.. (the x test is per node below).
     std::array<bool, corners> line_inside{};
@@ -136,6 +137,7 @@ void apply_node_cell(const CellOperator<dim>& op, const std::vector<double>& x, 
           for (int a = 0; a < dim; ++a) g[a] += ((k >> a) & 1) ? x[ci] : -x[ci];
         }
         g *= scale * beta[ni];
+        if (slip) g -= slip[ni].dot(g) * slip[ni];
       }
       for (int a = 0; a < dim; ++a) u[a * node_count + ni] = g[a];
     }
@@ -232,7 +234,8 @@ void apply_node_cell_periodic(const CellOperator<dim>& op, const std::vector<dou
   }
   const CellType* type = op.type.data();
   const double* beta = op.beta.data();
-  // Pass 1: u_n = beta_n (D^T x)_n from the cells n - bits(k) (corner k of each).
+  const Vec<dim>* slip = op.has_slip() ? op.slip_normal.data() : nullptr;
+  // Pass 1: u_n = beta_n P_n (D^T x)_n from the cells n - bits(k) (corner k of each).
   parallel_for_lines<dim>(nodes, [&](const IVec<dim>& n, std::int64_t node_base) {
     std::array<std::int64_t, corners> line{};  // cell index of axes 1.. for corner k, -1 outside
     for (int k = 0; k < corners; ++k)
@@ -252,6 +255,7 @@ void apply_node_cell_periodic(const CellOperator<dim>& op, const std::vector<dou
           for (int a = 0; a < dim; ++a) g[a] += ((k >> a) & 1) ? x[ci] : -x[ci];
         }
         g *= scale * beta[ni];
+        if (slip) g -= slip[ni].dot(g) * slip[ni];
       }
       for (int a = 0; a < dim; ++a) u[a * node_count + ni] = g[a];
     }

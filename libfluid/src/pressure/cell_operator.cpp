@@ -25,6 +25,13 @@ IVec<dim> corner_node(const IVec<dim>& c, int k) {
   return n;
 }
 inline double corner_sign(int k, int a) { return ((k >> a) & 1) ? 1.0 : -1.0; }
+//! (corner_sign(k, a))_a: the direction of corner k from the cell centre, scaled to +-1.
+template <int dim>
+Vec<dim> corner_signs(int k) {
+  Vec<dim> s;
+  for (int a = 0; a < dim; ++a) s[a] = corner_sign(k, a);
+  return s;
+}
 
 template <int dim, class Fn>
 void for_each_cell(const IVec<dim>& cells, Fn&& fn) {
@@ -81,7 +88,7 @@ void CellOperator<dim>::subtract_gradient(const std::vector<double>& p, std::vec
       for (int a = 0; a < dim; ++a) g[a] += corner_sign(k, a) * scale * p[ci];
     }
   });
-  for (std::size_t i = 0; i < grad.size(); ++i) u[i] += beta[i] * grad[i];
+  for (std::size_t i = 0; i < grad.size(); ++i) u[i] += mobility(static_cast<std::int64_t>(i), grad[i]);
 }
 
 template <int dim>
@@ -106,6 +113,16 @@ void CellOperator<dim>::apply(const std::vector<double>& x, std::vector<double>&
 }
 
 template <int dim>
+void CellOperator<dim>::empty_cells_without_unknowns() {
+  for_each_cell<dim>(cells, [&](const IVec<dim>& c, std::int64_t ci) {
+    if (type[ci] != CellType::fluid) return;
+    for (int k = 0; k < corners<dim>; ++k)
+      if (beta[node_index(corner_node<dim>(c, k))] > 0.0) return;
+    type[ci] = CellType::empty;
+  });
+}
+
+template <int dim>
 void CellOperator<dim>::diagonal(std::vector<double>& d) const {
   d.assign(static_cast<std::size_t>(cell_count()), 0.0);
   const double s2 = 1.0 / ((1 << (2 * dim - 2)) * dx * dx);
@@ -118,15 +135,13 @@ void CellOperator<dim>::diagonal(std::vector<double>& d) const {
       d[ci] = 2.0 * (dim - self) / (dx * dx);
       return;
     }
-    // sum over the corner pairs (k, k') at the same node of beta s_k . s_k'; distinct corners
-    // share a node only on a periodic axis of one cell.
+    // sum over the corner pairs (k, k') at the same node of s_k . beta P s_k'; distinct
+    // corners share a node only on a periodic axis of one cell.
     for (int k = 0; k < corners<dim>; ++k) {
       const std::int64_t n = node_index(corner_node<dim>(c, k));
       for (int k2 = 0; k2 < corners<dim>; ++k2) {
         if (k2 != k && node_index(corner_node<dim>(c, k2)) != n) continue;
-        double dot = 0.0;
-        for (int a = 0; a < dim; ++a) dot += corner_sign(k, a) * corner_sign(k2, a);
-        d[ci] += s2 * beta[n] * dot;
+        d[ci] += s2 * corner_signs<dim>(k).dot(mobility(n, corner_signs<dim>(k2)));
       }
     }
   });
@@ -165,9 +180,9 @@ void CellOperator<dim>::for_each_entry(const std::function<void(std::int64_t, st
               shared = shared && nb_bits[a] >= 0 && nb_bits[a] <= 1;
             }
             if (!shared) continue;
-            double dot = 0.0;
-            for (int a = 0; a < dim; ++a) dot += (bits[a] ? 1.0 : -1.0) * (nb_bits[a] ? 1.0 : -1.0);
-            v += s2 * beta[node_index(c + bits)] * dot;
+            const Vec<dim> s = (2.0 * bits.template cast<double>().array() - 1.0).matrix();
+            const Vec<dim> s_nb = (2.0 * nb_bits.template cast<double>().array() - 1.0).matrix();
+            v += s2 * s.dot(mobility(node_index(c + bits), s_nb));
           }
         }
         if (v != 0.0) row.emplace_back(cell_index(nb), v);

@@ -53,7 +53,15 @@ SolveResult MgpcgSolver<dim>::solve(const CellOperator<dim>& op, const std::vect
   SolveResult result;
   if (detail::begin_solve(op, b, p, rhs, result)) return result;
   if (Multigrid<dim>::supports(op)) {
-    Multigrid<dim> multigrid(op, options_);
+    // The V-cycle's smoother is written for a scalar mobility per node: it preconditions the
+    // operator with slipping nodes by the one that lets those nodes move freely (still
+    // symmetric positive definite, so CG stays valid; only the count of iterations can change).
+    CellOperator<dim> scalar;
+    if (op.has_slip()) {
+      scalar = op;
+      scalar.slip_normal.clear();
+    }
+    Multigrid<dim> multigrid(op.has_slip() ? scalar : op, options_);
     return solve_with(op, rhs, p, control, start, multigrid);
   }
   // 3D NodeCell: near-null modes that no smooth coarse space holds (modulated_multigrid.h).

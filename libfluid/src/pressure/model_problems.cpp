@@ -77,6 +77,32 @@ CellOperator<dim> periodic_channel_problem(int n, OperatorKind<dim> kind) {
 }
 
 template <int dim>
+CellOperator<dim> pile_channel_problem(int n) {
+  CellOperator<dim> op = periodic_channel_problem<dim>(n, OperatorKind<dim>::node_cell);
+  constexpr double radius = 0.2;
+  op.slip_normal.assign(static_cast<std::size_t>(op.node_count()), Vec<dim>::Zero());
+  const IVec<dim> extent = op.node_extent();
+  IVec<dim> q = IVec<dim>::Zero();
+  for (std::int64_t i = 0; i < op.node_count(); ++i) {
+    Vec<dim> from_axis = q.template cast<double>() * op.dx - Vec<dim>::Constant(0.5);
+    from_axis[dim - 1] = 0.0;
+    const double distance = from_axis.norm();
+    if (distance < radius) {
+      if (distance > radius - op.dx && distance > 0.0)
+        op.slip_normal[static_cast<std::size_t>(i)] = from_axis / distance;
+      else
+        op.beta[static_cast<std::size_t>(i)] = 0.0;
+    }
+    for (int a = 0; a < dim; ++a) {
+      if (++q[a] < extent[a]) break;
+      q[a] = 0;
+    }
+  }
+  op.empty_cells_without_unknowns();
+  return op;
+}
+
+template <int dim>
 std::vector<Vec<dim>> wall_consistent_velocity(const CellOperator<dim>& op, unsigned seed) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> uniform(-1.0, 1.0);
@@ -84,6 +110,7 @@ std::vector<Vec<dim>> wall_consistent_velocity(const CellOperator<dim>& op, unsi
   for (std::size_t i = 0; i < u.size(); ++i) {
     for (int a = 0; a < dim; ++a) u[i][a] = uniform(rng);
     if (op.beta[i] == 0.0) u[i].setZero();
+    if (op.has_slip()) u[i] -= op.slip_normal[i].dot(u[i]) * op.slip_normal[i];
   }
   return u;
 }
@@ -94,6 +121,8 @@ template CellOperator<2> periodic_box_problem<2>(int, OperatorKind<2>);
 template CellOperator<3> periodic_box_problem<3>(int, OperatorKind<3>);
 template CellOperator<2> periodic_channel_problem<2>(int, OperatorKind<2>);
 template CellOperator<3> periodic_channel_problem<3>(int, OperatorKind<3>);
+template CellOperator<2> pile_channel_problem<2>(int);
+template CellOperator<3> pile_channel_problem<3>(int);
 template CellOperator<2> closed_box_problem<2>(int, OperatorKind<2>);
 template CellOperator<3> closed_box_problem<3>(int, OperatorKind<3>);
 template std::vector<Vec<2>> wall_consistent_velocity<2>(const CellOperator<2>&, unsigned);

@@ -8,12 +8,38 @@
 
 namespace fluid::stages {
 
+namespace {
+//! The generic probe velocity a of the header comment [m/s].
+template <int dim>
+mpm::Vec<dim> probe() {
+  mpm::Vec<dim> a;
+  for (int d = 0; d < dim; ++d) a[d] = 1.0 / std::sqrt(d + 1.0);
+  return a;
+}
+}  // namespace
+
+template <int dim>
+std::optional<mpm::Vec<dim>> slip_normal(const mpm::geometry::ColliderSet<dim>& colliders, const mpm::Vec<dim>& x,
+                                         double t) {
+  // A separating obstacle holds the probe that approaches it: of the two probes, the one with
+  // fewer free directions tells what the obstacles hold.
+  const mpm::Vec<dim> a = probe<dim>();
+  const mpm::Mat<dim> up = colliders.free_directions(x, t, a), down = colliders.free_directions(x, t, -a);
+  const mpm::Mat<dim> free = up.trace() <= down.trace() ? up : down;
+  const double rank = free.trace();  // of an orthogonal projector
+  if (rank > dim - 0.5) return mpm::Vec<dim>::Zero();
+  if (rank < dim - 1.5) return std::nullopt;
+  const mpm::Mat<dim> held = mpm::Mat<dim>::Identity() - free;  // n n^T
+  int column = 0;
+  held.diagonal().maxCoeff(&column);
+  return held.col(column).normalized();
+}
+
 template <int dim>
 bool is_prescribed(const mpm::SparseGrid<dim>& grid, const mpm::geometry::ColliderSet<dim>& colliders, std::size_t k,
                    double t) {
   if (colliders.empty() || grid.mass[k] <= 0.0) return false;
-  mpm::Vec<dim> a;
-  for (int d = 0; d < dim; ++d) a[d] = 1.0 / std::sqrt(d + 1.0);
+  const mpm::Vec<dim> a = probe<dim>();
   const mpm::Vec<dim> x = grid.node_position(k);
   mpm::Vec<dim> up = a, down = -a;
   colliders.project(x, t, up);
@@ -32,6 +58,8 @@ std::vector<std::uint8_t> prescribed_nodes(const mpm::SparseGrid<dim>& grid,
   return mask;
 }
 
+template std::optional<mpm::Vec<2>> slip_normal(const mpm::geometry::ColliderSet<2>&, const mpm::Vec<2>&, double);
+template std::optional<mpm::Vec<3>> slip_normal(const mpm::geometry::ColliderSet<3>&, const mpm::Vec<3>&, double);
 template bool is_prescribed(const mpm::SparseGrid<2>&, const mpm::geometry::ColliderSet<2>&, std::size_t, double);
 template bool is_prescribed(const mpm::SparseGrid<3>&, const mpm::geometry::ColliderSet<3>&, std::size_t, double);
 template std::vector<std::uint8_t> prescribed_nodes(const mpm::SparseGrid<2>&, const mpm::geometry::ColliderSet<2>&,

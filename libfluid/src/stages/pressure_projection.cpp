@@ -9,8 +9,14 @@
 //      stage periodic_fill hands their velocities to the ghosts);
 //   2. per node i of the box: u_i = n_w v_i^* + n_s v_{s,i}^*  (n_w = 1, n_s = 0 single phase),
 //      beta_i = dt (n_w / rho_w + n_s / rho_s) for nodes with mass that no obstacle prescribes,
-//      beta_i = 0 otherwise (prescribed nodes keep their boundary velocity: wall normals are
-//      exact Neumann conditions on p);
+//      beta_i = 0 on nodes an obstacle holds (sticky) and u_i = v_i^*, their boundary velocity
+//      (wall normals are exact Neumann conditions on p); on a node slipping along an obstacle
+//      of normal n, u_i . n = v_i^* . n and the mobility beta_i (I - n n^T) (cell_operator.h):
+//      the pressure moves the tangential velocity, so that slip walls conserve mass too. With
+//      the grains' flux left out where the obstacles hold the mixture, b . z = 0 for every
+//      null vector z of A that static obstacles close off (a checkerboard on one layer of
+//      cells across a 3D flume: (D^T z)_i vanishes except at held nodes, where u_i . (D^T z)_i
+//      is then 0), so the solve stays consistent;
 //   3. solve D B D^T p = -D u (cell_operator.h), initial guess the previous pressure, after
 //      removing from b its components along the null vectors of A in the span of the
 //      constant and the checkerboards prod_{a in S} (-1)^{c_a}, |S| >= 2 (the Q1-P0 modes),
@@ -85,21 +91,6 @@ IVec<dim> fluid_cell_box(const mpm::SparseGrid<dim>& g, const std::vector<Vec<di
   return lo;
 }
 
-//! A fluid cell whose corners all have beta = 0 (a particle inside a wall) has no unknown that
-//! could change its divergence: it becomes empty (p = 0) instead of making the system
-//! inconsistent.
-template <int dim>
-void drop_cells_without_unknowns(CellOperator<dim>& op) {
-  for_each_point<dim>(op.cells, [&](const IVec<dim>& c, std::int64_t ci) {
-    if (op.type[ci] != CellType::fluid) return;
-    for (int k = 0; k < (1 << dim); ++k) {
-      IVec<dim> n = c;
-      for (int a = 0; a < dim; ++a) n[a] += (k >> a) & 1;
-      if (op.beta[op.node_index(n)] > 0.0) return;
-    }
-    op.type[ci] = CellType::empty;
-  });
-}
 }  // namespace
 
 template <int dim>
@@ -122,16 +113,35 @@ void PressureProjection<dim>::run(mpm::MpmState<dim>& s) {
   u_.assign(static_cast<std::size_t>(nodes), Vec<dim>::Zero());
   std::vector<mpm::Index> storage(static_cast<std::size_t>(nodes), -1);
   const double fluid_beta = s.dt / density_;
+  op_.slip_normal.clear();
   for_each_point<dim>(op_.node_extent(), [&](const IVec<dim>& n, std::int64_t i) {
     const mpm::Index k = g.node_index(lo + n);
     storage[i] = k;
     if (k < 0) return;
-    u_[i] = mixture_ ? mixture_->fluid_fraction[k] * g.velocity[k] + mixture_->solid_flux[k] : g.velocity[k];
-    if (g.mass[k] <= 0.0 || fixed[k]) return;
-    op_.beta[i] = mixture_ ? s.dt * (mixture_->fluid_fraction[k] / density_ + mixture_->solid_mobility[k]) : fluid_beta;
+    const Vec<dim>& v = g.velocity[k];
+    u_[i] = mixture_ ? mixture_->fluid_fraction[k] * v + mixture_->solid_flux[k] : v;
+    if (g.mass[k] <= 0.0) return;
+    const double beta =
+        mixture_ ? s.dt * (mixture_->fluid_fraction[k] / density_ + mixture_->solid_mobility[k]) : fluid_beta;
+    if (!fixed[k]) {
+      op_.beta[i] = beta;
+      return;
+    }
+    // A prescribed node: the components the obstacles hold are the fluid's (the obstacle's
+    // velocity, not the grains' flux), so that D u has no part along the null vectors the
+    // obstacles close off; along a slipping obstacle the pressure moves the rest.
+    const std::optional<Vec<dim>> normal = slip_normal(colliders_, g.node_position(k), s.time + s.dt);
+    if (!normal) {
+      u_[i] = v;
+      return;
+    }
+    u_[i] += normal->dot(v - u_[i]) * *normal;
+    op_.beta[i] = beta;
+    if (op_.slip_normal.empty()) op_.slip_normal.assign(static_cast<std::size_t>(nodes), Vec<dim>::Zero());
+    op_.slip_normal[i] = *normal;
   });
 
-  drop_cells_without_unknowns(op_);
+  op_.empty_cells_without_unknowns();
 
   // 3. Solve, starting from the previous pressure where the boxes overlap.
   op_.divergence(u_, b_);
@@ -183,7 +193,7 @@ void PressureProjection<dim>::run(mpm::MpmState<dim>& s) {
     std::cerr << "warning: " << failure(s, *solved_by) << "\n";
   }
 
-  // 4. v_w += (dt / rho_w) D^T p: the impulse beta D^T p rescaled from the mixture beta.
+  // 4. v_w += (dt / rho_w) P D^T p: the impulse beta P D^T p rescaled from the mixture beta.
   std::vector<Vec<dim>> impulse(static_cast<std::size_t>(nodes), Vec<dim>::Zero());
   op_.subtract_gradient(p_, impulse);
   for (std::int64_t i = 0; i < nodes; ++i)

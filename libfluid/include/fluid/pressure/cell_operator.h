@@ -10,8 +10,10 @@
 //!      (D u)_c = exact cell average of div u for the multilinear nodal field u
 //!              = sum_{corners i of c} sum_a s_{c,i,a} u_{i,a} / (2^{dim-1} dx),
 //!      s_{c,i,a} = +1 if corner i is on the upper side of c along axis a, else -1,
-//!      B = diag(beta_i) per node (beta_i = dt (n_w/rho_w + n_s/rho_s) [m^3 s/kg]; 0 on nodes
-//!      whose velocity is prescribed by a wall or collider, which is how Neumann walls enter),
+//!      B = diag(beta_i P_i) per node (beta_i = dt (n_w/rho_w + n_s/rho_s) [m^3 s/kg]; 0 on nodes
+//!      whose velocity is prescribed by a wall or collider, which is how Neumann walls enter;
+//!      P_i = I - n_i n_i^T on a node that slips along an obstacle of unit normal n_i, whose
+//!      normal velocity is prescribed and whose tangential velocity the pressure moves, else I),
 //!    so that u <- u - B G p = u + B D^T p (G = -D^T, the discrete gradient) with
 //!    A p = b, b = -D u, makes D u = 0 in every fluid cell. A is symmetric
 //!    positive semi-definite; on a uniform box it has checkerboard null modes besides constants.
@@ -47,7 +49,10 @@ struct CellOperator {
   double dx = 1.0;                      //!< [m]
   std::vector<CellType> type;           //!< per cell, x fastest
   std::vector<double> beta;             //!< per node, x fastest (NodeCell only)
-  std::array<bool, dim> periodic{};     //!< per axis (see above)
+  //! Per node, x fastest (NodeCell only): n_i of a slipping node, zero for P_i = I; empty when
+  //! no node slips.
+  std::vector<Vec<dim>> slip_normal;
+  std::array<bool, dim> periodic{};  //!< per axis (see above)
 
   bool is_periodic() const;
   //! Nodes per axis: cells + 1, or cells on a periodic axis.
@@ -60,6 +65,18 @@ struct CellOperator {
 
   //! y = A x over all cells (y_c = 0 for empty cells; x is read only at fluid cells).
   void apply(const std::vector<double>& x, std::vector<double>& y) const;
+  //! Whether some node slips (P_i != I somewhere).
+  bool has_slip() const { return !slip_normal.empty(); }
+  //! beta_i P_i g: the mobility of node i applied to a nodal vector g.
+  Vec<dim> mobility(std::int64_t i, const Vec<dim>& g) const {
+    const double b = beta[static_cast<std::size_t>(i)];
+    if (!has_slip()) return b * g;
+    const Vec<dim>& n = slip_normal[static_cast<std::size_t>(i)];
+    return b * (g - n.dot(g) * n);
+  }
+  //! Makes empty every fluid cell whose corners all have beta = 0 (NodeCell: a particle inside
+  //! a wall): no unknown could change its divergence, so it would make the system inconsistent.
+  void empty_cells_without_unknowns();
   //! The diagonal of A (0 for empty cells).
   void diagonal(std::vector<double>& d) const;
   //! Calls f(row cell, column cell, value) for every nonzero of A between fluid cells,
@@ -69,7 +86,7 @@ struct CellOperator {
 
   //! rhs of the projection: b_c = -(D u)_c for fluid cells, 0 elsewhere (u per node, x fastest).
   void divergence(const std::vector<Vec<dim>>& u, std::vector<double>& div) const;
-  //! u_i += beta_i (D^T p)_i (= u_i - beta_i (G p)_i) for every node.
+  //! u_i += beta_i P_i (D^T p)_i (= u_i - beta_i P_i (G p)_i) for every node.
   void subtract_gradient(const std::vector<double>& p, std::vector<Vec<dim>>& u) const;
 };
 

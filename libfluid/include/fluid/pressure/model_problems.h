@@ -33,8 +33,15 @@ CellOperator<dim> periodic_box_problem(int n, OperatorKind<dim> kind);
 template <int dim>
 CellOperator<dim> periodic_channel_problem(int n, OperatorKind<dim> kind);
 
-//! A pseudo-random nodal velocity [m/s] that is 0 on beta = 0 (wall) nodes, so that
-//! b = -D u lies in the range of A (the wall velocity is prescribed, here at rest).
+//! The NodeCell periodic channel with a pile through its water: the nodes within radius 0.2 of
+//! the axis (x_0, .., x_{dim-2}) = 1/2 (a vertical slab in 2D, a cylinder in 3D) are the
+//! obstacle; those within dx of its surface slip along it (slip_normal: the normal of the
+//! surface), the deeper ones are held (beta = 0). Cells without a free corner are empty.
+template <int dim>
+CellOperator<dim> pile_channel_problem(int n);
+
+//! A pseudo-random nodal velocity [m/s] that is 0 on beta = 0 (wall) nodes and tangential on
+//! slipping ones, so that b = -D u lies in the range of A (the obstacles are at rest).
 template <int dim>
 std::vector<Vec<dim>> wall_consistent_velocity(const CellOperator<dim>& op, unsigned seed);
 

@@ -23,10 +23,11 @@
 //!     - {shape: box, lo: [0, 0], hi: [0.1, 0.2], particles_per_cell: 4, velocity: [0, 0]}
 //! plus the shared keys (scene_settings.h), walls/colliders (collider_config.h) and the optional
 //! inflow/outflow (flow_boundary_config.h): the sink and source stages exist only with them. Walls act
-//! on the fluid as prescribed node velocities; use `contact: sticky` (no-slip): the pressure
-//! does not act on nodes inside a wall, so the tangential velocity a slip wall leaves there
-//! would not be corrected. The exception, a compromise: an obstacle a few cells across in a
-//! current, whose sticky nodes would hold a cell of dead water around it (user guide 4.16).
+//! on the fluid as prescribed node velocities: `sticky` holds every component of a node inside
+//! the wall, `slip` and `separate` the normal one, and the pressure moves the tangential one
+//! (pressure_projection.cpp). The scene files use sticky walls; an obstacle a few cells across
+//! in a current slips, since sticky nodes would hold a cell of dead water around it (user
+//! guide 4.16).
 #include <fluid/solver/fluid_solver.h>
 #include <fluid/stages/pressure_projection.h>
 

@@ -1,11 +1,12 @@
 #pragma once
 //! The grid nodes whose velocity a wall or collider prescribes, shared by the fluid stages that
-//! must leave those nodes alone (the pressure acts on them with beta = 0, the viscous solve
-//! takes them as Dirichlet data).
+//! must leave those nodes alone (the pressure acts on them with beta = 0, or along a slipping
+//! obstacle only, the viscous solve takes them as Dirichlet data).
 #include <mpm/core/sparse_grid.h>
 #include <mpm/geometry/collider.h>
 
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 namespace fluid::stages {
@@ -19,6 +20,15 @@ namespace fluid::stages {
 template <int dim>
 std::vector<std::uint8_t> prescribed_nodes(const mpm::SparseGrid<dim>& grid,
                                            const mpm::geometry::ColliderSet<dim>& colliders, double t);
+
+//! How the pressure may move a prescribed node at x at time t: nullopt where the obstacles hold
+//! every component of its velocity (sticky contact, or two obstacles meeting at x); else the
+//! unit normal n of the one obstacle it slips along (slip contact, and separating contact,
+//! which holds the normal velocity of a node that approaches it or rests on it): the pressure
+//! moves the tangential velocity, P = I - n n^T; a zero vector where nothing holds it.
+template <int dim>
+std::optional<mpm::Vec<dim>> slip_normal(const mpm::geometry::ColliderSet<dim>& colliders, const mpm::Vec<dim>& x,
+                                         double t);
 
 //! The same test for one storage node k (with mass) only.
 template <int dim>

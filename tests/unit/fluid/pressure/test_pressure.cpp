@@ -4,7 +4,9 @@
 // divergence-free velocity and agrees with CHOLMOD; the multigrid V-cycle is symmetric; MGPCG
 // iteration counts stay flat under refinement (Poisson); failed solves say so. Periodic axes:
 // the same properties on a fully periodic box (singular: compared modulo its null space,
-// null_space.h) and a periodic channel with a free surface.
+// null_space.h) and a periodic channel with a free surface. Slipping nodes (mobility
+// beta (I - n n^T)): the same properties on a channel with a pile, and why holding them at
+// their tangential velocity instead makes the 3D system inconsistent.
 #include <fluid/pressure/model_problems.h>
 #include <fluid/pressure/modulated_multigrid.h>
 #include <fluid/pressure/multigrid.h>
@@ -64,6 +66,7 @@ std::vector<CellOperator<dim>> small_problems(int n) {
     ops.push_back(periodic_box_problem<dim>(n, kind));
     ops.push_back(periodic_channel_problem<dim>(n, kind));
   }
+  if (n >= 5) ops.push_back(pile_channel_problem<dim>(n));
   return ops;
 }
 
@@ -147,6 +150,9 @@ void check_projection(const CellOperator<dim>& op, const std::string& solver) {
   op.subtract_gradient(p, u);
   op.divergence(u, div);
   for (std::size_t c = 0; c < div.size(); ++c) CHECK(std::abs(div[c]) <= 1e-9 * max_abs(b));
+  // The pressure moves a slipping node along its obstacle only.
+  if (op.has_slip())
+    for (std::size_t i = 0; i < u.size(); ++i) CHECK(std::abs(u[i].dot(op.slip_normal[i])) <= 1e-14);
 }
 
 //! Every back-end in `names` agrees with CHOLMOD on the pressure impulse B D^T p and, with
@@ -283,6 +289,53 @@ TEST_CASE("every back-end projects to a discretely divergence-free velocity") {
     check_projection(periodic_channel_problem<3>(8, OperatorKind<3>::node_cell), name);
     if (name != "hypre_pfmg") check_projection(periodic_box_problem<3>(8, OperatorKind<3>::node_cell), name);
   }
+}
+
+TEST_CASE("slipping nodes: every back-end projects, and holding them instead breaks the 3D solve") {
+  for (const std::string& name : pressure_solver_names()) {
+    check_projection(pile_channel_problem<2>(24), name);
+    // PFMG-PCG breaks down on the 3D pile's null vectors (below), as on the 3D periodic box.
+    if (name != "hypre_pfmg") check_projection(pile_channel_problem<3>(10), name);
+  }
+  // The pile closes off null vectors of A (so p is unique up to them; the impulse is unique):
+  // the x-y checkerboard z on one layer of cells, whose D^T z vanishes across the layer's faces
+  // and wherever all the cells around a node are fluid, so at the channel's walls and deep in
+  // the pile only, where beta = 0 and u = 0: b = -D u is orthogonal to it.
+  check_agreement(pile_channel_problem<2>(32), {"mgpcg", "cg", "jacobi_pcg"}, false);
+  check_agreement(pile_channel_problem<3>(12), {"mgpcg", "cg", "jacobi_pcg"}, false);
+  const CellOperator<3> slipping = pile_channel_problem<3>(12);
+  const auto layer_checkerboard = [](const CellOperator<3>& op) {
+    std::vector<double> z(static_cast<std::size_t>(op.cell_count()), 0.0);
+    for (int j = 0; j < op.cells[1]; ++j)
+      for (int i = 0; i < op.cells[0]; ++i) {
+        const std::int64_t c = op.cell_index(IVec<3>(i, j, 2));
+        if (op.type[c] == CellType::fluid) z[c] = (i + j) % 2 == 0 ? 1.0 : -1.0;
+      }
+    return z;
+  };
+  const std::vector<Vec<3>> u = wall_consistent_velocity(slipping, 3);  // tangential on the pile
+  std::vector<double> z = layer_checkerboard(slipping), Az, d, b, p;
+  slipping.diagonal(d);
+  slipping.apply(z, Az);
+  CHECK(norm(Az) <= 1e-12 * max_abs(d) * norm(z));
+  slipping.divergence(u, b);
+  CHECK(std::abs(dot(b, z)) <= 1e-12 * norm(b) * norm(z));
+  // Held (beta = 0) at the tangential velocity they keep, the pile's surface nodes border cells
+  // without unknowns, so D^T z is nonzero there and b is not orthogonal to z: CG diverges.
+  CellOperator<3> held = slipping;
+  for (std::size_t i = 0; i < held.beta.size(); ++i)
+    if (slipping.slip_normal[i] != Vec<3>::Zero()) held.beta[i] = 0.0;
+  held.slip_normal.clear();
+  held.empty_cells_without_unknowns();
+  z = layer_checkerboard(held);
+  held.diagonal(d);
+  held.apply(z, Az);
+  CHECK(norm(Az) <= 1e-12 * max_abs(d) * norm(z));
+  held.divergence(u, b);
+  CHECK(std::abs(dot(b, z)) > 1e-3 * norm(b) * norm(z));
+  SolveControl control;
+  control.max_iterations = 2000;
+  CHECK_FALSE(make_pressure_solver<3>("cg")->solve(held, b, p, control).converged);
 }
 
 TEST_CASE("every back-end agrees with CHOLMOD") {

@@ -32,9 +32,9 @@ using namespace mpm;
 
 namespace {
 
-//! A tank (sticky walls 2 dx thick, open top) holding water 0.15 m deep on its floor.
+//! A tank (walls 2 dx thick with `contact`, open top) holding water 0.15 m deep on its floor.
 template <int dim>
-std::string tank_yaml(const std::string& extra = "") {
+std::string tank_yaml(const std::string& extra = "", const std::string& contact = "sticky") {
   const std::string v = dim == 2 ? "[0, -9.81]" : "[0, -9.81, 0]";
   const std::string lo = dim == 2 ? "[0, 0]" : "[0, 0, 0]";
   const std::string hi = dim == 2 ? "[0.5, 0.5]" : "[0.5, 0.5, 0.5]";
@@ -43,9 +43,8 @@ std::string tank_yaml(const std::string& extra = "") {
   return "dim: " + std::to_string(dim) + "\ndomain: {lo: " + lo + ", hi: " + hi + "}\n" +
          "grid: {dx: " + (dim == 2 ? "0.025" : "0.05") + "}\n" + "time: {end: 1.0, frame_dt: 0.05}\ngravity: " + v +
          "\n" + "fluid: {density: 1000, viscosity: 0.0}\n" +
-         "pressure: {solver: cg, tolerance: 1.0e-12, max_iterations: 5000}\n" +
-         "walls: {contact: sticky, y_max: open}\n" + "bodies:\n  - {shape: box, lo: " + origin + ", hi: " + water +
-         "}\n" + extra;
+         "pressure: {solver: cg, tolerance: 1.0e-12, max_iterations: 5000}\n" + "walls: {contact: " + contact +
+         ", y_max: open}\n" + "bodies:\n  - {shape: box, lo: " + origin + ", hi: " + water + "}\n" + extra;
 }
 
 //! Node velocities of the operator box of `stage` (zero where the grid has no node).
@@ -77,8 +76,8 @@ double max_fluid_divergence(const fluid::CellOperator<dim>& op, const std::vecto
 
 //! Scene with random particle velocities, advanced through P2G, gravity and the walls.
 template <int dim>
-fluid::FluidScene<dim> stirred_tank(unsigned seed) {
-  const Config cfg = Config::parse(tank_yaml<dim>(), "tank.yaml");
+fluid::FluidScene<dim> stirred_tank(unsigned seed, const std::string& contact = "sticky") {
+  const Config cfg = Config::parse(tank_yaml<dim>("", contact), "tank.yaml");
   fluid::FluidScene<dim> scene = fluid::load_fluid_scene<dim>(cfg);
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
@@ -94,8 +93,9 @@ fluid::FluidScene<dim> stirred_tank(unsigned seed) {
 }
 
 template <int dim>
-void check_projection_divergence_free() {
-  fluid::FluidScene<dim> scene = stirred_tank<dim>(7);
+void check_projection_divergence_free(const std::string& contact) {
+  CAPTURE(contact);
+  fluid::FluidScene<dim> scene = stirred_tank<dim>(7, contact);
   MpmState<dim>& s = scene.state;
   const std::vector<Vec<dim>> before = s.grid.velocity;
   fluid::stages::PressureProjection<dim> projection(1000.0, scene.colliders, scene.pressure);
@@ -112,15 +112,27 @@ void check_projection_divergence_free() {
   CHECK(div_before > 1.0);  // [1/s]: the random field is far from solenoidal
   CHECK(div_after < 1e-9 * div_before);
 
-  // Wall nodes and nodes without mass keep their velocity exactly.
+  // Held wall nodes (sticky, or in a corner) and nodes without mass keep their velocity
+  // exactly; slipping wall nodes their normal velocity, while the pressure moves them along.
   const auto fixed = fluid::stages::prescribed_nodes(s.grid, scene.colliders, s.time + s.dt);
-  std::size_t wall_nodes = 0;
-  for (std::size_t k = 0; k < s.grid.node_storage(); ++k)
-    if (fixed[k] || s.grid.mass[k] <= 0.0) {
-      wall_nodes += fixed[k];
+  std::size_t held = 0, slipping = 0, moved = 0;
+  for (std::size_t k = 0; k < s.grid.node_storage(); ++k) {
+    if (s.grid.mass[k] <= 0.0) CHECK(s.grid.velocity[k] == before[k]);
+    if (!fixed[k]) continue;
+    const auto normal = fluid::stages::slip_normal(scene.colliders, s.grid.node_position(k), s.time + s.dt);
+    if (!normal) {
+      ++held;
       CHECK(s.grid.velocity[k] == before[k]);
+      continue;
     }
-  CHECK(wall_nodes > 0);
+    ++slipping;
+    const Vec<dim> change = s.grid.velocity[k] - before[k];
+    CHECK(std::abs(change.dot(*normal)) <= 1e-15);
+    moved += change.norm() > 1e-3;
+  }
+  CHECK(held > 0);
+  if (contact == "sticky") CHECK(slipping == 0);
+  if (contact == "slip") CHECK(4 * moved > slipping);  // the deeper nodes of the wall layer border no water
 }
 
 template <int dim>
@@ -145,8 +157,10 @@ void check_mixture_constraint() {
   projection.run(s);
   REQUIRE(projection.last_result().converged);
 
-  // Mixture flux after the step: n_w v_w + n_s v_s^* + dt (n_s / rho_s) D^T p on free nodes.
+  // Mixture flux after the step: n_w v_w + n_s v_s^* + dt (n_s / rho_s) D^T p on free nodes,
+  // the water's (the walls') velocity where the walls hold the mixture (the tank is sticky).
   const auto& op = projection.cell_operator();
+  const auto held = fluid::stages::prescribed_nodes(s.grid, scene.colliders, s.time + s.dt);
   const std::vector<Vec<dim>> vw = box_velocities(projection, s.grid);
   std::vector<Vec<dim>> impulse(vw.size(), Vec<dim>::Zero());  // beta D^T p
   op.subtract_gradient(projection.pressure(), impulse);
@@ -155,7 +169,7 @@ void check_mixture_constraint() {
   for (std::size_t i = 0; i < vw.size(); ++i) {
     const Index k = s.grid.node_index(projection.box_origin() + c);
     if (k >= 0) {
-      flux[i] = mixture.fluid_fraction[k] * vw[i] + mixture.solid_flux[k];
+      flux[i] = held[k] ? vw[i] : mixture.fluid_fraction[k] * vw[i] + mixture.solid_flux[k];
       if (op.beta[i] > 0.0) flux[i] += (s.dt * mixture.solid_mobility[k] / op.beta[i]) * impulse[i];
     }
     for (int a = 0; a < dim; ++a) {
@@ -170,9 +184,11 @@ void check_mixture_constraint() {
 
 }  // namespace
 
-TEST_CASE("pressure projection: D u = 0 in every fluid cell, walls untouched (2D, 3D)") {
-  check_projection_divergence_free<2>();
-  check_projection_divergence_free<3>();
+TEST_CASE("pressure projection: D u = 0 in every fluid cell, walls held or slipping (2D, 3D)") {
+  for (const std::string contact : {"sticky", "slip"}) {
+    check_projection_divergence_free<2>(contact);
+    check_projection_divergence_free<3>(contact);
+  }
 }
 
 TEST_CASE("pressure projection: mixture constraint div(n_w v_w + n_s v_s) = 0") { check_mixture_constraint<2>(); }
