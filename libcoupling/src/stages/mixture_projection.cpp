@@ -48,9 +48,10 @@ void MixtureProjection<dim>::run(CoupledState<dim>& s) {
   projection_.set_mixture(&mixture_);
   projection_.run(s.fluid);
 
-  // The rest of the corrections, with P D^T p = impulse / beta_i where the operator acted
-  // (beta_i = 0: a held or massless node, which the projection leaves alone; P = I - n n^T on
-  // a node slipping along an obstacle, so both phases move along it only).
+  // The rest of the corrections, with P D^T p / phi = impulse / (beta_i phi) where the operator
+  // acted (beta_i = 0: a held or massless node, which the projection leaves alone; on a node
+  // slipping along obstacles P projects onto the directions they leave free and phi is its open
+  // share, PressureProjection::open_share(), so both phases move along the obstacles only).
   const fluid::CellOperator<dim>& op = projection_.cell_operator();
   impulse_.assign(static_cast<std::size_t>(op.node_count()), mpm::Vec<dim>::Zero());
   op.subtract_gradient(projection_.pressure(), impulse_);
@@ -60,7 +61,7 @@ void MixtureProjection<dim>::run(CoupledState<dim>& s) {
     const mpm::Index kw = gw.node_index(projection_.box_origin() + n);
     if (op.beta[i] > 0.0 && kw >= 0) {
       const auto k = static_cast<std::size_t>(kw);
-      const mpm::Vec<dim> grad = impulse_[i] / op.beta[i];
+      const mpm::Vec<dim> grad = impulse_[i] / (op.beta[i] * projection_.open_share()[i]);
       gw.velocity[k] += (c_w_[k] - dt / rho_w_) * grad;
       if (const mpm::Index ks = sediment_node_[k]; ks >= 0 && gs.mass[static_cast<std::size_t>(ks)] > 0.0)
         gs.velocity[static_cast<std::size_t>(ks)] += c_s_[k] * grad;

@@ -111,7 +111,7 @@ void apply_node_cell(const CellOperator<dim>& op, const std::vector<double>& x, 
       }
   const CellType* type = op.type.data();
   const double* beta = op.beta.data();
-  const Vec<dim>* slip = op.has_slip() ? op.slip_normal.data() : nullptr;
+  const std::int32_t* slip = op.has_slip() ? op.slip_index.data() : nullptr;
   // Pass 1: u_n = beta_n P_n (D^T x)_n, stored axis-major (u[a * node_count + n]).
   parallel_for_lines<dim>(nodes, [&](const IVec<dim>& n, std::int64_t node_base) {
     // Corners whose cell is inside the box along axes 1.. (the x test is per node below).
@@ -137,7 +137,7 @@ void apply_node_cell(const CellOperator<dim>& op, const std::vector<double>& x, 
           for (int a = 0; a < dim; ++a) g[a] += ((k >> a) & 1) ? x[ci] : -x[ci];
         }
         g *= scale * beta[ni];
-        if (slip) g -= slip[ni].dot(g) * slip[ni];
+        if (slip && slip[ni] >= 0) g = op.slip_projector[static_cast<std::size_t>(slip[ni])] * g;
       }
       for (int a = 0; a < dim; ++a) u[a * node_count + ni] = g[a];
     }
@@ -234,7 +234,7 @@ void apply_node_cell_periodic(const CellOperator<dim>& op, const std::vector<dou
   }
   const CellType* type = op.type.data();
   const double* beta = op.beta.data();
-  const Vec<dim>* slip = op.has_slip() ? op.slip_normal.data() : nullptr;
+  const std::int32_t* slip = op.has_slip() ? op.slip_index.data() : nullptr;
   // Pass 1: u_n = beta_n P_n (D^T x)_n from the cells n - bits(k) (corner k of each).
   parallel_for_lines<dim>(nodes, [&](const IVec<dim>& n, std::int64_t node_base) {
     std::array<std::int64_t, corners> line{};  // cell index of axes 1.. for corner k, -1 outside
@@ -255,7 +255,7 @@ void apply_node_cell_periodic(const CellOperator<dim>& op, const std::vector<dou
           for (int a = 0; a < dim; ++a) g[a] += ((k >> a) & 1) ? x[ci] : -x[ci];
         }
         g *= scale * beta[ni];
-        if (slip) g -= slip[ni].dot(g) * slip[ni];
+        if (slip && slip[ni] >= 0) g = op.slip_projector[static_cast<std::size_t>(slip[ni])] * g;
       }
       for (int a = 0; a < dim; ++a) u[a * node_count + ni] = g[a];
     }

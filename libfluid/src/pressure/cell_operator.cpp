@@ -113,6 +113,19 @@ void CellOperator<dim>::apply(const std::vector<double>& x, std::vector<double>&
 }
 
 template <int dim>
+void CellOperator<dim>::set_slip(std::int64_t i, const Mat<dim>& free) {
+  if (slip_index.empty()) slip_index.assign(static_cast<std::size_t>(node_count()), -1);
+  slip_index[static_cast<std::size_t>(i)] = static_cast<std::int32_t>(slip_projector.size());
+  slip_projector.push_back(free);
+}
+
+template <int dim>
+void CellOperator<dim>::clear_slip() {
+  slip_index.clear();
+  slip_projector.clear();
+}
+
+template <int dim>
 void CellOperator<dim>::empty_cells_without_unknowns() {
   for_each_cell<dim>(cells, [&](const IVec<dim>& c, std::int64_t ci) {
     if (type[ci] != CellType::fluid) return;

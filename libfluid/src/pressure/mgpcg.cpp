@@ -59,7 +59,7 @@ SolveResult MgpcgSolver<dim>::solve(const CellOperator<dim>& op, const std::vect
     CellOperator<dim> scalar;
     if (op.has_slip()) {
       scalar = op;
-      scalar.slip_normal.clear();
+      scalar.clear_slip();
     }
     Multigrid<dim> multigrid(op.has_slip() ? scalar : op, options_);
     return solve_with(op, rhs, p, control, start, multigrid);

@@ -80,7 +80,6 @@ template <int dim>
 CellOperator<dim> pile_channel_problem(int n) {
   CellOperator<dim> op = periodic_channel_problem<dim>(n, OperatorKind<dim>::node_cell);
   constexpr double radius = 0.2;
-  op.slip_normal.assign(static_cast<std::size_t>(op.node_count()), Vec<dim>::Zero());
   const IVec<dim> extent = op.node_extent();
   IVec<dim> q = IVec<dim>::Zero();
   for (std::int64_t i = 0; i < op.node_count(); ++i) {
@@ -89,7 +88,7 @@ CellOperator<dim> pile_channel_problem(int n) {
     const double distance = from_axis.norm();
     if (distance < radius) {
       if (distance > radius - op.dx && distance > 0.0)
-        op.slip_normal[static_cast<std::size_t>(i)] = from_axis / distance;
+        op.set_slip(i, Mat<dim>::Identity() - from_axis * from_axis.transpose() / (distance * distance));
       else
         op.beta[static_cast<std::size_t>(i)] = 0.0;
     }
@@ -110,7 +109,7 @@ std::vector<Vec<dim>> wall_consistent_velocity(const CellOperator<dim>& op, unsi
   for (std::size_t i = 0; i < u.size(); ++i) {
     for (int a = 0; a < dim; ++a) u[i][a] = uniform(rng);
     if (op.beta[i] == 0.0) u[i].setZero();
-    if (op.has_slip()) u[i] -= op.slip_normal[i].dot(u[i]) * op.slip_normal[i];
+    u[i] = op.free_directions(static_cast<std::int64_t>(i)) * u[i];
   }
   return u;
 }

@@ -19,20 +19,15 @@ mpm::Vec<dim> probe() {
 }  // namespace
 
 template <int dim>
-std::optional<mpm::Vec<dim>> slip_normal(const mpm::geometry::ColliderSet<dim>& colliders, const mpm::Vec<dim>& x,
-                                         double t) {
+std::optional<mpm::Mat<dim>> slip_directions(const mpm::geometry::ColliderSet<dim>& colliders, const mpm::Vec<dim>& x,
+                                             double t) {
   // A separating obstacle holds the probe that approaches it: of the two probes, the one with
   // fewer free directions tells what the obstacles hold.
   const mpm::Vec<dim> a = probe<dim>();
   const mpm::Mat<dim> up = colliders.free_directions(x, t, a), down = colliders.free_directions(x, t, -a);
   const mpm::Mat<dim> free = up.trace() <= down.trace() ? up : down;
-  const double rank = free.trace();  // of an orthogonal projector
-  if (rank > dim - 0.5) return mpm::Vec<dim>::Zero();
-  if (rank < dim - 1.5) return std::nullopt;
-  const mpm::Mat<dim> held = mpm::Mat<dim>::Identity() - free;  // n n^T
-  int column = 0;
-  held.diagonal().maxCoeff(&column);
-  return held.col(column).normalized();
+  if (free.trace() < 0.5) return std::nullopt;  // the rank of an orthogonal projector
+  return free;
 }
 
 template <int dim>
@@ -58,8 +53,8 @@ std::vector<std::uint8_t> prescribed_nodes(const mpm::SparseGrid<dim>& grid,
   return mask;
 }
 
-template std::optional<mpm::Vec<2>> slip_normal(const mpm::geometry::ColliderSet<2>&, const mpm::Vec<2>&, double);
-template std::optional<mpm::Vec<3>> slip_normal(const mpm::geometry::ColliderSet<3>&, const mpm::Vec<3>&, double);
+template std::optional<mpm::Mat<2>> slip_directions(const mpm::geometry::ColliderSet<2>&, const mpm::Vec<2>&, double);
+template std::optional<mpm::Mat<3>> slip_directions(const mpm::geometry::ColliderSet<3>&, const mpm::Vec<3>&, double);
 template bool is_prescribed(const mpm::SparseGrid<2>&, const mpm::geometry::ColliderSet<2>&, std::size_t, double);
 template bool is_prescribed(const mpm::SparseGrid<3>&, const mpm::geometry::ColliderSet<3>&, std::size_t, double);
 template std::vector<std::uint8_t> prescribed_nodes(const mpm::SparseGrid<2>&, const mpm::geometry::ColliderSet<2>&,

@@ -10,9 +10,11 @@
 //   2. per node i of the box: u_i = n_w v_i^* + n_s v_{s,i}^*  (n_w = 1, n_s = 0 single phase),
 //      beta_i = dt (n_w / rho_w + n_s / rho_s) for nodes with mass that no obstacle prescribes,
 //      beta_i = 0 on nodes an obstacle holds (sticky) and u_i = v_i^*, their boundary velocity
-//      (wall normals are exact Neumann conditions on p); on a node slipping along an obstacle
-//      of normal n, u_i . n = v_i^* . n and the mobility beta_i (I - n n^T) (cell_operator.h):
-//      the pressure moves the tangential velocity, so that slip walls conserve mass too. With
+//      (wall normals are exact Neumann conditions on p); on a node slipping along obstacles,
+//      with P the projector onto the directions they leave free, (I - P) u_i = (I - P) v_i^*
+//      and the mobility beta_i P / phi_i (cell_operator.h, phi_i the node's open share,
+//      open_share()): the pressure moves the tangential velocity, so that slip walls conserve
+//      mass and hold water at rest too. With
 //      the grains' flux left out where the obstacles hold the mixture, b . z = 0 for every
 //      null vector z of A that static obstacles close off (a checkerboard on one layer of
 //      cells across a 3D flume: (D^T z)_i vanishes except at held nodes, where u_i . (D^T z)_i
@@ -91,6 +93,18 @@ IVec<dim> fluid_cell_box(const mpm::SparseGrid<dim>& g, const std::vector<Vec<di
   return lo;
 }
 
+//! The share of the 2^dim cells around the node at x (spacing dx) whose centres no obstacle
+//! prescribes at time t: the part of the node's dual cell that the fluid can fill.
+template <int dim>
+double dual_cell_share(const mpm::geometry::ColliderSet<dim>& colliders, const Vec<dim>& x, double dx, double t) {
+  int open = 0;
+  for (int k = 0; k < (1 << dim); ++k) {
+    Vec<dim> centre = x;
+    for (int a = 0; a < dim; ++a) centre[a] += ((k >> a) & 1) ? 0.5 * dx : -0.5 * dx;
+    open += !colliders.prescribes(centre, t);
+  }
+  return static_cast<double>(open) / (1 << dim);
+}
 }  // namespace
 
 template <int dim>
@@ -113,7 +127,8 @@ void PressureProjection<dim>::run(mpm::MpmState<dim>& s) {
   u_.assign(static_cast<std::size_t>(nodes), Vec<dim>::Zero());
   std::vector<mpm::Index> storage(static_cast<std::size_t>(nodes), -1);
   const double fluid_beta = s.dt / density_;
-  op_.slip_normal.clear();
+  op_.clear_slip();
+  open_share_.assign(static_cast<std::size_t>(nodes), 1.0);
   for_each_point<dim>(op_.node_extent(), [&](const IVec<dim>& n, std::int64_t i) {
     const mpm::Index k = g.node_index(lo + n);
     storage[i] = k;
@@ -130,15 +145,16 @@ void PressureProjection<dim>::run(mpm::MpmState<dim>& s) {
     // A prescribed node: the components the obstacles hold are the fluid's (the obstacle's
     // velocity, not the grains' flux), so that D u has no part along the null vectors the
     // obstacles close off; along a slipping obstacle the pressure moves the rest.
-    const std::optional<Vec<dim>> normal = slip_normal(colliders_, g.node_position(k), s.time + s.dt);
-    if (!normal) {
+    const std::optional<mpm::Mat<dim>> free = slip_directions(colliders_, g.node_position(k), s.time + s.dt);
+    if (!free) {
       u_[i] = v;
       return;
     }
-    u_[i] += normal->dot(v - u_[i]) * *normal;
-    op_.beta[i] = beta;
-    if (op_.slip_normal.empty()) op_.slip_normal.assign(static_cast<std::size_t>(nodes), Vec<dim>::Zero());
-    op_.slip_normal[i] = *normal;
+    u_[i] = *free * u_[i] + (mpm::Mat<dim>::Identity() - *free) * v;
+    const double share = dual_cell_share(colliders_, g.node_position(k), g.dx(), s.time + s.dt);
+    if (share > 0.0) open_share_[i] = share;
+    op_.beta[i] = beta / open_share_[i];
+    if (free->trace() < dim - 0.5) op_.set_slip(i, *free);
   });
 
   op_.empty_cells_without_unknowns();
@@ -193,11 +209,12 @@ void PressureProjection<dim>::run(mpm::MpmState<dim>& s) {
     std::cerr << "warning: " << failure(s, *solved_by) << "\n";
   }
 
-  // 4. v_w += (dt / rho_w) P D^T p: the impulse beta P D^T p rescaled from the mixture beta.
+  // 4. v_w += (dt / (rho_w phi)) P D^T p: the impulse (beta / phi) P D^T p rescaled from the
+  // mixture beta (open_share()).
   std::vector<Vec<dim>> impulse(static_cast<std::size_t>(nodes), Vec<dim>::Zero());
   op_.subtract_gradient(p_, impulse);
   for (std::int64_t i = 0; i < nodes; ++i)
-    if (op_.beta[i] > 0.0) g.velocity[storage[i]] += (fluid_beta / op_.beta[i]) * impulse[i];
+    if (op_.beta[i] > 0.0) g.velocity[storage[i]] += (fluid_beta / (op_.beta[i] * open_share_[i])) * impulse[i];
 }
 
 template <int dim>

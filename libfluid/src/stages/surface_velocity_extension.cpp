@@ -1,9 +1,14 @@
 // Velocity extension to the loose surface nodes (surface_velocity_extension.h):
 //   reached: the corners of the fluid cells (fluid_cell.h, the projection's rule) and the nodes
-//            a wall or collider prescribes (their velocity is boundary data);
-//   loose:   canonical nodes with mass that are neither;
+//            a wall or collider holds (their velocity is boundary data);
+//   loose:   canonical nodes with mass that are neither, among them the nodes slipping along
+//            an obstacle deeper inside it than the fluid cells' corners (the pressure reaches
+//            none of them: in a tank at rest with slip walls they would fall freely and hand
+//            the particles beside the wall a share of g every step);
 //   layer l: every loose node with a reached neighbour (3^dim box, wrapped on periodic axes)
-//            takes their mean velocity and counts as reached from layer l + 1 on.
+//            takes their mean velocity (a slipping node: its part in the directions the
+//            obstacles leave free; it keeps the held ones) and counts as reached from layer
+//            l + 1 on.
 // A kernel of radius r cells leaves loose nodes at most ceil(r) layers out; the loop stops when a
 // layer is empty (a loose node with no reached node near it keeps v*).
 #include <fluid/stages/prescribed_nodes.h>
@@ -18,7 +23,7 @@
 namespace fluid::stages {
 
 namespace {
-enum : std::uint8_t { kLoose = 0, kReached = 1, kLeftAlone = 2 };
+enum : std::uint8_t { kLoose = 0, kReached = 1, kLeftAlone = 2, kPrescribed = 3 };
 }
 
 template <int dim>
@@ -54,12 +59,24 @@ void SurfaceVelocityExtension<dim>::run(mpm::MpmState<dim>& s) {
       if (!(g.mass[k] > 0.0) || (periodic && g.periodic_image(g.node_coord(k)) != g.node_coord(k)))
         state_[k] = kLeftAlone;
       else if (is_prescribed(g, colliders_, k, t))
-        state_[k] = kReached;
+        state_[k] = kPrescribed;
     }
   });
+  // A prescribed node is loose in the directions the obstacles leave free (few nodes: serial).
   std::vector<mpm::Index> loose;
-  for (std::size_t k = 0; k < nodes; ++k)
+  slip_index_.assign(nodes, -1);
+  slip_projector_.clear();
+  for (std::size_t k = 0; k < nodes; ++k) {
+    if (state_[k] == kPrescribed) {
+      const std::optional<mpm::Mat<dim>> free = slip_directions(colliders_, g.node_position(k), t);
+      state_[k] = free ? kLoose : kReached;
+      if (free) {
+        slip_index_[k] = static_cast<std::int32_t>(slip_projector_.size());
+        slip_projector_.push_back(*free);
+      }
+    }
     if (state_[k] == kLoose) loose.push_back(static_cast<mpm::Index>(k));
+  }
 
   while (!loose.empty()) {
     layer_.clear();
@@ -85,8 +102,13 @@ void SurfaceVelocityExtension<dim>::run(mpm::MpmState<dim>& s) {
         loose[kept++] = k;
         continue;
       }
+      mpm::Vec<dim> extended = sum / count;
+      if (const std::int32_t j = slip_index_[static_cast<std::size_t>(k)]; j >= 0) {
+        const mpm::Mat<dim>& free = slip_projector_[static_cast<std::size_t>(j)];
+        extended = free * extended + (mpm::Mat<dim>::Identity() - free) * g.velocity[k];
+      }
       layer_.push_back(k);
-      extended_velocity_.push_back(sum / count);
+      extended_velocity_.push_back(extended);
     }
     if (layer_.empty()) break;
     for (std::size_t i = 0; i < layer_.size(); ++i) {

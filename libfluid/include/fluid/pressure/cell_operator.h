@@ -12,8 +12,10 @@
 //!      s_{c,i,a} = +1 if corner i is on the upper side of c along axis a, else -1,
 //!      B = diag(beta_i P_i) per node (beta_i = dt (n_w/rho_w + n_s/rho_s) [m^3 s/kg]; 0 on nodes
 //!      whose velocity is prescribed by a wall or collider, which is how Neumann walls enter;
-//!      P_i = I - n_i n_i^T on a node that slips along an obstacle of unit normal n_i, whose
-//!      normal velocity is prescribed and whose tangential velocity the pressure moves, else I),
+//!      P_i the orthogonal projector onto the velocity directions that no obstacle holds at a
+//!      node slipping along one (I - n_i n_i^T on a wall of unit normal n_i, e_i e_i^T along
+//!      the edge where two walls meet in 3D), whose held components the pressure leaves and
+//!      whose free ones it moves; P_i = I elsewhere),
 //!    so that u <- u - B G p = u + B D^T p (G = -D^T, the discrete gradient) with
 //!    A p = b, b = -D u, makes D u = 0 in every fluid cell. A is symmetric
 //!    positive semi-definite; on a uniform box it has checkerboard null modes besides constants.
@@ -37,6 +39,7 @@
 namespace fluid {
 
 using mpm::IVec;
+using mpm::Mat;
 using mpm::Vec;
 
 enum class CellType : std::uint8_t { empty = 0, fluid = 1 };
@@ -49,9 +52,10 @@ struct CellOperator {
   double dx = 1.0;                      //!< [m]
   std::vector<CellType> type;           //!< per cell, x fastest
   std::vector<double> beta;             //!< per node, x fastest (NodeCell only)
-  //! Per node, x fastest (NodeCell only): n_i of a slipping node, zero for P_i = I; empty when
-  //! no node slips.
-  std::vector<Vec<dim>> slip_normal;
+  //! Slipping nodes (NodeCell only; both empty when none): slip_index[i] >= 0 makes
+  //! P_i = slip_projector[slip_index[i]], -1 makes P_i = I (per node, x fastest).
+  std::vector<std::int32_t> slip_index;
+  std::vector<Mat<dim>> slip_projector;
   std::array<bool, dim> periodic{};  //!< per axis (see above)
 
   bool is_periodic() const;
@@ -66,13 +70,21 @@ struct CellOperator {
   //! y = A x over all cells (y_c = 0 for empty cells; x is read only at fluid cells).
   void apply(const std::vector<double>& x, std::vector<double>& y) const;
   //! Whether some node slips (P_i != I somewhere).
-  bool has_slip() const { return !slip_normal.empty(); }
+  bool has_slip() const { return !slip_index.empty(); }
+  //! Makes P_i = free, an orthogonal projector.
+  void set_slip(std::int64_t i, const Mat<dim>& free);
+  //! P_i = I everywhere.
+  void clear_slip();
+  //! P_i.
+  Mat<dim> free_directions(std::int64_t i) const {
+    const std::int32_t j = has_slip() ? slip_index[static_cast<std::size_t>(i)] : -1;
+    return j < 0 ? Mat<dim>::Identity() : slip_projector[static_cast<std::size_t>(j)];
+  }
   //! beta_i P_i g: the mobility of node i applied to a nodal vector g.
   Vec<dim> mobility(std::int64_t i, const Vec<dim>& g) const {
     const double b = beta[static_cast<std::size_t>(i)];
-    if (!has_slip()) return b * g;
-    const Vec<dim>& n = slip_normal[static_cast<std::size_t>(i)];
-    return b * (g - n.dot(g) * n);
+    const std::int32_t j = has_slip() ? slip_index[static_cast<std::size_t>(i)] : -1;
+    return j < 0 ? Vec<dim>(b * g) : Vec<dim>(b * (slip_projector[static_cast<std::size_t>(j)] * g));
   }
   //! Makes empty every fluid cell whose corners all have beta = 0 (NodeCell: a particle inside
   //! a wall): no unknown could change its divergence, so it would make the system inconsistent.

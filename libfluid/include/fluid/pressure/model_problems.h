@@ -35,7 +35,7 @@ CellOperator<dim> periodic_channel_problem(int n, OperatorKind<dim> kind);
 
 //! The NodeCell periodic channel with a pile through its water: the nodes within radius 0.2 of
 //! the axis (x_0, .., x_{dim-2}) = 1/2 (a vertical slab in 2D, a cylinder in 3D) are the
-//! obstacle; those within dx of its surface slip along it (slip_normal: the normal of the
+//! obstacle; those within dx of its surface slip along it (P = I - n n^T, n the normal of the
 //! surface), the deeper ones are held (beta = 0). Cells without a free corner are empty.
 template <int dim>
 CellOperator<dim> pile_channel_problem(int n);

@@ -22,13 +22,14 @@ std::vector<std::uint8_t> prescribed_nodes(const mpm::SparseGrid<dim>& grid,
                                            const mpm::geometry::ColliderSet<dim>& colliders, double t);
 
 //! How the pressure may move a prescribed node at x at time t: nullopt where the obstacles hold
-//! every component of its velocity (sticky contact, or two obstacles meeting at x); else the
-//! unit normal n of the one obstacle it slips along (slip contact, and separating contact,
-//! which holds the normal velocity of a node that approaches it or rests on it): the pressure
-//! moves the tangential velocity, P = I - n n^T; a zero vector where nothing holds it.
+//! every component of its velocity (sticky contact, or slipping obstacles whose normals span
+//! the space); else P, the orthogonal projector onto the directions they leave free (slip
+//! contact, and separating contact, which holds the normal velocity of a node that approaches
+//! it or rests on it): I - n n^T along one wall, e e^T along the edge of two in 3D, I where
+//! nothing holds it.
 template <int dim>
-std::optional<mpm::Vec<dim>> slip_normal(const mpm::geometry::ColliderSet<dim>& colliders, const mpm::Vec<dim>& x,
-                                         double t);
+std::optional<mpm::Mat<dim>> slip_directions(const mpm::geometry::ColliderSet<dim>& colliders, const mpm::Vec<dim>& x,
+                                             double t);
 
 //! The same test for one storage node k (with mass) only.
 template <int dim>

@@ -95,6 +95,13 @@ public:
   const CellOperator<dim>& cell_operator() const { return op_; }
   const std::vector<double>& pressure() const { return p_; }
   const IVec<dim>& box_origin() const { return box_lo_; }
+  //! Per node of the box, phi_i: the share of the node's dual cell (the 2^dim cells around it)
+  //! outside the obstacles, 1 except at slipping nodes. A slipping node on a wall holds fluid
+  //! on one side only, so its mass is phi_i of a full node's and the pressure's impulse moves it
+  //! 1 / phi_i as fast: its mobility in the operator is beta_i / phi_i, and the corrections of
+  //! both phases there are divided by phi_i (without it, water at rest beside a slip wall
+  //! feels half the hydrostatic gradient and falls along it).
+  const std::vector<double>& open_share() const { return open_share_; }
   //! Pressure [Pa] of the cell holding x after the last solve (0 in empty cells and outside).
   double pressure_at(const mpm::SparseGrid<dim>& grid, const Vec<dim>& x) const;
   const SolveResult& last_result() const { return result_; }
@@ -128,6 +135,7 @@ private:
   std::vector<double> p_;  // last pressure, the initial guess of the next solve
   std::vector<double> b_;
   std::vector<Vec<dim>> u_;
+  std::vector<double> open_share_;
   SolveResult result_;
   bool stopped_at_round_off_ = false;
   std::int64_t unconverged_ = 0;  //!< solves that did not converge, over the run

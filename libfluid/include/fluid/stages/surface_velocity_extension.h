@@ -9,7 +9,8 @@
 //! rest, 4 particles per cell): the spurious surface currents of a tank at rest.
 //!
 //! The stage gives each such "loose" node (mass > 0, no corner of a fluid cell, velocity not
-//! prescribed by a wall or collider) the mean velocity of its neighbours (3^dim box) that the
+//! held by a wall or collider; a node slipping along one gets the tangential part) the mean
+//! velocity of its neighbours (3^dim box) that the
 //! projection reached, layer by layer outwards (each layer from the previous ones only, so the
 //! result does not depend on node order), as FLIP liquids extrapolate the grid velocity into
 //! the air (Zhu & Bridson 2005). Water at rest
@@ -43,9 +44,11 @@ public:
 
 private:
   mpm::geometry::ColliderSet<dim> colliders_;
-  std::vector<std::uint8_t> state_;  // per storage node: 0 loose, 1 reached (or prescribed), 2 no mass
+  std::vector<std::uint8_t> state_;  // per storage node: 0 loose, 1 reached (or held), 2 no mass
   std::vector<mpm::Index> layer_;
   std::vector<mpm::Vec<dim>> extended_velocity_;
+  std::vector<std::int32_t> slip_index_;       // per storage node: its slip_projector_, or -1
+  std::vector<mpm::Mat<dim>> slip_projector_;  // the free directions of loose slipping nodes
   std::int64_t extended_ = 0;
 };
 
