@@ -15,15 +15,42 @@ namespace mpm::adaptive {
 namespace {
 const Eigen::IOFormat kList(Eigen::FullPrecision, Eigen::DontAlignCols, ", ", ", ");
 
-// Stable sort of (block, particle) pairs by block (the pairs come in particle order).
-void sort_by_block(std::vector<std::pair<BlockKey, std::uint32_t>>& pairs) {
-  if (std::is_sorted(pairs.begin(), pairs.end())) return;
-  std::vector<BlockKey> keys(pairs.size());
-  for (std::size_t i = 0; i < pairs.size(); ++i) keys[i] = pairs[i].first;
-  std::vector<std::pair<BlockKey, std::uint32_t>> sorted(pairs.size());
-  const std::vector<std::uint32_t> order = stable_key_order(keys);
-  for (std::size_t i = 0; i < pairs.size(); ++i) sorted[i] = pairs[order[i]];
-  pairs.swap(sorted);
+// Splits 0 .. n-1 by class (class_of(i) in [0, classes)) into one list per class, each in
+// ascending order, in parallel: every chunk counts its members per class, then writes them
+// after the earlier chunks' (the result does not depend on the thread count).
+template <class ClassOf>
+std::vector<std::vector<std::uint32_t>> split_by_class(std::size_t n, int classes, ClassOf&& class_of) {
+  constexpr std::size_t chunk = 1 << 14;
+  const std::size_t chunks = (n + chunk - 1) / chunk;
+  std::vector<std::uint32_t> place(chunks * static_cast<std::size_t>(classes), 0);  // chunk-major
+  tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
+    for (std::size_t i = c * chunk; i < std::min(n, (c + 1) * chunk); ++i) ++place[c * classes + class_of(i)];
+  });
+  std::vector<std::vector<std::uint32_t>> out(static_cast<std::size_t>(classes));
+  for (int q = 0; q < classes; ++q) {
+    std::uint32_t next = 0;
+    for (std::size_t c = 0; c < chunks; ++c) {
+      const std::uint32_t count = place[c * classes + q];
+      place[c * classes + q] = next;
+      next += count;
+    }
+    out[q].resize(next);
+  }
+  tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
+    for (std::size_t i = c * chunk; i < std::min(n, (c + 1) * chunk); ++i) {
+      const int q = class_of(i);
+      out[q][place[c * classes + q]++] = static_cast<std::uint32_t>(i);
+    }
+  });
+  return out;
+}
+
+// The colour of a block (parity of its coordinates): buckets of one colour share no node.
+template <int dim>
+int block_color(const IVec<dim>& block_coord) {
+  int color = 0;
+  for (int a = 0; a < dim; ++a) color |= (block_coord[a] & 1) << a;
+  return color;
 }
 }  // namespace
 
@@ -64,18 +91,15 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
   transfer_level_.resize(x.size());
   half_cells_.assign(x.size(), 0.5);
   std::vector<std::vector<BlockKey>> own_blocks(L);
-  // Particles on their own level (h = 1/2, the quadratic B-spline) go in buckets for the
-  // uniform loops; the others (irregular) take the general path.
-  std::vector<std::vector<std::pair<BlockKey, std::uint32_t>>> bucketed(L);
   // The irregular particles by (transfer level, block of the first stencil node), and the
   // most blocks a stencil spans on an axis: the colouring's period.
   std::vector<std::tuple<int, BlockKey, std::uint32_t>> irregular_at;
   int span = 1;
 
   // Transfer level, half-size and, for a particle on its own level whose stencil lies inside
-  // the level, its bucket's block, in parallel (the tree walk is the cost); the loop after it
-  // reports the first bad particle, collects the buckets in particle order and takes the
-  // others (irregular) through their general stencil.
+  // the level, its bucket's block, in parallel (the tree walk is the cost). Those (regular)
+  // go in buckets for the uniform loops; the loop after it reports the first bad particle and
+  // takes the others (irregular) through their general stencil.
   std::vector<std::uint8_t> regular(x.size(), 0);
   std::vector<BlockKey> bucket(x.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 4096), [&](const auto& range) {
@@ -98,11 +122,9 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
       }
     }
   });
-  for (std::size_t p = 0; p < x.size(); ++p) {
-    if (regular[p]) {
-      bucketed[transfer_level_[p]].emplace_back(bucket[p], static_cast<std::uint32_t>(p));
-      continue;
-    }
+  std::vector<std::vector<std::uint32_t>> by_level =
+      split_by_class(x.size(), L + 1, [&](std::size_t p) { return regular[p] ? transfer_level_[p] : L; });
+  for (const std::uint32_t p : by_level[L]) {
     MPM_VERIFY(type[p] < L, InputError,
                "stage '" + stage + "': particle " + std::to_string(p) + " has type " + std::to_string(type[p]) +
                    ", outside the grid's levels [0, " + std::to_string(L - 1) + "]");
@@ -147,13 +169,31 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
       if (a == dim) break;
     }
   }
-  // A bucket's patch covers its block and the +1 neighbours on every axis.
+  // The regular particles of each level in buckets: a stable sort by block, in parallel. A
+  // bucket's patch covers its block and the +1 neighbours on every axis.
   std::vector<std::vector<BlockKey>> blocks(L);
   for (int n = 0; n < L; ++n) {
-    sort_by_block(bucketed[n]);
-    for (std::size_t i = 0; i < bucketed[n].size(); ++i) {
-      if (i > 0 && bucketed[n][i].first == bucketed[n][i - 1].first) continue;
-      const IVec<dim> c = levels_[n].block_coord(bucketed[n][i].first);
+    const std::vector<std::uint32_t>& members = by_level[n];
+    std::vector<BlockKey> keys(members.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, members.size(), 1 << 14), [&](const auto& range) {
+      for (std::size_t i = range.begin(); i != range.end(); ++i) keys[i] = bucket[members[i]];
+    });
+    KeyOrder sorted = sort_keys(keys);
+    ParticleBuckets<dim>& b = regular_[n];
+    b = ParticleBuckets<dim>{};
+    if (sorted.identity) {
+      b.particle = members;
+    } else {
+      b.particle.resize(members.size());
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, members.size(), 1 << 14), [&](const auto& range) {
+        for (std::size_t i = range.begin(); i != range.end(); ++i) b.particle[i] = members[sorted.order[i]];
+      });
+    }
+    b.begin = std::move(sorted.begin);
+    b.block = std::move(sorted.key);
+    for (int k = 0; k < b.count(); ++k) {
+      const IVec<dim> c = levels_[n].block_coord(b.block[k]);
+      b.by_color[block_color<dim>(c)].push_back(k);
       for (int corner = 0; corner < (1 << dim); ++corner) {
         IVec<dim> nb = c;
         for (int a = 0; a < dim; ++a) nb[a] += (corner >> a) & 1;
@@ -213,8 +253,8 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
     }
   }
 
-  // Every bucketed particle stays in the buckets. Those whose stencil holds an embedded ghost
-  // are also listed: APIC adds the ghosts' affine terms for them (adaptive_transfer.cpp).
+  // The bucketed particles whose stencil holds an embedded ghost are also listed: APIC adds
+  // the ghosts' affine terms for them (adaptive_transfer.cpp).
   for (int n = 0; n < L; ++n) {
     const SparseGrid<dim>& g = levels_[n];
     const LevelStatus& status = status_[n];
@@ -222,77 +262,81 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
       const int m = status.index.find(g.block_id(block_coord * B));
       return m >= 0 ? status.blocks[static_cast<std::size_t>(m)].embedded : 0;
     };
-    // Whether each bucketed particle's 3^dim stencil holds an embedded ghost, in parallel
-    // (chunks of particles, one patch of block masks per block).
-    const auto& pairs = bucketed[n];
-    std::vector<std::uint32_t> near(pairs.size(), 0);  // the stencil's embedded ghosts, by bit
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pairs.size(), 2048), [&](const auto& range) {
-      BlockKey checked = ~BlockKey{0};
-      std::uint64_t patch_mask[1 << dim] = {};  // embedded masks of the patch's blocks
-      bool check_nodes = false;
-      for (std::size_t i = range.begin(); i != range.end(); ++i) {
-        const auto& [block, p] = pairs[i];
-        if (block != checked) {
-          checked = block;
-          check_nodes = false;
-          const IVec<dim> c = g.block_coord(block);
-          for (int corner = 0; corner < (1 << dim); ++corner) {
-            IVec<dim> nb = c;
-            for (int a = 0; a < dim; ++a) nb[a] += (corner >> a) & 1;
-            patch_mask[corner] = embedded_mask(nb);
-            check_nodes = check_nodes || patch_mask[corner] != 0;
-          }
+    // Whether each bucketed particle's 3^dim stencil holds an embedded ghost, in parallel by
+    // bucket (one patch of block masks per bucket), and how many per bucket.
+    const ParticleBuckets<dim>& reg = regular_[n];
+    std::vector<std::uint32_t> near(reg.particle.size(), 0);  // the stencil's embedded ghosts, by bit
+    std::vector<std::uint32_t> near_count(static_cast<std::size_t>(reg.count()), 0);
+    tbb::parallel_for(tbb::blocked_range<int>(0, reg.count(), 8), [&](const auto& range) {
+      for (int k = range.begin(); k != range.end(); ++k) {
+        const IVec<dim> c = g.block_coord(reg.block[k]);
+        std::uint64_t patch_mask[1 << dim] = {};  // embedded masks of the patch's blocks
+        bool check_nodes = false;
+        for (int corner = 0; corner < (1 << dim); ++corner) {
+          IVec<dim> nb = c;
+          for (int a = 0; a < dim; ++a) nb[a] += (corner >> a) & 1;
+          patch_mask[corner] = embedded_mask(nb);
+          check_nodes = check_nodes || patch_mask[corner] != 0;
         }
         if (!check_nodes) continue;
-        // The 3^dim stencil nodes lie in the patch: test their bits. Per axis, the patch block
-        // (corner bit) and the local index bits of the three nodes; the nodes combine them.
-        const IVec<dim> base = uniform_base(n, x[p]);
-        const IVec<dim> first = g.block_coord(block) * B;
-        int corner_bit[dim][3], local_bits[dim][3];
-        for (int a = 0; a < dim; ++a)
-          for (int r = 0; r < 3; ++r) {
-            const int offset = base[a] + r - first[a];  // in [0, 2B)
-            corner_bit[a][r] = (offset >= B) << a;
-            local_bits[a][r] = (offset & (B - 1)) << (a * SparseGrid<dim>::block_bits);
+        const IVec<dim> first = c * B;
+        for (std::uint32_t i = reg.begin[k]; i < reg.begin[k + 1]; ++i) {
+          // The 3^dim stencil nodes lie in the patch: test their bits. Per axis, the patch
+          // block (corner bit) and the local index bits of the three nodes; the nodes combine
+          // them.
+          const IVec<dim> base = uniform_base(n, x[reg.particle[i]]);
+          int corner_bit[dim][3], local_bits[dim][3];
+          for (int a = 0; a < dim; ++a)
+            for (int r = 0; r < 3; ++r) {
+              const int offset = base[a] + r - first[a];  // in [0, 2B)
+              corner_bit[a][r] = (offset >= B) << a;
+              local_bits[a][r] = (offset & (B - 1)) << (a * SparseGrid<dim>::block_bits);
+            }
+          std::uint32_t bits = 0;
+          for (int j = 0; j < ipow(3, dim); j += 3) {  // a row of three nodes along axis 0
+            int corner = 0, local = 0;
+            for (int a = 1; a < dim; ++a) {
+              corner |= corner_bit[a][stencil_offsets[j][a]];
+              local |= local_bits[a][stencil_offsets[j][a]];
+            }
+            for (int r = 0; r < 3; ++r)
+              bits |=
+                  static_cast<std::uint32_t>((patch_mask[corner | corner_bit[0][r]] >> (local | local_bits[0][r])) & 1)
+                  << (j + r);
           }
-        std::uint32_t bits = 0;
-        for (int j = 0; j < ipow(3, dim); j += 3) {  // a row of three nodes along axis 0
-          int corner = 0, local = 0;
-          for (int a = 1; a < dim; ++a) {
-            corner |= corner_bit[a][stencil_offsets[j][a]];
-            local |= local_bits[a][stencil_offsets[j][a]];
-          }
-          for (int r = 0; r < 3; ++r)
-            bits |=
-                static_cast<std::uint32_t>((patch_mask[corner | corner_bit[0][r]] >> (local | local_bits[0][r])) & 1)
-                << (j + r);
+          near[i] = bits;
+          near_count[static_cast<std::size_t>(k)] += bits != 0;
         }
-        near[i] = bits;
       }
     });
-    auto append = [&](ParticleBuckets<dim>& b, BlockKey block, std::uint32_t p) {
-      if (b.block.empty() || b.block.back() != block) {
-        const IVec<dim> c = g.block_coord(block);
-        int color = 0;
-        for (int a = 0; a < dim; ++a) color |= (c[a] & 1) << a;
-        b.by_color[color].push_back(b.count());
-        b.block.push_back(block);
-        b.begin.push_back(static_cast<std::uint32_t>(b.particle.size()));
-      }
-      b.particle.push_back(p);
-    };
-    regular_[n] = ParticleBuckets<dim>{};
-    near_embedded_[n] = ParticleBuckets<dim>{};
-    near_masks_[n].clear();
-    for (std::size_t i = 0; i < pairs.size(); ++i) {
-      append(regular_[n], pairs[i].first, pairs[i].second);
-      if (near[i]) {
-        append(near_embedded_[n], pairs[i].first, pairs[i].second);
-        near_masks_[n].push_back(near[i]);
-      }
+    // The near ones in buckets of their own: the buckets that hold any, then their particles
+    // and masks filled per bucket in parallel.
+    ParticleBuckets<dim>& ne = near_embedded_[n];
+    ne = ParticleBuckets<dim>{};
+    std::vector<int> near_bucket;  // bucket of reg behind each bucket of ne
+    std::uint32_t near_total = 0;
+    for (int k = 0; k < reg.count(); ++k) {
+      if (near_count[static_cast<std::size_t>(k)] == 0) continue;
+      ne.by_color[block_color<dim>(g.block_coord(reg.block[k]))].push_back(ne.count());
+      ne.begin.push_back(near_total);
+      ne.block.push_back(reg.block[k]);
+      near_bucket.push_back(k);
+      near_total += near_count[static_cast<std::size_t>(k)];
     }
-    regular_[n].begin.push_back(static_cast<std::uint32_t>(regular_[n].particle.size()));
-    near_embedded_[n].begin.push_back(static_cast<std::uint32_t>(near_embedded_[n].particle.size()));
+    ne.begin.push_back(near_total);
+    ne.particle.resize(near_total);
+    near_masks_[n].resize(near_total);
+    tbb::parallel_for(tbb::blocked_range<int>(0, ne.count(), 16), [&](const auto& range) {
+      for (int e = range.begin(); e != range.end(); ++e) {
+        const int k = near_bucket[static_cast<std::size_t>(e)];
+        std::uint32_t out = ne.begin[e];
+        for (std::uint32_t i = reg.begin[k]; i < reg.begin[k + 1]; ++i)
+          if (near[i]) {
+            ne.particle[out] = reg.particle[i];
+            near_masks_[n][out++] = near[i];
+          }
+      }
+    });
   }
   group_irregular(irregular_at, span);
   const bool moved = move && store_in_transfer_order(move);
@@ -354,6 +398,7 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
       }
     });
   }
+  build_push_tables();
   return moved;
 }
 
@@ -501,24 +546,60 @@ void AdaptiveGrid<dim>::forget_changed_statuses() {
 }
 
 template <int dim>
-void AdaptiveGrid<dim>::push_momentum(const std::vector<std::vector<Mat<dim>>>& affine) {
-  for (int n = 0; n < levels(); ++n) {
+void AdaptiveGrid<dim>::build_push_tables() {
+  // A counting sort of the links by the storage node they reach (stable: each node's links
+  // stay in scatter order), then the nodes that any link reaches.
+  const int L = levels();
+  std::vector<std::vector<std::uint32_t>> first(L);  // per storage node of level m
+  for (int m = 0; m < L; ++m) first[m].assign(levels_[m].node_storage() + 1, 0);
+  for (const Ghosts& g : ghosts_)
+    for (const GhostLink<dim>& link : g.link) ++first[link.level][static_cast<std::size_t>(link.index) + 1];
+  push_tables_.assign(L, PushTable{});
+  for (int m = 0; m < L; ++m) {
+    std::vector<std::uint32_t>& f = first[m];
+    PushTable& t = push_tables_[m];
+    t.begin.push_back(0);
+    for (std::size_t i = 0; i + 1 < f.size(); ++i) {
+      if (f[i + 1] > 0) {
+        t.target.push_back(static_cast<Index>(i));
+        t.begin.push_back(t.begin.back() + f[i + 1]);
+      }
+      f[i + 1] += f[i];
+    }
+    t.source.resize(t.begin.back());
+  }
+  for (int n = 0; n < L; ++n) {
     const Ghosts& g = ghosts_[n];
-    SparseGrid<dim>& from = levels_[n];
-    for (std::size_t j = 0; j < g.node.size(); ++j) {
-      const std::size_t k = static_cast<std::size_t>(g.node[j]);
-      const Vec<dim> xk = from.node_position(k);
+    for (std::uint32_t j = 0; j < g.node.size(); ++j)
       for (std::uint32_t l = g.begin[j]; l < g.begin[j + 1]; ++l) {
         const GhostLink<dim>& link = g.link[l];
-        SparseGrid<dim>& to = levels_[link.level];
-        const std::size_t i = static_cast<std::size_t>(link.index);
-        to.mass[i] += link.weight * from.mass[k];
-        to.velocity[i] += link.weight * (from.velocity[k] + affine[n][j] * link_offset(link, xk));
+        push_tables_[link.level].source[first[link.level][static_cast<std::size_t>(link.index)]++] = {n, j, l};
       }
-      from.mass[k] = 0.0;
-      from.velocity[k].setZero();
-    }
   }
+}
+
+template <int dim>
+void AdaptiveGrid<dim>::push_momentum(const std::vector<std::vector<Mat<dim>>>& affine) {
+  for_each_push_target([&](int m, std::size_t i, const PushSource* first, const PushSource* last) {
+    SparseGrid<dim>& to = levels_[m];
+    for (const PushSource* s = first; s != last; ++s) {
+      const Ghosts& g = ghosts_[s->level];
+      const SparseGrid<dim>& from = levels_[s->level];
+      const std::size_t k = static_cast<std::size_t>(g.node[s->ghost]);
+      const GhostLink<dim>& link = g.link[s->link];
+      to.mass[i] += link.weight * from.mass[k];
+      to.velocity[i] +=
+          link.weight * (from.velocity[k] + affine[s->level][s->ghost] * link_offset(link, from.node_position(k)));
+    }
+  });
+  std::vector<std::vector<double>*> mass;
+  std::vector<std::vector<Vec<dim>>*> velocity;
+  for (SparseGrid<dim>& g : levels_) {
+    mass.push_back(&g.mass);
+    velocity.push_back(&g.velocity);
+  }
+  clear_ghosts(mass);
+  clear_ghosts(velocity);
 }
 
 template <int dim>
@@ -572,6 +653,9 @@ std::size_t AdaptiveGrid<dim>::index_bytes() const {
     bytes += s.index.bytes() + s.blocks.capacity() * sizeof(BlockStatus) + s.ghosts.capacity() * sizeof(PendingGhost) +
              s.links.capacity() * sizeof(NodeWeight<dim>) + s.reached.capacity() * sizeof(s.reached[0]);
   for (const std::vector<BlockKey>& own : own_blocks_) bytes += own.capacity() * sizeof(BlockKey);
+  for (const PushTable& t : push_tables_)
+    bytes += t.target.capacity() * sizeof(Index) + t.begin.capacity() * sizeof(std::uint32_t) +
+             t.source.capacity() * sizeof(PushSource);
   return bytes;
 }
 

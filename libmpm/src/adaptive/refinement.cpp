@@ -278,17 +278,22 @@ void refine_level(CellTree<dim>& tree, const std::vector<Vec<dim>>& x, const std
   };
   IVec<dim> last;  // of level q - 1 in the domain
   for (int a = 0; a < dim; ++a) last[a] = (tree.base_cells()[a] << (q - 1)) - 1;
+  // The candidates around the held cells, per chunk of them in parallel (the tree is only read).
+  std::vector<DistinctKeys> candidates((held.size() + 1023) / 1024);
+  tbb::parallel_for(std::size_t{0}, candidates.size(), [&](std::size_t k) {
+    for (std::size_t i = k * 1024; i < std::min(held.size(), (k + 1) * 1024); ++i) {
+      const IVec<dim> cell = key_cell<dim>(held[i]);
+      for_each_in_box<dim>(IVec<dim>(cell.array() - 1).cwiseMax(0), IVec<dim>(cell.array() + 1).cwiseMin(last),
+                           [&](const IVec<dim>& c) {
+                             if (tree.is_refined(q - 1, c) || box_may_meet(c)) return;
+                             const CellId<dim> leaf = tree.leaf_of(IVec<dim>(c * tree.scale(q - 1)));
+                             if (leaf.level == q - 1 || !listed(reached[leaf.level], leaf.cell))
+                               candidates[k].add(cell_key<dim>(c));
+                           });
+    }
+  });
   DistinctKeys padded;
-  for (const std::uint64_t key : held) {
-    const IVec<dim> cell = key_cell<dim>(key);
-    for_each_in_box<dim>(IVec<dim>(cell.array() - 1).cwiseMax(0), IVec<dim>(cell.array() + 1).cwiseMin(last),
-                         [&](const IVec<dim>& c) {
-                           if (tree.is_refined(q - 1, c) || box_may_meet(c)) return;
-                           const CellId<dim> leaf = tree.leaf_of(IVec<dim>(c * tree.scale(q - 1)));
-                           if (leaf.level == q - 1 || !listed(reached[leaf.level], leaf.cell))
-                             padded.add(cell_key<dim>(c));
-                         });
-  }
+  for (const DistinctKeys& c : candidates) padded.absorb(c);
   // In key order: the same tree whatever the particles' order.
   for (const std::uint64_t key : padded.take()) refine_down_to(tree, key_cell<dim>(key), q - 1);
 }

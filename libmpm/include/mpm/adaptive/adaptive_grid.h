@@ -31,6 +31,8 @@
 #include <tuple>
 #include <vector>
 
+#include <tbb/parallel_for.h>
+
 namespace mpm::adaptive {
 
 //! Uniform GIMP weights along one axis for any particle half-size h (in cells of the level):
@@ -202,6 +204,26 @@ private:
   int points_per_axis_ = 2;
   std::vector<SparseGrid<dim>> levels_;
   std::vector<Ghosts> ghosts_;
+  // The ghosts' links by the real node they reach, per level of that node: push() and
+  // push_momentum() gather each real node's sums in parallel, in the order (ghost level,
+  // ghost, link) a serial scatter would add them (bit for bit the same result).
+  struct PushSource {
+    int level;
+    std::uint32_t ghost, link;
+  };
+  struct PushTable {
+    std::vector<Index> target;         // real node of each segment
+    std::vector<std::uint32_t> begin;  // segment s: source[begin[s]] .. source[begin[s + 1] - 1]
+    std::vector<PushSource> source;
+  };
+  std::vector<PushTable> push_tables_;
+  void build_push_tables();
+  //! fn(level m, real node i, sources) for every real node a ghost reaches, in parallel.
+  template <class Fn>
+  void for_each_push_target(Fn&& fn) const;
+  //! Sets every ghost's value to zero in each level's `channel`.
+  template <class T>
+  void clear_ghosts(const std::vector<std::vector<T>*>& channel) const;
   std::vector<int> transfer_level_;
   std::vector<double> half_cells_;
   std::vector<ParticleBuckets<dim>> regular_;
@@ -291,18 +313,43 @@ void AdaptiveGrid<dim>::for_each_weight(int n, const GimpAxis* axis, Fn&& fn) co
 }
 
 template <int dim>
+template <class Fn>
+void AdaptiveGrid<dim>::for_each_push_target(Fn&& fn) const {
+  for (int m = 0; m < levels(); ++m) {
+    const PushTable& t = push_tables_[m];
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, t.target.size(), 256), [&](const auto& range) {
+      for (std::size_t s = range.begin(); s != range.end(); ++s)
+        fn(m, static_cast<std::size_t>(t.target[s]), t.source.data() + t.begin[s], t.source.data() + t.begin[s + 1]);
+    });
+  }
+}
+
+template <int dim>
 template <class T>
-void AdaptiveGrid<dim>::push(std::vector<std::vector<T>*> channel) const {
+void AdaptiveGrid<dim>::clear_ghosts(const std::vector<std::vector<T>*>& channel) const {
   for (int n = 0; n < levels(); ++n) {
     const Ghosts& g = ghosts_[n];
-    std::vector<T>& from = *channel[n];
-    for (std::size_t j = 0; j < g.node.size(); ++j) {
-      T& value = from[static_cast<std::size_t>(g.node[j])];
-      for (std::uint32_t l = g.begin[j]; l < g.begin[j + 1]; ++l)
-        (*channel[g.link[l].level])[static_cast<std::size_t>(g.link[l].index)] += g.link[l].weight * value;
-      value = T(0 * value);
-    }
+    std::vector<T>& values = *channel[n];
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, g.node.size(), 4096), [&](const auto& range) {
+      for (std::size_t j = range.begin(); j != range.end(); ++j) {
+        T& value = values[static_cast<std::size_t>(g.node[j])];
+        value = T(0 * value);
+      }
+    });
   }
+}
+
+template <int dim>
+template <class T>
+void AdaptiveGrid<dim>::push(std::vector<std::vector<T>*> channel) const {
+  for_each_push_target([&](int m, std::size_t i, const PushSource* first, const PushSource* last) {
+    T& target = (*channel[m])[i];
+    for (const PushSource* s = first; s != last; ++s) {
+      const Ghosts& g = ghosts_[s->level];
+      target += g.link[s->link].weight * (*channel[s->level])[static_cast<std::size_t>(g.node[s->ghost])];
+    }
+  });
+  clear_ghosts(channel);
 }
 
 }  // namespace mpm::adaptive
