@@ -10,7 +10,8 @@ the uniform/adaptive ratios. Memory held is what the particle and grid fields an
 index tables (particle buckets; an adaptive grid's tree, ghost tables and transfer lists)
 hold, as the apps' summary.json reports it (memory_bytes.*: capacities, not sizes). docs/performance.md has the figures and the command.
 
-    python3 bench/adaptive_table2.py --bin build/apps [--case jello|sand|all] [--repeat N] [--set KEY=VALUE]
+    python3 bench/adaptive_table2.py --bin build/apps [--case jello|sand|jello_paper|sand_paper|all] [--repeat N]
+        [--set KEY=VALUE]
 """
 import argparse
 import json
@@ -43,6 +44,15 @@ CASES = {
                      "adaptive.resample.d_medium=0.005", "adaptive.resample.d_large=0.0075"],
     },
 }
+# The same scenes at the paper's size (Table 2: 1.74 M and 1.68 M particles on the uniform grid):
+# each jello 48 finest cells wide (1.77 M), the column 60 (1.73 M); the refinement's distances
+# kept in finest cells.
+CASES["jello_paper"] = dict(CASES["jello"], uniform=["grid.dx=0.004166666666666667", "time.end=0.01"],
+                            adaptive=["adaptive.levels=3", "adaptive.surface_band=0.016666666666666666"])
+CASES["sand_paper"] = dict(CASES["sand"], uniform=["column.cells_per_width=60", "time.end=0.003"],
+                           adaptive=["adaptive.levels=3", "adaptive.surface_band=0.005", "adaptive.resample.d_small=0",
+                                     "adaptive.resample.d_medium=0.0033333333333333335",
+                                     "adaptive.resample.d_large=0.005"])
 
 
 def run(binary, scene, sets, out):
@@ -87,14 +97,15 @@ def measure(binary, scene, sets):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--bin", required=True, help="folder of the app binaries (build/apps)")
-    parser.add_argument("--case", choices=["jello", "sand", "all"], default="all")
+    parser.add_argument("--case", choices=list(CASES) + ["all"], default="all",
+                        help="one case, or all: jello and sand (the paper-size cases take minutes each)")
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                         help="a scene override added to both runs, after the case's own (repeatable)")
     parser.add_argument("--repeat", type=int, default=1, help="alternating runs of each grid; the best is kept")
     args = parser.parse_args()
     if args.repeat < 1:
         sys.exit(f"adaptive_table2: --repeat {args.repeat}: accepted range is >= 1")
-    names = list(CASES) if args.case == "all" else [args.case]
+    names = ["jello", "sand"] if args.case == "all" else [args.case]
     print("| case | grid | particles (end) | steps | stages [s/step] | memory held [MB] | peak RSS [MB] | wall [s] |")
     print("|---|---|---:|---:|---:|---:|---:|---:|")
     for name in names:

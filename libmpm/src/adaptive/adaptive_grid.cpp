@@ -496,52 +496,104 @@ void AdaptiveGrid<dim>::forget_changed_statuses() {
   // node, then the corners it is interpolated from, recursively: constrained_basis.cpp). A
   // refinement change alters the leaves in the closure of the changed cell only, so a block's
   // statuses stand unless some changed cell's closure meets the box of its points
-  // (BlockStatus::depends_lo/hi); only the last step's blocks are kept.
+  // (BlockStatus::depends_lo/hi); only the last step's blocks are kept. The changed cells are
+  // binned by level-0 cell (no cell is larger, so each meets at most 2^dim bins): a block tests
+  // the cells of the bins its box meets, not every changed cell.
+  const int bin = tree_.scale(0);  // lattice units per bin
+  const auto bin_key = [](const IVec<dim>& b) {
+    std::uint64_t key = 0;
+    for (int a = dim - 1; a >= 0; --a) key = (key << 21) | static_cast<std::uint64_t>(b[a]);
+    return key;
+  };
   std::vector<std::pair<IVec<dim>, IVec<dim>>> changed;
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> binned;  // (bin, changed cell), sorted
   for (const CellId<dim>& c : tree_.refined_difference(status_tree_)) {
     const int s = tree_.scale(c.level);
     changed.push_back({c.cell * s, (c.cell + IVec<dim>::Ones()) * s});
+    for_each_in_box<dim>(IVec<dim>(changed.back().first / bin), IVec<dim>(changed.back().second / bin),
+                         [&](const IVec<dim>& b) {
+                           binned.push_back({bin_key(b), static_cast<std::uint32_t>(changed.size() - 1)});
+                         });
   }
+  std::sort(binned.begin(), binned.end());
+  const auto near_change = [&](const BlockStatus& block) {
+    bool near = false;
+    for_each_in_box<dim>(IVec<dim>(block.depends_lo.cwiseMax(0) / bin), IVec<dim>(block.depends_hi.cwiseMax(0) / bin),
+                         [&](const IVec<dim>& b) {
+                           const std::uint64_t key = bin_key(b);
+                           auto it = std::lower_bound(binned.begin(), binned.end(), std::pair{key, std::uint32_t{0}});
+                           for (; !near && it != binned.end() && it->first == key; ++it) {
+                             const auto& [lo, hi] = changed[it->second];
+                             near = (block.depends_lo.array() <= hi.array()).all() &&
+                                    (block.depends_hi.array() >= lo.array()).all();
+                           }
+                         });
+    return near;
+  };
   status_tree_ = tree_;
   for (int n = 0; n < L; ++n) {
     const LevelStatus old = std::move(status_[n]);
     LevelStatus& kept = status_[n] = LevelStatus{};
     if (static_cast<int>(own_blocks_.size()) != L) continue;
+    // The kept blocks and their place in the new tables, then their copies, in parallel.
     const std::vector<BlockKey>& last_blocks = own_blocks_[n];
-    std::vector<std::uint8_t> near(last_blocks.size(), 0);  // near a change: in parallel
+    std::vector<int> from(last_blocks.size(), -1);  // the kept blocks' index in `old`
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, last_blocks.size(), 64), [&](const auto& range) {
       for (std::size_t b = range.begin(); b != range.end(); ++b) {
         const int m = old.index.find(last_blocks[b]);
-        if (m < 0) continue;
-        const BlockStatus& block = old.blocks[static_cast<std::size_t>(m)];
-        for (std::size_t i = 0; i < changed.size() && !near[b]; ++i)
-          near[b] = (block.depends_lo.array() <= changed[i].second.array()).all() &&
-                    (block.depends_hi.array() >= changed[i].first.array()).all();
+        if (m >= 0 && !near_change(old.blocks[static_cast<std::size_t>(m)])) from[b] = m;
       }
     });
+    // A block's ghosts' links lie together: from its first ghost's first link on.
+    const auto first_link_of = [&](const BlockStatus& block) {
+      return block.end_ghost > block.first_ghost ? old.ghosts[block.first_ghost].first_link : std::size_t{0};
+    };
+    const auto link_count = [&](const BlockStatus& block) {
+      return block.end_ghost > block.first_ghost ? old.ghosts[block.end_ghost - 1].end_link - first_link_of(block)
+                                                 : std::size_t{0};
+    };
+    std::size_t ghosts = 0, reached = 0;
+    std::vector<std::size_t> first_link{0};  // per kept block, in the new tables
+    std::vector<int> kept_from;              // per kept block: its index in `old`
     for (std::size_t b = 0; b < last_blocks.size(); ++b) {
-      const BlockKey key = last_blocks[b];
-      const int m = old.index.find(key);
-      if (m < 0 || near[b]) continue;
-      BlockStatus block = old.blocks[static_cast<std::size_t>(m)];
-      const std::uint32_t first_ghost = static_cast<std::uint32_t>(kept.ghosts.size());
-      for (std::uint32_t j = block.first_ghost; j < block.end_ghost; ++j) {
-        const PendingGhost& ghost = old.ghosts[j];
-        const std::size_t first_link = kept.links.size();
-        kept.links.insert(kept.links.end(), old.links.begin() + static_cast<std::ptrdiff_t>(ghost.first_link),
-                          old.links.begin() + static_cast<std::ptrdiff_t>(ghost.end_link));
-        kept.ghosts.push_back({ghost.node, first_link, kept.links.size()});
-      }
-      const std::uint32_t first_reached = static_cast<std::uint32_t>(kept.reached.size());
-      kept.reached.insert(kept.reached.end(), old.reached.begin() + block.first_reached,
-                          old.reached.begin() + block.end_reached);
-      block.first_ghost = first_ghost;
-      block.end_ghost = static_cast<std::uint32_t>(kept.ghosts.size());
-      block.first_reached = first_reached;
-      block.end_reached = static_cast<std::uint32_t>(kept.reached.size());
-      kept.index.insert(key, static_cast<int>(kept.blocks.size()));
+      if (from[b] < 0) continue;
+      BlockStatus block = old.blocks[static_cast<std::size_t>(from[b])];
+      first_link.push_back(first_link.back() + link_count(block));
+      const std::uint32_t ghost_count = block.end_ghost - block.first_ghost;
+      const std::uint32_t reached_count = block.end_reached - block.first_reached;
+      block.first_ghost = static_cast<std::uint32_t>(ghosts);
+      block.end_ghost = block.first_ghost + ghost_count;
+      block.first_reached = static_cast<std::uint32_t>(reached);
+      block.end_reached = block.first_reached + reached_count;
+      ghosts += ghost_count;
+      reached += reached_count;
+      kept.index.insert(last_blocks[b], static_cast<int>(kept.blocks.size()));
       kept.blocks.push_back(block);
+      kept_from.push_back(from[b]);
     }
+    // Room for the new blocks' statuses appended after these (about as many as are dropped).
+    kept.ghosts.reserve(old.ghosts.size());
+    kept.links.reserve(old.links.size());
+    kept.reached.reserve(old.reached.size());
+    kept.ghosts.resize(ghosts);
+    kept.links.resize(first_link.back());
+    kept.reached.resize(reached);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, kept.blocks.size(), 16), [&](const auto& range) {
+      for (std::size_t k = range.begin(); k != range.end(); ++k) {
+        const BlockStatus& was = old.blocks[static_cast<std::size_t>(kept_from[k])];
+        const BlockStatus& now = kept.blocks[k];
+        const std::size_t shift = first_link[k] - first_link_of(was);
+        for (std::uint32_t j = was.first_ghost, out = now.first_ghost; j < was.end_ghost; ++j, ++out) {
+          const PendingGhost& ghost = old.ghosts[j];
+          kept.ghosts[out] = {ghost.node, ghost.first_link + shift, ghost.end_link + shift};
+        }
+        std::copy(old.links.begin() + static_cast<std::ptrdiff_t>(first_link_of(was)),
+                  old.links.begin() + static_cast<std::ptrdiff_t>(first_link_of(was) + link_count(was)),
+                  kept.links.begin() + static_cast<std::ptrdiff_t>(first_link[k]));
+        std::copy(old.reached.begin() + was.first_reached, old.reached.begin() + was.end_reached,
+                  kept.reached.begin() + now.first_reached);
+      }
+    });
   }
 }
 

@@ -1,6 +1,7 @@
 #include <mpm/core/app.h>
 #include <mpm/core/config.h>
 #include <mpm/core/error.h>
+#include <mpm/core/huge_pages.h>
 #include <mpm/core/memory_budget.h>
 #include <mpm/core/scene_settings.h>
 #include <mpm/core/stop_signals.h>
@@ -14,6 +15,7 @@ namespace mpm {
 int run_app(int argc, char** argv, const std::string& app_name, const std::string& description,
             const std::function<int(const CommandLine&)>& body) {
   const CommandLine cl = parse_command_line(argc, argv, app_name, description);
+  keep_freed_memory();
   if (cl.max_memory_gb) cap_memory(*cl.max_memory_gb * 1e9);
   try {
     const int code = body(cl);

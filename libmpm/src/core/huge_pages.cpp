@@ -2,6 +2,10 @@
 
 #include <sys/mman.h>
 
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
+
 #include <cstdint>
 
 namespace mpm {
@@ -15,6 +19,14 @@ void advise_huge_pages(void* p, std::size_t bytes) {
 #else
   (void)p;
   (void)bytes;
+#endif
+}
+
+void keep_freed_memory() {
+#if defined(__GLIBC__)
+  constexpr int huge = 1 << 30;     // [B]: above any buffer a step allocates
+  mallopt(M_MMAP_THRESHOLD, huge);  // also turns off the threshold's own adjustment
+  mallopt(M_TRIM_THRESHOLD, huge);
 #endif
 }
 

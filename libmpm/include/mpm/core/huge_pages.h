@@ -25,4 +25,12 @@ void reserve_advised(std::vector<T>& v, std::size_t n) {
   advise_huge_pages(v.data(), n * sizeof(T));
 }
 
+//! Keeps the memory this process frees for its next allocations instead of handing it back to
+//! the kernel (glibc: blocks of any size come from the heap rather than from their own
+//! mappings, and the heap is not trimmed), so that work buffers allocated anew every step (the
+//! adaptive grid's set-up: tables of tens of MB) land on pages already mapped instead of
+//! faulting in fresh zeroed ones. The price is resident memory: what was once held stays held.
+//! The apps call it at start-up (run_app); a no-op outside glibc.
+void keep_freed_memory();
+
 }  // namespace mpm
