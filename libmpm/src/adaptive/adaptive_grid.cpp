@@ -499,20 +499,15 @@ void AdaptiveGrid<dim>::forget_changed_statuses() {
   // (BlockStatus::depends_lo/hi); only the last step's blocks are kept. The changed cells are
   // binned by level-0 cell (no cell is larger, so each meets at most 2^dim bins): a block tests
   // the cells of the bins its box meets, not every changed cell.
-  const int bin = tree_.scale(0);  // lattice units per bin
-  const auto bin_key = [](const IVec<dim>& b) {
-    std::uint64_t key = 0;
-    for (int a = dim - 1; a >= 0; --a) key = (key << 21) | static_cast<std::uint64_t>(b[a]);
-    return key;
-  };
+  const int bin = tree_.scale(0);  // lattice units per bin: a bin is a level-0 cell
   std::vector<std::pair<IVec<dim>, IVec<dim>>> changed;
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> binned;  // (bin, changed cell), sorted
+  std::vector<std::pair<BlockKey, std::uint32_t>> binned;  // (bin, changed cell), sorted
   for (const CellId<dim>& c : tree_.refined_difference(status_tree_)) {
     const int s = tree_.scale(c.level);
     changed.push_back({c.cell * s, (c.cell + IVec<dim>::Ones()) * s});
     for_each_in_box<dim>(IVec<dim>(changed.back().first / bin), IVec<dim>(changed.back().second / bin),
                          [&](const IVec<dim>& b) {
-                           binned.push_back({bin_key(b), static_cast<std::uint32_t>(changed.size() - 1)});
+                           binned.push_back({CellTree<dim>::key(b), static_cast<std::uint32_t>(changed.size() - 1)});
                          });
   }
   std::sort(binned.begin(), binned.end());
@@ -520,7 +515,7 @@ void AdaptiveGrid<dim>::forget_changed_statuses() {
     bool near = false;
     for_each_in_box<dim>(IVec<dim>(block.depends_lo.cwiseMax(0) / bin), IVec<dim>(block.depends_hi.cwiseMax(0) / bin),
                          [&](const IVec<dim>& b) {
-                           const std::uint64_t key = bin_key(b);
+                           const BlockKey key = CellTree<dim>::key(b);
                            auto it = std::lower_bound(binned.begin(), binned.end(), std::pair{key, std::uint32_t{0}});
                            for (; !near && it != binned.end() && it->first == key; ++it) {
                              const auto& [lo, hi] = changed[it->second];
@@ -644,14 +639,8 @@ void AdaptiveGrid<dim>::push_momentum(const std::vector<std::vector<Mat<dim>>>& 
           link.weight * (from.velocity[k] + affine[s->level][s->ghost] * link_offset(link, from.node_position(k)));
     }
   });
-  std::vector<std::vector<double>*> mass;
-  std::vector<std::vector<Vec<dim>>*> velocity;
-  for (SparseGrid<dim>& g : levels_) {
-    mass.push_back(&g.mass);
-    velocity.push_back(&g.velocity);
-  }
-  clear_ghosts(mass);
-  clear_ghosts(velocity);
+  clear_ghosts(per_level(&SparseGrid<dim>::mass));
+  clear_ghosts(per_level(&SparseGrid<dim>::velocity));
 }
 
 template <int dim>

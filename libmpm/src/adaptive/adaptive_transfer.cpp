@@ -192,12 +192,6 @@ void add_ghost_terms(Particles<dim>& P, const AdaptiveGrid<dim>& grid, int n, co
   });
 }
 
-template <int dim>
-std::vector<std::vector<Vec<dim>>*> per_level(AdaptiveGrid<dim>& grid, std::vector<Vec<dim>> SparseGrid<dim>::*field) {
-  std::vector<std::vector<Vec<dim>>*> v;
-  for (int n = 0; n < grid.levels(); ++n) v.push_back(&(grid.level(n).*field));
-  return v;
-}
 }  // namespace
 
 template <int dim>
@@ -224,7 +218,7 @@ void particles_to_grid(const Particles<dim>& P, const TransferScheme& scheme, Ad
   });
   for (int n = 0; apic && n < grid.levels(); ++n) scatter_ghost_affine(P, grid, n, affine[n]);
   grid.push_momentum(affine);
-  if (S) grid.push(per_level(grid, &SparseGrid<dim>::force));
+  if (S) grid.push(grid.per_level(&SparseGrid<dim>::force));
 }
 
 template <int dim>
@@ -240,7 +234,7 @@ void stress_to_grid_forces(const std::vector<Mat<dim>>& S, const Particles<dim>&
   scatter_irregular(P, grid, [&](std::size_t p, int n, Index k, double, const Vec<dim>& grad, const Vec<dim>&) {
     grid.level(n).force[k] -= S[p] * grad;
   });
-  grid.push(per_level(grid, &SparseGrid<dim>::force));
+  grid.push(grid.per_level(&SparseGrid<dim>::force));
 }
 
 template <int dim>

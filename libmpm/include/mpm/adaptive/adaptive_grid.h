@@ -185,6 +185,13 @@ public:
   //! a channel given as one vector per level (forces: f_i = sum_k E_ik f_k).
   template <class T>
   void push(std::vector<std::vector<T>*> channel) const;
+  //! One node channel of every level, for push(): per_level(&SparseGrid<dim>::force).
+  template <class T>
+  std::vector<std::vector<T>*> per_level(std::vector<T> SparseGrid<dim>::*field) {
+    std::vector<std::vector<T>*> channel;
+    for (SparseGrid<dim>& g : levels_) channel.push_back(&(g.*field));
+    return channel;
+  }
   //! Pushes the ghosts' mass and APIC momentum to the real nodes: (m v)_i += E_ik ((m v)_k +
   //! G_k (x_i - x_k)) with G_k = sum_p w_kp m_p C_p (`affine`, one per ghost), which makes the
   //! momentum that of the real node's own position x_i (so P2G reproduces affine fields and

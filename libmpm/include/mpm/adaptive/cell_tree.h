@@ -92,9 +92,10 @@ public:
   //! The cells refined in exactly one of the two trees (same_domain required).
   std::vector<CellId<dim>> refined_difference(const CellTree& other) const;
   std::size_t memory_bytes() const;
+  //! A cell's coordinates packed into one key (distinct cells of one level, distinct keys).
+  static BlockKey key(const IVec<dim>& cell);
 
 private:
-  static BlockKey key(const IVec<dim>& cell);
   //! Calls fn(cell) for the level-0 cells of the domain that overlap the box [lo, hi].
   template <class Fn>
   void for_each_base_cell(const Vec<dim>& lo, const Vec<dim>& hi, Fn&& fn) const {
