@@ -4,6 +4,8 @@
 #include <mpm/core/kernels.h>
 
 #include <algorithm>
+#include <array>
+#include <atomic>
 #include <cmath>
 #include <sstream>
 #include <tuple>
@@ -339,47 +341,69 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
     });
   }
   group_irregular(irregular_at, span);
+  std::vector<std::vector<std::uint64_t>> reached_nodes(L);
+  for (int n = 0; n < L; ++n) reached_nodes[n] = stencil_nodes(n, x, own_blocks[n]);
   const bool moved = move && store_in_transfer_order(move);
 
-  // The grids and ghost tables follow from the tree and the blocks alone: while neither changes
-  // (most steps: particles seldom cross into new blocks), the previous ones stand.
+  // The grids follow from the tree and the blocks alone, the ghost tables also from the nodes
+  // the stencils reach: while neither the tree nor the blocks change (most steps: particles
+  // seldom cross into new blocks), the grids stand, and so do the tables while they hold every
+  // node reached.
   bool same_blocks = same_tree && own_blocks == own_blocks_;
   for (int n = 0; n < L; ++n) {
     std::sort(blocks[n].begin(), blocks[n].end());
     blocks[n].erase(std::unique(blocks[n].begin(), blocks[n].end()), blocks[n].end());
     same_blocks = same_blocks && blocks[n] == levels_[n].active_blocks();
   }
-  if (same_blocks) return moved;
-  own_blocks_ = own_blocks;
-  for (int n = 0; n < L; ++n) levels_[n].activate(blocks[n]);
+  if (same_blocks) {
+    bool tables_hold = true;
+    for (int n = 0; n < L; ++n)
+      for (std::size_t b = 0; b < reached_nodes[n].size(); ++b)
+        tables_hold = tables_hold && (reached_nodes[n][b] & ~tabled_[n][b]) == 0;
+    if (tables_hold) return moved;
+  } else {
+    own_blocks_ = own_blocks;
+    for (int n = 0; n < L; ++n) levels_[n].activate(blocks[n]);
+  }
+  tabled_ = std::move(reached_nodes);
 
-  // Ghost tables in storage indices, each block's ghosts filled in parallel at offsets counted
-  // first (their order: the blocks', then the statuses').
+  // Ghost tables in storage indices for the nodes the stencils reach, each block's ghosts
+  // filled in parallel at offsets counted first (their order: the blocks', then the
+  // statuses').
   for (int n = 0; n < L; ++n) {
     Ghosts& g = ghosts_[n];
     g = Ghosts{};
     g.of_node.assign(levels_[n].node_storage(), -1);
     const LevelStatus& status = status_[n];
     const std::vector<BlockKey>& own = own_blocks[n];
+    const auto tabled = [&](std::size_t b, const PendingGhost& ghost) {
+      return (tabled_[n][b] >> SparseGrid<dim>::local_index(ghost.node) & 1) != 0;
+    };
     std::vector<const BlockStatus*> block(own.size());
     std::vector<std::uint32_t> first_ghost(own.size() + 1, 0);
     for (std::size_t b = 0; b < own.size(); ++b) {
       block[b] = &status.blocks[static_cast<std::size_t>(status.index.find(own[b]))];
-      first_ghost[b + 1] = first_ghost[b] + block[b]->end_ghost - block[b]->first_ghost;
+      first_ghost[b + 1] = first_ghost[b];
+      for (std::uint32_t j = block[b]->first_ghost; j < block[b]->end_ghost; ++j)
+        first_ghost[b + 1] += tabled(b, status.ghosts[j]);
     }
     const std::size_t ghosts = first_ghost.back();
     g.node.resize(ghosts);
     g.spread.resize(ghosts);
     g.begin.resize(ghosts + 1);
     for (std::size_t b = 0; b < own.size(); ++b)
-      for (std::uint32_t j = block[b]->first_ghost, out = first_ghost[b]; j < block[b]->end_ghost; ++j, ++out)
-        g.begin[out + 1] =
-            g.begin[out] + static_cast<std::uint32_t>(status.ghosts[j].end_link - status.ghosts[j].first_link);
+      for (std::uint32_t j = block[b]->first_ghost, out = first_ghost[b]; j < block[b]->end_ghost; ++j)
+        if (tabled(b, status.ghosts[j])) {
+          g.begin[out + 1] =
+              g.begin[out] + static_cast<std::uint32_t>(status.ghosts[j].end_link - status.ghosts[j].first_link);
+          ++out;
+        }
     g.link.resize(g.begin.back());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, own.size(), 8), [&](const auto& range) {
       for (std::size_t b = range.begin(); b != range.end(); ++b) {
-        for (std::uint32_t j = block[b]->first_ghost, out = first_ghost[b]; j < block[b]->end_ghost; ++j, ++out) {
+        for (std::uint32_t j = block[b]->first_ghost, out = first_ghost[b]; j < block[b]->end_ghost; ++j) {
           const PendingGhost& ghost = status.ghosts[j];
+          if (!tabled(b, ghost)) continue;
           const Index k = levels_[n].node_index(ghost.node);
           const Vec<dim> xk = node_position(n, k);
           Mat<dim> spread = Mat<dim>::Zero();
@@ -394,6 +418,7 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
           g.of_node[static_cast<std::size_t>(k)] = static_cast<int>(out);
           g.node[out] = k;
           g.spread[out] = spread;
+          ++out;
         }
       }
     });
@@ -448,6 +473,86 @@ bool AdaptiveGrid<dim>::store_in_transfer_order(const MoveParticles& move) {
   for (ParticleBuckets<dim>& b : near_embedded_)
     for (std::uint32_t& p : b.particle) p = renamed[p];
   return true;
+}
+
+template <int dim>
+std::vector<std::uint64_t> AdaptiveGrid<dim>::stencil_nodes(int n, const std::vector<Vec<dim>>& x,
+                                                            const std::vector<BlockKey>& own) const {
+  constexpr int B = SparseGrid<dim>::block_size, W = 2 * B;  // a bucket's patch: 2 blocks per axis
+  constexpr int rows = ipow(W, dim - 1);                     // its rows of W nodes along axis 0
+  static_assert(SparseGrid<dim>::nodes_per_block <= 64 && W <= 32);
+  const SparseGrid<dim>& g = levels_[n];
+  std::vector<std::uint64_t> reached(own.size(), 0);
+  // Buckets of neighbouring blocks reach the same blocks: the bits are or-ed in atomically
+  // (the result does not depend on the order).
+  const auto add = [&](BlockKey key, std::uint64_t bits) {
+    const auto it = std::lower_bound(own.begin(), own.end(), key);
+    MPM_ASSERT(it != own.end() && *it == key);
+    std::atomic_ref<std::uint64_t>(reached[static_cast<std::size_t>(it - own.begin())])
+        .fetch_or(bits, std::memory_order_relaxed);
+  };
+  // The regular particles' 3^dim stencils, per bucket: the stencils' first nodes marked in the
+  // patch's rows, dilated by two nodes along each axis, then cut into the patch's blocks.
+  const ParticleBuckets<dim>& reg = regular_[n];
+  tbb::parallel_for(tbb::blocked_range<int>(0, reg.count(), 8), [&](const auto& range) {
+    for (int k = range.begin(); k != range.end(); ++k) {
+      const IVec<dim> first = g.block_coord(reg.block[k]) * B;
+      std::array<std::uint32_t, rows> row{};
+      for (std::uint32_t i = reg.begin[k]; i < reg.begin[k + 1]; ++i) {
+        const IVec<dim> base = uniform_base(n, x[reg.particle[i]]) - first;  // in [0, B) on every axis
+        int r = 0;
+        for (int a = dim - 1; a >= 1; --a) r = r * W + base[a];
+        row[static_cast<std::size_t>(r)] |= 1u << base[0];
+      }
+      for (std::uint32_t& r : row) r |= r << 1 | r << 2;
+      for (int a = 1, stride = 1; a < dim; ++a, stride *= W)
+        for (int r = rows - 1; r >= 0; --r) {  // from the top: the rows below are not yet dilated
+          const int c = r / stride % W;
+          if (c >= 1) row[static_cast<std::size_t>(r)] |= row[static_cast<std::size_t>(r - stride)];
+          if (c >= 2) row[static_cast<std::size_t>(r)] |= row[static_cast<std::size_t>(r - 2 * stride)];
+        }
+      for (int corner = 0; corner < (1 << dim); ++corner) {
+        std::uint64_t bits = 0;
+        for (int r = 0; r < rows; ++r) {
+          IVec<dim> local = IVec<dim>::Zero();  // the row's first node in the corner's block
+          bool in_corner = true;
+          for (int a = 1, rest = r; a < dim; ++a, rest /= W) {
+            local[a] = rest % W - ((corner >> a) & 1) * B;
+            in_corner = in_corner && local[a] >= 0 && local[a] < B;
+          }
+          if (in_corner)
+            bits |=
+                static_cast<std::uint64_t>((row[static_cast<std::size_t>(r)] >> ((corner & 1) * B)) & ((1u << B) - 1))
+                << SparseGrid<dim>::local_index(local);
+        }
+        IVec<dim> block = first / B;
+        for (int a = 0; a < dim; ++a) block[a] += (corner >> a) & 1;
+        if (bits) add(g.block_id(block * B), bits);
+      }
+    }
+  });
+  // The irregular particles' general stencils, node by node.
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, irregular_.size(), 64), [&](const auto& range) {
+    for (std::size_t i = range.begin(); i != range.end(); ++i) {
+      const std::uint32_t p = irregular_[i];
+      if (transfer_level_[p] != n) continue;
+      GimpAxis axis[dim];
+      axis_weights(n, half_cells_[p], x[p], axis);
+      int offset[dim] = {};
+      while (true) {
+        IVec<dim> node;
+        for (int a = 0; a < dim; ++a) node[a] = axis[a].base + offset[a];
+        add(g.block_id(node), std::uint64_t{1} << SparseGrid<dim>::local_index(node));
+        int a = 0;
+        for (; a < dim; ++a) {
+          if (++offset[a] < axis[a].count) break;
+          offset[a] = 0;
+        }
+        if (a == dim) break;
+      }
+    }
+  });
+  return reached;
 }
 
 template <int dim>

@@ -279,6 +279,11 @@ private:
   //! After a tree change: drops the statuses the change can reach and those of unused blocks.
   void forget_changed_statuses();
   std::vector<std::vector<BlockKey>> own_blocks_;  // per level: the blocks of the ghost tables
+  //! Per block of own (sorted) of level n, the nodes the particles' stencils on level n reach
+  //! (bit local_index): the ghosts a table needs; the others receive and give nothing.
+  std::vector<std::uint64_t> stencil_nodes(int n, const std::vector<Vec<dim>>& x,
+                                           const std::vector<BlockKey>& own) const;
+  std::vector<std::vector<std::uint64_t>> tabled_;  // per level and own block: the tabled nodes
 };
 
 template <int dim>

@@ -11,7 +11,9 @@
 //    particles' blocks, not the domain;
 //  - after a tree change, the grids and ghost tables equal those built from scratch;
 //  - the ghosts' push (real nodes gather their links' sums in parallel) equals the serial
-//    scatter, ghost by ghost, bit for bit.
+//    scatter, ghost by ghost, bit for bit;
+//  - the ghost tables hold the nodes the stencils reach that are not real on their level, and
+//    built afresh, no other node.
 #include <mpm/adaptive/adaptive_transfer.h>
 #include <mpm/core/particle_buckets.h>
 
@@ -23,6 +25,7 @@
 
 #include <map>
 #include <random>
+#include <set>
 #include <utility>
 
 using namespace mpm;
@@ -436,7 +439,68 @@ void check_push(unsigned seed) {
   }
 }
 
+// The nodes of level n that the particles' stencils reach: the 3^dim stencils of the regular
+// particles (the uniform loops write all of them) and the general stencils of the others.
+template <int dim>
+std::set<Index> reached_nodes(const AdaptiveGrid<dim>& grid, const Particles<dim>& P, int n) {
+  std::set<Index> reached;
+  const SparseGrid<dim>& g = grid.level(n);
+  const auto add_box = [&](const IVec<dim>& first, const IVec<dim>& count) {
+    for_each_in_box<dim>(first, IVec<dim>(first + count - IVec<dim>::Ones()),
+                         [&](const IVec<dim>& node) { reached.insert(g.node_index(node)); });
+  };
+  for (const std::uint32_t p : grid.regular(n).particle) add_box(grid.uniform_base(n, P.x[p]), IVec<dim>::Constant(3));
+  for (const std::uint32_t p : grid.irregular()) {
+    if (grid.transfer_level(p) != n) continue;
+    GimpAxis axis[dim];
+    grid.axis_weights(n, grid.half_cells(p), P.x[p], axis);
+    IVec<dim> first, count;
+    for (int a = 0; a < dim; ++a) {
+      first[a] = axis[a].base;
+      count[a] = axis[a].count;
+    }
+    add_box(first, count);
+  }
+  return reached;
+}
+
+// Every node a stencil reaches is either real on its level or a ghost with a table entry;
+// built afresh, the tables hold no other node; after the particles move, the tables kept or
+// rebuilt still hold every node reached.
+template <int dim>
+void check_ghost_tables(unsigned seed) {
+  std::vector<std::uint16_t> type;
+  Particles<dim> P;
+  AdaptiveGrid<dim> grid = prepared_grid(seed, P, type);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-0.3, 0.3);
+  for (int round = 0; round < 3; ++round) {
+    std::size_t ghosts = 0, unreached = 0;
+    for (int n = 0; n < grid.levels(); ++n) {
+      const std::set<Index> reached = reached_nodes(grid, P, n);
+      for (const Index k : reached) {
+        const IVec<dim> point = grid.level(n).node_coord(static_cast<std::size_t>(k)) * grid.tree().scale(n);
+        const bool real = home_level(grid.tree(), point) == n;
+        CHECK(real != (grid.ghosts(n).of_node[static_cast<std::size_t>(k)] >= 0));
+      }
+      for (const Index k : grid.ghosts(n).node) unreached += !reached.count(k);
+      ghosts += grid.ghosts(n).node.size();
+    }
+    CHECK(ghosts > 0);
+    if (round == 0) CHECK(unreached == 0);
+    // A small move (a fraction of the finest cell): most steps keep the tables.
+    for (std::size_t p = 0; p < P.size(); ++p)
+      for (int a = 0; a < dim; ++a) P.x[p][a] += u(rng) * grid.tree().dx(grid.tree().finest());
+    grid.prepare(P.x, type);
+  }
+}
+
 }  // namespace
+
+TEST_CASE("the ghost tables hold exactly the nodes the stencils reach that are not real on their level") {
+  for (unsigned seed : {1u, 2u, 3u}) check_ghost_tables<2>(seed);
+  for (unsigned seed : {4u, 5u}) check_ghost_tables<3>(seed);
+}
 
 TEST_CASE("the ghosts' push gathers in parallel what the serial scatter adds, bit for bit") {
   for (unsigned seed : {1u, 2u}) check_push<2>(seed);
