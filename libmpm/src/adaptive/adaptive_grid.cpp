@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <bit>
 #include <cmath>
 #include <sstream>
 #include <tuple>
@@ -78,6 +79,8 @@ AdaptiveGrid<dim>::AdaptiveGrid(CellTree<dim> tree, int points_per_axis)
   MPM_VERIFY(points_per_axis >= 1, InputError, "adaptive grid: at least one particle per axis per cell");
   const Vec<dim> hi = tree_.origin() + tree_.dx(0) * tree_.base_cells().template cast<double>();
   for (int n = 0; n < tree_.levels(); ++n) levels_.emplace_back(tree_.origin(), hi, tree_.dx(n));
+  for (int t = 0; t < tree_.levels(); ++t)
+    for (int n = 0; n < tree_.levels(); ++n) half_cells_[t * max_levels + n] = 0.5 * particle_size(t) / levels_[n].dx();
   ghosts_.resize(tree_.levels());
   regular_.resize(tree_.levels());
   near_embedded_.resize(tree_.levels());
@@ -91,7 +94,7 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
   const int L = levels();
   constexpr int B = SparseGrid<dim>::block_size;
   transfer_level_.resize(x.size());
-  half_cells_.assign(x.size(), 0.5);
+  type_.resize(x.size());
   std::vector<std::vector<BlockKey>> own_blocks(L);
   // The irregular particles by (transfer level, block of the first stencil node), and the
   // most blocks a stencil spans on an axis: the colouring's period.
@@ -109,12 +112,12 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
     for (std::size_t p = range.begin(); p != range.end(); ++p) {
       transfer_level_[p] = -1;  // reported below (a type out of range first)
       if (type[p] >= L || !x[p].allFinite()) continue;
+      type_[p] = static_cast<std::uint8_t>(type[p]);
       const double half = 0.5 * particle_size(type[p]);
       const int n = tree_.finest_level_in(x[p].array() - half, x[p].array() + half, leaf);
-      transfer_level_[p] = n;
+      transfer_level_[p] = static_cast<std::int8_t>(n);
       if (n < 0) continue;
       const SparseGrid<dim>& g = levels_[n];
-      half_cells_[p] = half / g.dx();
       if (n == type[p]) {  // on its own level: regular_kernel(), whose stencil holds the general one
         const IVec<dim> base = uniform_base(n, x[p]);
         if ((base.array() >= 0).all() && (base.array() + 2 < g.node_counts().array()).all()) {
@@ -140,7 +143,7 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
       throw NumericalError(s.str());
     }
     const SparseGrid<dim>& g = levels_[n];
-    const double h = half_cells_[p];
+    const double h = half_cells(p);
     IVec<dim> first, last;
     GimpAxis axis[dim];
     axis_weights(n, h, x[p], axis);
@@ -204,37 +207,48 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
     }
   }
 
-  // Status of every node of the stencil blocks: real on its level, or a ghost with links given
-  // by lattice point and home level until the grids are allocated. A ghost that is not simply
-  // a real node of another level (one link of weight 1) is an embedded ghost: its bit is set
-  // in its block's mask. The statuses depend on the tree only: they are kept per block while
-  // the tree stays the same (a static refinement: always), and computed for new blocks.
-  const bool same_tree = tree_ == status_tree_;
-  if (!same_tree) forget_changed_statuses();
+  // The nodes the stencils reach, per block of each level's stencil blocks.
+  group_irregular(irregular_at, span);
+  std::vector<std::vector<std::uint64_t>> reached_nodes(L);
   for (int n = 0; n < L; ++n) {
     std::vector<BlockKey>& own = own_blocks[n];
     std::sort(own.begin(), own.end());
     own.erase(std::unique(own.begin(), own.end()), own.end());
+    reached_nodes[n] = stencil_nodes(n, x, own);
+  }
+
+  // Status of the nodes reached: real on its level, or a ghost with links given by lattice
+  // point and home level until the grids are allocated. A ghost that is not simply a real node
+  // of another level (one link of weight 1) is an embedded ghost: its bit is set in its block's
+  // mask. The statuses depend on the tree only: they are kept per block while the tree stays
+  // the same (a static refinement: always), and computed for the nodes a block does not know.
+  const bool same_tree = tree_ == status_tree_;
+  if (!same_tree || statuses_stale_) forget_changed_statuses();
+  for (int n = 0; n < L; ++n) {
+    const std::vector<BlockKey>& own = own_blocks[n];
     LevelStatus& status = status_[n];
-    // The new blocks' statuses in parallel (the embedding walks are the cost), appended in
-    // block order.
-    std::vector<BlockKey> fresh;
-    for (BlockKey key : own)
-      if (status.index.find(key) < 0) fresh.push_back(key);
+    // The blocks with a node newly reached, computed anew in parallel for every node they know
+    // or now reach (the embedding walks are the cost), appended in block order.
+    std::vector<std::size_t> fresh;
+    std::vector<std::uint64_t> fresh_nodes;
+    for (std::size_t b = 0; b < own.size(); ++b) {
+      const int m = status.index.find(own[b]);
+      const std::uint64_t known = m < 0 ? 0 : status.blocks[static_cast<std::size_t>(m)].known;
+      if (m < 0 || (reached_nodes[n][b] & ~known) != 0) {
+        fresh.push_back(b);
+        fresh_nodes.push_back(known | reached_nodes[n][b]);
+      }
+    }
     std::vector<FreshStatus> computed(fresh.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, fresh.size(), 4), [&](const auto& range) {
-      for (std::size_t i = range.begin(); i != range.end(); ++i) computed[i] = block_status(n, fresh[i]);
+      for (std::size_t i = range.begin(); i != range.end(); ++i)
+        computed[i] = block_status(n, own[fresh[i]], fresh_nodes[i]);
     });
     for (std::size_t i = 0; i < fresh.size(); ++i) {
       FreshStatus& c = computed[i];
       const std::size_t link_offset = status.links.size();
-      BlockStatus block{static_cast<std::uint32_t>(status.ghosts.size()),
-                        0,
-                        c.embedded,
-                        static_cast<std::uint32_t>(status.reached.size()),
-                        0,
-                        c.depends_lo,
-                        c.depends_hi};
+      BlockStatus block{static_cast<std::uint32_t>(status.ghosts.size()),  0, c.embedded,   fresh_nodes[i],
+                        static_cast<std::uint32_t>(status.reached.size()), 0, c.depends_lo, c.depends_hi};
       for (PendingGhost& ghost : c.ghosts) {
         ghost.first_link += link_offset;
         ghost.end_link += link_offset;
@@ -244,9 +258,19 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
       status.reached.insert(status.reached.end(), c.reached.begin(), c.reached.end());
       block.end_ghost = static_cast<std::uint32_t>(status.ghosts.size());
       block.end_reached = static_cast<std::uint32_t>(status.reached.size());
-      status.index.insert(fresh[i], static_cast<int>(status.blocks.size()));
-      status.blocks.push_back(block);
+      if (const int m = status.index.find(own[fresh[i]]); m >= 0) {  // the old entries stay unused
+        BlockStatus& old = status.blocks[static_cast<std::size_t>(m)];
+        status.unused += old.end_ghost - old.first_ghost;
+        old = block;
+      } else {
+        status.index.insert(own[fresh[i]], static_cast<int>(status.blocks.size()));
+        status.blocks.push_back(block);
+      }
     }
+    // Unused entries (replaced, or of blocks no longer reached) are dropped at the next call
+    // once they are as many as the used ones.
+    statuses_stale_ =
+        statuses_stale_ || 2 * status.unused > status.ghosts.size() || status.blocks.size() > 2 * own.size();
     blocks[n].insert(blocks[n].end(), own.begin(), own.end());
     for (BlockKey key : own) {
       const BlockStatus& block = status.blocks[static_cast<std::size_t>(status.index.find(key))];
@@ -340,9 +364,6 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
       }
     });
   }
-  group_irregular(irregular_at, span);
-  std::vector<std::vector<std::uint64_t>> reached_nodes(L);
-  for (int n = 0; n < L; ++n) reached_nodes[n] = stencil_nodes(n, x, own_blocks[n]);
   const bool moved = move && store_in_transfer_order(move);
 
   // The grids follow from the tree and the blocks alone, the ghost tables also from the nodes
@@ -465,7 +486,7 @@ bool AdaptiveGrid<dim>::store_in_transfer_order(const MoveParticles& move) {
     for (std::size_t i = 0; i < order.size(); ++i) values[i] = old[order[i]];
   };
   reorder(transfer_level_);
-  reorder(half_cells_);
+  reorder(type_);
   std::uint32_t next = 0;
   for (ParticleBuckets<dim>& b : regular_)
     for (std::uint32_t& p : b.particle) p = next++;
@@ -537,7 +558,7 @@ std::vector<std::uint64_t> AdaptiveGrid<dim>::stencil_nodes(int n, const std::ve
       const std::uint32_t p = irregular_[i];
       if (transfer_level_[p] != n) continue;
       GimpAxis axis[dim];
-      axis_weights(n, half_cells_[p], x[p], axis);
+      axis_weights(n, half_cells(p), x[p], axis);
       int offset[dim] = {};
       while (true) {
         IVec<dim> node;
@@ -556,13 +577,15 @@ std::vector<std::uint64_t> AdaptiveGrid<dim>::stencil_nodes(int n, const std::ve
 }
 
 template <int dim>
-typename AdaptiveGrid<dim>::FreshStatus AdaptiveGrid<dim>::block_status(int n, BlockKey key) const {
+typename AdaptiveGrid<dim>::FreshStatus AdaptiveGrid<dim>::block_status(int n, BlockKey key,
+                                                                        std::uint64_t nodes) const {
   constexpr int B = SparseGrid<dim>::block_size;
   const SparseGrid<dim>& g = levels_[n];
   const int s = tree_.scale(n);
   FreshStatus out;
   const IVec<dim> origin = g.block_coord(key) * B;
-  for (int local = 0; local < SparseGrid<dim>::nodes_per_block; ++local) {
+  for (; nodes != 0; nodes &= nodes - 1) {
+    const int local = std::countr_zero(nodes);
     IVec<dim> node;
     for (int a = 0; a < dim; ++a) node[a] = origin[a] + ((local >> (a * SparseGrid<dim>::block_bits)) & (B - 1));
     if ((node.array() >= g.node_counts().array()).any()) continue;  // padding beyond the domain
@@ -591,6 +614,7 @@ typename AdaptiveGrid<dim>::FreshStatus AdaptiveGrid<dim>::block_status(int n, B
 
 template <int dim>
 void AdaptiveGrid<dim>::forget_changed_statuses() {
+  statuses_stale_ = false;
   const int L = levels();
   if (static_cast<int>(status_.size()) != L || !status_tree_.same_domain(tree_)) {
     status_tree_ = tree_;
@@ -786,8 +810,8 @@ std::size_t AdaptiveGrid<dim>::memory_bytes() const {
 
 template <int dim>
 std::size_t AdaptiveGrid<dim>::index_bytes() const {
-  std::size_t bytes = tree_.memory_bytes() + transfer_level_.capacity() * sizeof(int);
-  bytes += half_cells_.capacity() * sizeof(double) + irregular_.capacity() * sizeof(std::uint32_t);
+  std::size_t bytes = tree_.memory_bytes() + transfer_level_.capacity() + type_.capacity();
+  bytes += irregular_.capacity() * sizeof(std::uint32_t);
   for (const Ghosts& g : ghosts_)
     bytes += g.node.capacity() * sizeof(Index) + g.begin.capacity() * sizeof(std::uint32_t) +
              g.link.capacity() * sizeof(GhostLink<dim>) + g.spread.capacity() * sizeof(Mat<dim>) +

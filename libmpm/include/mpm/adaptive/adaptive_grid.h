@@ -130,7 +130,7 @@ public:
   //! Transfer level of particle p (after prepare).
   int transfer_level(std::size_t p) const { return transfer_level_[p]; }
   //! Half-size of particle p's GIMP box in cells of its transfer level (after prepare).
-  double half_cells(std::size_t p) const { return half_cells_[p]; }
+  double half_cells(std::size_t p) const { return half_cells_[type_[p] * max_levels + transfer_level_[p]]; }
 
   //! Calls fn(k, w, grad_w, x_k) for the level-n storage node k of every non-zero weight of a
   //! particle at x that transfers on level n with half-size h cells: w = w_kp (uniform GIMP),
@@ -231,8 +231,10 @@ private:
   //! Sets every ghost's value to zero in each level's `channel`.
   template <class T>
   void clear_ghosts(const std::vector<std::vector<T>*>& channel) const;
-  std::vector<int> transfer_level_;
-  std::vector<double> half_cells_;
+  std::vector<std::int8_t> transfer_level_;
+  std::vector<std::uint8_t> type_;  // the particles' types (levels) at prepare()
+  // Half-size of a particle of type t in cells of level n: half_cells_[t * max_levels + n].
+  std::array<double, max_levels * max_levels> half_cells_{};
   std::vector<ParticleBuckets<dim>> regular_;
   std::vector<std::uint32_t> irregular_;
   IrregularGroups irregular_groups_;
@@ -252,6 +254,7 @@ private:
   struct BlockStatus {
     std::uint32_t first_ghost, end_ghost;
     std::uint64_t embedded;  // bit l: node l of the block is an embedded ghost
+    std::uint64_t known;     // bit l: node l's status is here (the nodes reached so far)
     std::uint32_t first_reached, end_reached;
     // Lattice box of every point the statuses were read from (the nodes and their links): a
     // tree change away from it leaves them as they are (forget_changed_statuses).
@@ -263,6 +266,7 @@ private:
     std::vector<PendingGhost> ghosts;
     std::vector<NodeWeight<dim>> links;
     std::vector<std::pair<int, BlockKey>> reached;  // (level, block) of a block's ghosts' links
+    std::size_t unused = 0;                         // ghosts of entries a block no longer uses
   };
   struct FreshStatus {  // one block's status before it joins its level's tables
     std::uint64_t embedded = 0;
@@ -272,12 +276,15 @@ private:
     std::vector<NodeWeight<dim>> links;
     std::vector<std::pair<int, BlockKey>> reached;
   };
-  //! The status of the nodes of block `key` of level n under the current tree.
-  FreshStatus block_status(int n, BlockKey key) const;
+  //! The status of the nodes `nodes` (bit local_index) of block `key` of level n under the
+  //! current tree.
+  FreshStatus block_status(int n, BlockKey key, std::uint64_t nodes) const;
   CellTree<dim> status_tree_;
   std::vector<LevelStatus> status_;
-  //! After a tree change: drops the statuses the change can reach and those of unused blocks.
+  //! After a tree change: drops the statuses the change can reach and those of unused blocks;
+  //! also when the unused entries have grown (statuses_stale_).
   void forget_changed_statuses();
+  bool statuses_stale_ = false;
   std::vector<std::vector<BlockKey>> own_blocks_;  // per level: the blocks of the ghost tables
   //! Per block of own (sorted) of level n, the nodes the particles' stencils on level n reach
   //! (bit local_index): the ghosts a table needs; the others receive and give nothing.
