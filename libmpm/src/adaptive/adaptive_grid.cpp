@@ -560,10 +560,17 @@ std::vector<std::uint64_t> AdaptiveGrid<dim>::stencil_nodes(int n, const std::ve
       GimpAxis axis[dim];
       axis_weights(n, half_cells(p), x[p], axis);
       int offset[dim] = {};
+      BlockKey block = ~BlockKey{0};  // consecutive nodes mostly share a block: one add per run
+      std::uint64_t bits = 0;
       while (true) {
         IVec<dim> node;
         for (int a = 0; a < dim; ++a) node[a] = axis[a].base + offset[a];
-        add(g.block_id(node), std::uint64_t{1} << SparseGrid<dim>::local_index(node));
+        if (const BlockKey key = g.block_id(node); key != block) {
+          if (bits) add(block, bits);
+          block = key;
+          bits = 0;
+        }
+        bits |= std::uint64_t{1} << SparseGrid<dim>::local_index(node);
         int a = 0;
         for (; a < dim; ++a) {
           if (++offset[a] < axis[a].count) break;
@@ -571,6 +578,7 @@ std::vector<std::uint64_t> AdaptiveGrid<dim>::stencil_nodes(int n, const std::ve
         }
         if (a == dim) break;
       }
+      add(block, bits);
     }
   });
   return reached;

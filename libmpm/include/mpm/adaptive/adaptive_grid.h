@@ -14,10 +14,12 @@
 //! then run on every level as on a uniform grid: ghosts hold no mass.
 //!
 //! prepare() allocates, per level, the blocks of the stencils of the particles that transfer
-//! there and the blocks of the real nodes their ghosts reach, and builds the ghost tables.
-//! Memory and time follow the allocated blocks, not the domain. Between steps it keeps what
-//! still holds: the node statuses of the blocks a tree change cannot reach, and the grids and
-//! ghost tables while neither the tree nor the blocks change.
+//! there and the blocks of the real nodes their ghosts reach, and builds the ghost tables of
+//! the nodes the stencils reach (in a thin fine band, about a quarter of the blocks' nodes that
+//! are not real). Memory and time follow the particles' stencils, not the domain. Between steps
+//! it keeps what still holds: the node statuses of the blocks a tree change cannot reach, the
+//! grids while neither the tree nor the blocks change, and the ghost tables while they also
+//! hold every node reached.
 #include <mpm/adaptive/cell_tree.h>
 #include <mpm/adaptive/constrained_basis.h>
 #include <mpm/core/error.h>
