@@ -230,12 +230,14 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
     // The blocks with a node newly reached, computed anew in parallel for every node they know
     // or now reach (the embedding walks are the cost), appended in block order.
     std::vector<std::size_t> fresh;
+    std::vector<int> fresh_entry;  // the block's entry in status.blocks, -1 for a new block
     std::vector<std::uint64_t> fresh_nodes;
     for (std::size_t b = 0; b < own.size(); ++b) {
       const int m = status.index.find(own[b]);
       const std::uint64_t known = m < 0 ? 0 : status.blocks[static_cast<std::size_t>(m)].known;
       if (m < 0 || (reached_nodes[n][b] & ~known) != 0) {
         fresh.push_back(b);
+        fresh_entry.push_back(m);
         fresh_nodes.push_back(known | reached_nodes[n][b]);
       }
     }
@@ -258,7 +260,7 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
       status.reached.insert(status.reached.end(), c.reached.begin(), c.reached.end());
       block.end_ghost = static_cast<std::uint32_t>(status.ghosts.size());
       block.end_reached = static_cast<std::uint32_t>(status.reached.size());
-      if (const int m = status.index.find(own[fresh[i]]); m >= 0) {  // the old entries stay unused
+      if (const int m = fresh_entry[i]; m >= 0) {  // the old entries stay unused
         BlockStatus& old = status.blocks[static_cast<std::size_t>(m)];
         status.unused += old.end_ghost - old.first_ghost;
         old = block;
@@ -559,25 +561,21 @@ std::vector<std::uint64_t> AdaptiveGrid<dim>::stencil_nodes(int n, const std::ve
       if (transfer_level_[p] != n) continue;
       GimpAxis axis[dim];
       axis_weights(n, half_cells(p), x[p], axis);
-      int offset[dim] = {};
+      IVec<dim> first, last;
+      for (int a = 0; a < dim; ++a) {
+        first[a] = axis[a].base;
+        last[a] = axis[a].base + axis[a].count - 1;
+      }
       BlockKey block = ~BlockKey{0};  // consecutive nodes mostly share a block: one add per run
       std::uint64_t bits = 0;
-      while (true) {
-        IVec<dim> node;
-        for (int a = 0; a < dim; ++a) node[a] = axis[a].base + offset[a];
+      for_each_in_box<dim>(first, last, [&](const IVec<dim>& node) {
         if (const BlockKey key = g.block_id(node); key != block) {
           if (bits) add(block, bits);
           block = key;
           bits = 0;
         }
         bits |= std::uint64_t{1} << SparseGrid<dim>::local_index(node);
-        int a = 0;
-        for (; a < dim; ++a) {
-          if (++offset[a] < axis[a].count) break;
-          offset[a] = 0;
-        }
-        if (a == dim) break;
-      }
+      });
       add(block, bits);
     }
   });
