@@ -139,7 +139,7 @@ void scatter_ghost_affine(const Particles<dim>& P, const AdaptiveGrid<dim>& grid
       for_each_embedded(st, masks[e],
                         [&](int node, double w) { Eigen::Map<Mat<dim>>(patch.data() + node * M) += w * mC; });
     }
-    detail::for_each_patch_node(g, near.block[b], [&](int node, std::size_t k) {
+    detail::for_each_patch_node<dim, 3>(g, near.block[b], [&](int node, std::size_t k) {
       if (const int j = ghosts.of_node[k]; j >= 0) affine[j] += Eigen::Map<const Mat<dim>>(patch.data() + node * M);
     });
   });
@@ -162,7 +162,7 @@ void add_ghost_terms(Particles<dim>& P, const AdaptiveGrid<dim>& grid, int n, co
   const double dx = g.dx();
   for_each_near_bucket(grid, n, Walk::gather, [&](int b, const auto& kernel) {
     alignas(64) std::array<double, detail::patch_nodes<dim> * Ch> patch;
-    detail::for_each_patch_node(g, near.block[b], [&](int node, std::size_t k) {
+    detail::for_each_patch_node<dim, 3>(g, near.block[b], [&](int node, std::size_t k) {
       double* out = patch.data() + node * Ch;
       if (const int j = ghosts.of_node[k]; j >= 0) {
         std::copy_n(ghosts.velocity_moment[j].data(), M, out);

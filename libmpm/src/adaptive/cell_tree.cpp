@@ -124,9 +124,14 @@ void CellTree<dim>::refine_to(const Vec<dim>& x, int level) {
 
 template <int dim>
 CellId<dim> CellTree<dim>::leaf_of(const IVec<dim>& f) const {
+  return leaf_of(f, 0);
+}
+
+template <int dim>
+CellId<dim> CellTree<dim>::leaf_of(const IVec<dim>& f, int first_level) const {
   for (int a = 0; a < dim; ++a)
     if (f[a] < 0 || f[a] >= base_cells_[a] << finest()) return {};
-  for (int level = 0; level < levels_; ++level) {
+  for (int level = first_level; level < levels_; ++level) {
     IVec<dim> cell;
     for (int a = 0; a < dim; ++a) cell[a] = f[a] >> (finest() - level);
     if (level == finest() || !is_refined(level, cell)) return {level, cell};
@@ -179,9 +184,16 @@ CellId<dim> CellTree<dim>::leaf_at(const Vec<dim>& x, const CellId<dim>& hint) c
     if (!(std::abs(f[a]) < 1e9)) return {};
     cell[a] = static_cast<int>(std::floor(f[a]));
   }
-  bool inside_hint = hint.level >= 0;  // cells outside the domain (negative) never match
-  for (int a = 0; a < dim && inside_hint; ++a) inside_hint = cell[a] >> (finest() - hint.level) == hint.cell[a];
-  return inside_hint ? hint : leaf_of(cell);
+  // The finest level on which x's cell is the hint's or one of its ancestors (cells outside
+  // the domain, negative, never match): the hint itself, or a refined cell (an ancestor of a
+  // leaf) below which the walk starts.
+  int level = hint.level;
+  for (; level >= 0; --level) {
+    bool same = true;
+    for (int a = 0; a < dim && same; ++a) same = cell[a] >> (finest() - level) == hint.cell[a] >> (hint.level - level);
+    if (same) break;
+  }
+  return level >= 0 && level == hint.level ? hint : leaf_of(cell, level + 1);
 }
 
 template <int dim>

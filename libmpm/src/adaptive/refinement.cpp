@@ -161,15 +161,28 @@ IVec<dim> key_cell(std::uint64_t key) {
   return cell;
 }
 
-//! Collects distinct keys: a direct-mapped cache of the keys added last drops most repeats
-//! (particles of a cell come in runs, interleaved with a few other cells' runs) before the
-//! sort that drops the rest.
+//! A direct-mapped cache of the keys seen last: a cheap filter for the repeats of neighbours
+//! (particles of a cell come in runs, interleaved with a few other cells' runs).
+class RecentKeys {
+public:
+  RecentKeys() { slots_.fill(~std::uint64_t{0}); }
+  //! False when `key` is among the keys seen last; otherwise remembers it.
+  bool fresh(std::uint64_t key) {
+    std::uint64_t& slot = slots_[(key * 0x9e3779b97f4a7c15ull) >> 54];
+    if (slot == key) return false;
+    slot = key;
+    return true;
+  }
+
+private:
+  std::array<std::uint64_t, 1024> slots_;
+};
+
+//! Collects distinct keys: RecentKeys drops most repeats before the sort that drops the rest.
 class DistinctKeys {
 public:
-  DistinctKeys() { recent_.fill(~std::uint64_t{0}); }
   void add(std::uint64_t key) {
-    std::uint64_t& slot = recent_[(key * 0x9e3779b97f4a7c15ull) >> 54];
-    if (slot != key) keys_.push_back(slot = key);
+    if (recent_.fresh(key)) keys_.push_back(key);
   }
   //! Adds the keys `other` holds.
   void absorb(const DistinctKeys& other) { absorb_keys(other.keys_); }
@@ -182,7 +195,7 @@ public:
   }
 
 private:
-  std::array<std::uint64_t, 1024> recent_;
+  RecentKeys recent_;
   std::vector<std::uint64_t> keys_;
 };
 
@@ -281,11 +294,13 @@ void refine_level(CellTree<dim>& tree, const std::vector<Vec<dim>>& x, const std
   // The candidates around the held cells, per chunk of them in parallel (the tree is only read).
   std::vector<DistinctKeys> candidates((held.size() + 1023) / 1024);
   tbb::parallel_for(std::size_t{0}, candidates.size(), [&](std::size_t k) {
+    RecentKeys tested;  // neighbouring held cells share most of their neighbours
     for (std::size_t i = k * 1024; i < std::min(held.size(), (k + 1) * 1024); ++i) {
       const IVec<dim> cell = key_cell<dim>(held[i]);
       for_each_in_box<dim>(IVec<dim>(cell.array() - 1).cwiseMax(0), IVec<dim>(cell.array() + 1).cwiseMin(last),
                            [&](const IVec<dim>& c) {
-                             if (tree.is_refined(q - 1, c) || box_may_meet(c)) return;
+                             if (!tested.fresh(cell_key<dim>(c)) || tree.is_refined(q - 1, c) || box_may_meet(c))
+                               return;
                              const CellId<dim> leaf = tree.leaf_of(IVec<dim>(c * tree.scale(q - 1)));
                              if (leaf.level == q - 1 || !listed(reached[leaf.level], leaf.cell))
                                candidates[k].add(cell_key<dim>(c));

@@ -123,18 +123,17 @@ Mat<dim> average_deformation(const std::vector<Mat<dim>>& F, const std::vector<d
   return R.topLeftCorner<dim, dim>() * (stretch / total);
 }
 
+namespace {
+
+// Particle p (type q) and its 2^dim - 1 copies at first_new.. become p's children: the
+// corners of the rotated cube of half-diagonal b/4 around it (b its box), each with the
+// parent's APIC velocity there, a 2^-dim share of its mass and volume, and type q + 1.
 template <int dim>
-void split_particle(Particles<dim>& P, std::size_t p, const CellTree<dim>& tree, int points_per_axis,
-                    const Mat<dim>& rotation) {
+void place_children(Particles<dim>& P, std::size_t p, std::size_t first_new, const CellTree<dim>& tree,
+                    int points_per_axis, const Mat<dim>& rotation) {
   std::vector<std::uint16_t>& level = P.template channel<std::uint16_t>(kParticleLevel);
   const int q = level[p];
-  MPM_VERIFY(q < tree.finest(), Error, "split_particle: particle " + std::to_string(p) + " is of the finest type");
   constexpr int children = 1 << dim;
-  const std::size_t first_new = P.size();
-  P.resize(first_new + children - 1);
-  P.for_each_channel([&](const ChannelInfo&, auto& values) {
-    for (int c = 1; c < children; ++c) values[first_new + c - 1] = values[p];
-  });
   const Vec<dim> x = P.x[p], v = P.v[p];
   const Mat<dim> C = P.C[p];
   const double m = P.mass[p] / children, V = P.volume0[p] / children;
@@ -150,6 +149,22 @@ void split_particle(Particles<dim>& P, std::size_t p, const CellTree<dim>& tree,
     P.volume0[child] = V;
     level[child] = static_cast<std::uint16_t>(q + 1);
   }
+}
+
+}  // namespace
+
+template <int dim>
+void split_particle(Particles<dim>& P, std::size_t p, const CellTree<dim>& tree, int points_per_axis,
+                    const Mat<dim>& rotation) {
+  std::vector<std::uint16_t>& level = P.template channel<std::uint16_t>(kParticleLevel);
+  const int q = level[p];
+  MPM_VERIFY(q < tree.finest(), Error, "split_particle: particle " + std::to_string(p) + " is of the finest type");
+  const std::size_t first_new = P.size();
+  P.resize(first_new + (1 << dim) - 1);
+  P.for_each_channel([&](const ChannelInfo&, auto& values) {
+    for (std::size_t c = first_new; c < P.size(); ++c) values[c] = values[p];
+  });
+  place_children(P, p, first_new, tree, points_per_axis, rotation);
 }
 
 template <int dim>
@@ -350,12 +365,32 @@ ResampleCounts resample_particles(Particles<dim>& P, const CellTree<dim>& tree, 
     }
   }
 
-  for (std::size_t p : allowed_splits) {
-    split_particle(P, p, tree, points_per_axis, random_rotation<dim>(mix(step) ^ p));
+  // The merged-away particles dropped and the split ones' children appended in one gather: the
+  // particles kept, in order, then per split its 2^dim - 1 copies (the order of splitting
+  // each in turn and then erasing, without growing every channel and compacting it again).
+  if (allowed_splits.empty() && counts.merged == 0) return counts;
+  constexpr std::size_t copies = (1 << dim) - 1;
+  std::vector<std::uint32_t> order;
+  order.reserve(n + copies * allowed_splits.size());
+  std::vector<std::size_t> split_at;  // the split particles' indices after the gather
+  split_at.reserve(allowed_splits.size());
+  for (std::size_t p = 0, next = 0; p < n; ++p) {
+    if (erase[p]) continue;
+    if (next < allowed_splits.size() && allowed_splits[next] == p) {
+      split_at.push_back(order.size());
+      ++next;
+    }
+    order.push_back(static_cast<std::uint32_t>(p));
+  }
+  MPM_ASSERT(split_at.size() == allowed_splits.size());  // ascending, none merged
+  for (std::size_t p : allowed_splits) order.insert(order.end(), copies, static_cast<std::uint32_t>(p));
+  const std::size_t first_copy = order.size() - copies * allowed_splits.size();
+  P.permute(order);
+  for (std::size_t i = 0; i < allowed_splits.size(); ++i) {
+    const std::size_t p = allowed_splits[i];
+    place_children(P, split_at[i], first_copy + copies * i, tree, points_per_axis, random_rotation<dim>(mix(step) ^ p));
     ++counts.split;
   }
-  erase.resize(P.size(), 0);
-  P.erase_flagged(erase);
   return counts;
 }
 

@@ -75,7 +75,8 @@ public:
   //! The leaf that contains position x [m] (level -1 outside).
   CellId<dim> leaf_at(const Vec<dim>& x) const;
   //! leaf_at(x), or `hint` (a leaf of this tree, or level -1) when it contains x: loops over
-  //! particles in storage order pass the previous particle's leaf and seldom read the tables.
+  //! particles in storage order pass the previous particle's leaf and seldom read the tables
+  //! (the hint's ancestors are refined: the walk starts below the one that holds x).
   CellId<dim> leaf_at(const Vec<dim>& x, const CellId<dim>& hint) const;
   //! The finest level of the leaves that overlap the open box (lo, hi) [m]; -1 when the box
   //! misses the domain.
@@ -106,6 +107,8 @@ private:
     }
     for_each_in_box<dim>(first, last, fn);
   }
+  //! leaf_of(f), the cells of levels below `first_level` that hold f known to be refined.
+  CellId<dim> leaf_of(const IVec<dim>& f, int first_level) const;
   void visit_leaves(int level, const IVec<dim>& cell, const std::function<void(int, const IVec<dim>&)>& fn) const;
   //! refine_where's walk, top down over the level-0 cells overlapping [region_lo, region_hi]:
   //! on_refine(level, cell) for each unrefined cell whose target level exceeds its own (false:

@@ -8,7 +8,8 @@
 //  - w_ip: partition of unity, non-negativity, linear reproduction; grad w_ip against central
 //    differences; w and grad w continuous where the particle box enters a finer leaf;
 //  - the free T-junction basis of Lian et al. (sec. 5.1, eq. 9-10) goes negative where the
-//    constrained basis does not.
+//    constrained basis does not;
+//  - the leaf lookups from a hint leaf find what the walks from the roots find.
 #include <mpm/adaptive/adaptive_transfer.h>
 #include <mpm/adaptive/constrained_basis.h>
 
@@ -284,6 +285,35 @@ void check_level_switch(unsigned seed) {
   CHECK(worst_grad < 1e-6);  // grad w is C0: a change O(eps / dx), scaled by dx_finest
 }
 
+// leaf_at(x, hint) and finest_level_in(lo, hi, last_leaf) against the walks from the roots,
+// with a hint of no cell, the leaf of a nearby point (the loops' case) and of a random point.
+template <int dim>
+void check_leaf_hints(unsigned seed) {
+  const CellTree<dim> tree = test::random_tree<dim>(seed, 4, 3);
+  std::mt19937 rng(seed + 100);
+  std::uniform_real_distribution<double> u(-0.5, 2.5), step(-0.05, 0.05);
+  Vec<dim> x, prev;
+  for (int a = 0; a < dim; ++a) prev[a] = u(rng);
+  int differing = 0;
+  for (int i = 0; i < 4000; ++i) {
+    for (int a = 0; a < dim; ++a) x[a] = i % 7 == 0 ? u(rng) : std::clamp(prev[a] + step(rng), -0.5, 2.49);
+    const IVec<dim> finest_cell = ((x - tree.origin()) / tree.dx(tree.finest())).array().floor().template cast<int>();
+    const CellId<dim> truth = tree.leaf_of(finest_cell);  // the walk from the root
+    Vec<dim> far;
+    for (int a = 0; a < dim; ++a) far[a] = u(rng);
+    for (CellId<dim> hint : {CellId<dim>{}, tree.leaf_at(prev), tree.leaf_at(far)}) {
+      const CellId<dim> found = tree.leaf_at(x, hint);
+      CHECK(found.level == truth.level);
+      CHECK(found.cell == truth.cell);
+      differing += hint.level != truth.level || hint.cell != truth.cell;
+      const Vec<dim> h = Vec<dim>::Constant(0.01 * (i % 5));
+      CHECK(tree.finest_level_in(x - h, x + h, hint) == tree.finest_level_in(x - h, x + h));
+    }
+    prev = x;
+  }
+  CHECK(differing > 1000);  // the hints often miss, so the walks below them are exercised
+}
+
 // Lian et al.'s free T-junction basis (eq. 9-10) on a coarse cell [-1, 1]^2 with T-junctions b
 // = (1, 0) and d = (0, 1): the corner function N_c = H_c - N_b / 2 - N_d / 2.
 double free_tjunction_Nc(double x, double y) {
@@ -317,6 +347,11 @@ TEST_CASE("GIMP weight gradients against central differences") {
 TEST_CASE("weights are C1 where a particle's box enters a finer leaf") {
   for (unsigned seed : {1u, 2u, 3u}) check_level_switch<2>(seed);
   check_level_switch<3>(4u);
+}
+
+TEST_CASE("leaves found from a hint leaf equal those found from the roots") {
+  for (unsigned seed : {1u, 2u}) check_leaf_hints<2>(seed);
+  for (unsigned seed : {3u, 4u}) check_leaf_hints<3>(seed);
 }
 
 TEST_CASE("the free T-junction basis goes negative where the constrained one does not (Fig. 5b)") {

@@ -3,7 +3,7 @@
 // bucket order once, nearly ordered storage is reached through the index with transfers
 // bitwise equal to those on moved particles, single-precision positions give the same
 // buckets, and the scalar-generic loops run in float. The parallel key sort under the buckets
-// equals std::stable_sort.
+// equals std::stable_sort. The patch nodes the loops copy are those the stencils can reach.
 #include <mpm/core/block_table.h>
 #include <mpm/core/detail/transfer_loops.h>
 #include <mpm/core/error.h>
@@ -188,4 +188,38 @@ TEST_CASE("the parallel key sort equals std::stable_sort on every thread count")
       }
     }
   }
+}
+
+namespace {
+// Every node of every stencil that starts in the bucket's block is in the patch's reach, and
+// the reach holds no other node: (B + support - 1)^dim nodes, each once, each at its storage
+// place in its corner block.
+template <int dim, int support>
+void check_patch_reach() {
+  constexpr int B = SparseGrid<dim>::block_size, W = detail::patch_width<dim>;
+  constexpr const detail::PatchReach<dim, support>& reach = detail::patch_reach<dim, support>;
+  std::vector<int> listed(detail::patch_nodes<dim>, 0);
+  for (int corner = 0; corner < (1 << dim); ++corner)
+    for (int i = 0; i < reach.count[corner]; ++i) {
+      const int patch = reach.patch[corner][i], local = reach.local[corner][i];
+      ++listed[static_cast<std::size_t>(patch)];
+      for (int a = 0, p = patch, l = local; a < dim; ++a, p /= W, l /= B)
+        CHECK(p % W == l % B + ((corner >> a) & 1) * B);
+    }
+  int reached = 0;
+  for (int patch = 0; patch < detail::patch_nodes<dim>; ++patch) {
+    bool in_stencil = true;  // some stencil starting in [0, B) per axis holds it
+    for (int a = 0, p = patch; a < dim; ++a, p /= W) in_stencil = in_stencil && p % W < B + support - 1;
+    CHECK(listed[static_cast<std::size_t>(patch)] == (in_stencil ? 1 : 0));
+    reached += in_stencil;
+  }
+  CHECK(reached == ipow(B + support - 1, dim));
+}
+}  // namespace
+
+TEST_CASE("the patch nodes copied are exactly those the stencils reach") {
+  check_patch_reach<2, 3>();
+  check_patch_reach<2, 4>();
+  check_patch_reach<3, 3>();
+  check_patch_reach<3, 4>();
 }

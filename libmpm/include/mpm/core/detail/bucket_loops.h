@@ -121,24 +121,55 @@ constexpr std::array<int, SparseGrid<dim>::nodes_per_block> block_to_patch = [] 
   return t;
 }();
 
-//! Calls fn(patch index, storage index) for every node of the 2^dim blocks under the patch of
-//! the bucket whose first block is `block`.
-template <int dim, class Fn>
+//! The most nodes per axis a stencil of the library's kernels spans (the cubic B-spline's).
+inline constexpr int max_support = 4;
+
+//! The patch nodes a `support`-node stencil of a bucket's particles can reach, per corner block
+//! of the patch: the stencils start in the bucket's block, so on every axis the patch nodes
+//! [0, B + support - 1) (for the quadratic kernels 216 of the 512 nodes in 3D). Per corner, the
+//! count and the nodes as (patch index, index in the block), in the block's storage order.
+template <int dim, int support>
+struct PatchReach {
+  static constexpr int B = SparseGrid<dim>::block_size;
+  static_assert(support >= 1 && support <= B + 1);
+  std::array<int, 1 << dim> count{};
+  std::array<std::array<int, SparseGrid<dim>::nodes_per_block>, 1 << dim> patch{}, local{};
+};
+template <int dim, int support>
+constexpr PatchReach<dim, support> patch_reach = [] {
+  constexpr int B = SparseGrid<dim>::block_size;
+  PatchReach<dim, support> r;
+  for (int corner = 0; corner < (1 << dim); ++corner)
+    for (int l = 0; l < SparseGrid<dim>::nodes_per_block; ++l) {
+      bool reached = true;
+      for (int a = 0, rest = l; a < dim; ++a, rest /= B)
+        reached = reached && rest % B < (((corner >> a) & 1) ? support - 1 : B);
+      if (!reached) continue;
+      int corner_patch = 0;
+      for (int a = 0, stride = 1; a < dim; ++a, stride *= patch_width<dim>)
+        corner_patch += ((corner >> a) & 1) * B * stride;
+      const int i = r.count[corner]++;
+      r.patch[corner][i] = corner_patch + block_to_patch<dim>[l];
+      r.local[corner][i] = l;
+    }
+  return r;
+}();
+
+//! Calls fn(patch index, storage index) for every node of the patch of the bucket whose first
+//! block is `block` that a `support`-node stencil of its particles can reach (PatchReach).
+template <int dim, int support = max_support, class Fn>
 void for_each_patch_node(const SparseGrid<dim>& grid, BlockKey block, Fn&& fn) {
   constexpr int B = SparseGrid<dim>::block_size;
-  constexpr int W = patch_width<dim>;
+  constexpr const PatchReach<dim, support>& reach = patch_reach<dim, support>;
   const IVec<dim> origin = grid.block_coord(block) * B;
   for (int corner = 0; corner < (1 << dim); ++corner) {
+    if (reach.count[corner] == 0) continue;
     IVec<dim> corner_node = origin;
-    int corner_patch = 0;
-    for (int a = 0, stride = 1; a < dim; ++a, stride *= W) {
-      const int c = ((corner >> a) & 1) * B;
-      corner_node[a] += c;
-      corner_patch += c * stride;
-    }
+    for (int a = 0; a < dim; ++a) corner_node[a] += ((corner >> a) & 1) * B;
     const std::size_t first =
         static_cast<std::size_t>(grid.slot(grid.block_id(corner_node))) * SparseGrid<dim>::nodes_per_block;
-    for (int l = 0; l < SparseGrid<dim>::nodes_per_block; ++l) fn(corner_patch + block_to_patch<dim>[l], first + l);
+    for (int i = 0; i < reach.count[corner]; ++i)
+      fn(reach.patch[corner][i], first + static_cast<std::size_t>(reach.local[corner][i]));
   }
 }
 
@@ -170,8 +201,9 @@ void for_each_range(I n, I grain, bool serial, Body&& body) {
 
 //! bucket_body(first, last, const PatchFrame&, T* patch) adds Ch values per node of the
 //! particles with indices [first, last) (a range of ParticleBuckets::particle: one bucket)
-//! into patch[node * Ch + c]; the sums are added into `channels` afterwards.
-template <int dim, int Ch, class T, class BucketBody>
+//! into patch[node * Ch + c]; the sums are added into `channels` afterwards. The particles'
+//! stencils span at most `support` nodes per axis.
+template <int dim, int Ch, int support = max_support, class T, class BucketBody>
 void scatter_buckets(const SparseGrid<dim>& grid, const ParticleBuckets<dim>& buckets,
                      const std::array<BasicChannelView<T>, Ch>& channels, BucketBody&& bucket_body) {
   const bool serial = buckets.particle.size() < serial_below_particles;
@@ -183,7 +215,7 @@ void scatter_buckets(const SparseGrid<dim>& grid, const ParticleBuckets<dim>& bu
         patch.fill(T(0));
         bucket_body(buckets.particle.data() + buckets.begin[b], buckets.particle.data() + buckets.begin[b + 1],
                     PatchFrame<dim>(grid, buckets.block[b]), patch.data());
-        for_each_patch_node(grid, buckets.block[b], [&](int node, std::size_t k) {
+        for_each_patch_node<dim, support>(grid, buckets.block[b], [&](int node, std::size_t k) {
           for (int c = 0; c < Ch; ++c)
             channels[c].data[k * channels[c].stride + channels[c].offset] += patch[node * Ch + c];
         });
@@ -204,15 +236,16 @@ void scatter(const SparseGrid<dim>& grid, const ParticleBuckets<dim>& buckets,
 }
 
 //! bucket_body(first, last, const PatchFrame&, const T* patch) reads Ch values per node for
-//! the particles with indices [first, last) (one bucket).
-template <int dim, int Ch, class T, class BucketBody>
+//! the particles with indices [first, last) (one bucket), whose stencils span at most `support`
+//! nodes per axis (the other patch values are left unset).
+template <int dim, int Ch, int support = max_support, class T, class BucketBody>
 void gather_buckets(const SparseGrid<dim>& grid, const ParticleBuckets<dim>& buckets,
                     const std::array<BasicChannelView<T>, Ch>& channels, BucketBody&& bucket_body) {
   const bool serial = buckets.particle.size() < serial_below_particles;
   for_each_range(buckets.count(), 4, serial, [&](const tbb::blocked_range<int>& range) {
     alignas(64) std::array<T, patch_nodes<dim> * Ch> patch;
     for (int b = range.begin(); b != range.end(); ++b) {
-      for_each_patch_node(grid, buckets.block[b], [&](int node, std::size_t k) {
+      for_each_patch_node<dim, support>(grid, buckets.block[b], [&](int node, std::size_t k) {
         for (int c = 0; c < Ch; ++c)
           patch[node * Ch + c] = channels[c].data[k * channels[c].stride + channels[c].offset];
       });

@@ -288,7 +288,7 @@ void p2g(const PS& P, const ParticleBuckets<dim>& buckets, const K& kernel, cons
   using MatT = Eigen::Matrix<T, dim, dim>;
   const T dx = static_cast<T>(grid.dx());
   const T inv_dx = 1 / dx;
-  scatter_buckets<dim, int(Ch)>(
+  scatter_buckets<dim, int(Ch), K::support>(
       grid, buckets, channels,
       [&](const std::uint32_t* first, const std::uint32_t* last, const PatchFrame<dim>& f, T* patch) {
         Stencil<dim, K::support, T> st[chunk_size];
@@ -393,9 +393,11 @@ void g2p(PS& P, const ParticleBuckets<dim>& buckets, const K& kernel, const Spar
       if (then) (*then)(first, last);
   };
   const bool avx2 = cpu_has_avx2();
-  gather_buckets<dim, lanes>(grid, buckets, read,
-                             [&](const std::uint32_t* first, const std::uint32_t* last, const PatchFrame<dim>& f,
-                                 const T* patch) { with_simd(avx2, bucket, first, last, &f, patch); });
+  gather_buckets<dim, lanes, K::support>(
+      grid, buckets, read,
+      [&](const std::uint32_t* first, const std::uint32_t* last, const PatchFrame<dim>& f, const T* patch) {
+        with_simd(avx2, bucket, first, last, &f, patch);
+      });
 }
 
 }  // namespace mpm::detail
