@@ -248,7 +248,7 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
     });
     for (std::size_t i = 0; i < fresh.size(); ++i) {
       FreshStatus& c = computed[i];
-      const std::size_t link_offset = status.links.size();
+      const auto link_offset = static_cast<std::uint32_t>(status.links.size());
       BlockStatus block{static_cast<std::uint32_t>(status.ghosts.size()),  0, c.embedded,   fresh_nodes[i],
                         static_cast<std::uint32_t>(status.reached.size()), 0, c.depends_lo, c.depends_hi};
       for (PendingGhost& ghost : c.ghosts) {
@@ -396,6 +396,8 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
   for (int n = 0; n < L; ++n) {
     Ghosts& g = ghosts_[n];
     g = Ghosts{};
+    MPM_VERIFY(levels_[n].node_storage() <= std::numeric_limits<std::uint32_t>::max(), Error,
+               "adaptive grid: level " + std::to_string(n) + " holds more nodes than 32-bit ghost links address");
     g.of_node.assign(levels_[n].node_storage(), -1);
     const LevelStatus& status = status_[n];
     const std::vector<BlockKey>& own = own_blocks[n];
@@ -412,15 +414,18 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
     }
     const std::size_t ghosts = first_ghost.back();
     g.node.resize(ghosts);
-    g.spread.resize(ghosts);
     g.begin.resize(ghosts + 1);
+    g.moment.resize(ghosts);
+    int moments = 0;
     for (std::size_t b = 0; b < own.size(); ++b)
-      for (std::uint32_t j = block[b]->first_ghost, out = first_ghost[b]; j < block[b]->end_ghost; ++j)
-        if (tabled(b, status.ghosts[j])) {
-          g.begin[out + 1] =
-              g.begin[out] + static_cast<std::uint32_t>(status.ghosts[j].end_link - status.ghosts[j].first_link);
-          ++out;
-        }
+      for (std::uint32_t j = block[b]->first_ghost, out = first_ghost[b]; j < block[b]->end_ghost; ++j) {
+        const PendingGhost& ghost = status.ghosts[j];
+        if (!tabled(b, ghost)) continue;
+        g.begin[out + 1] = g.begin[out] + (ghost.end_link - ghost.first_link);
+        g.moment[out] = (block[b]->embedded >> SparseGrid<dim>::local_index(ghost.node) & 1) != 0 ? moments++ : -1;
+        ++out;
+      }
+    g.spread.resize(static_cast<std::size_t>(moments));
     g.link.resize(g.begin.back());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, own.size(), 8), [&](const auto& range) {
       for (std::size_t b = range.begin(); b != range.end(); ++b) {
@@ -433,14 +438,15 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
           std::uint32_t l_out = g.begin[out];
           for (std::size_t l = ghost.first_link; l < ghost.end_link; ++l, ++l_out) {
             const NodeWeight<dim>& link = status.links[l];
-            g.link[l_out] = {levels_[link.level].node_index(link.point / tree_.scale(link.level)), link.weight,
-                             link.level};
+            g.link[l_out] = {
+                static_cast<std::uint32_t>(levels_[link.level].node_index(link.point / tree_.scale(link.level))),
+                link.level, link.weight};
             const Vec<dim> r = link_offset(g.link[l_out], xk);
             spread.noalias() += link.weight * r * r.transpose();
           }
           g.of_node[static_cast<std::size_t>(k)] = static_cast<int>(out);
           g.node[out] = k;
-          g.spread[out] = spread;
+          if (const int m = g.moment[out]; m >= 0) g.spread[static_cast<std::size_t>(m)] = spread;
           ++out;
         }
       }
@@ -601,7 +607,7 @@ typename AdaptiveGrid<dim>::FreshStatus AdaptiveGrid<dim>::block_status(int n, B
     if (home_level(tree_, point) == n) continue;  // a real node of this level
     const std::size_t first_link = out.links.size();
     embed(tree_, point, 1.0, out.links);
-    out.ghosts.push_back({node, first_link, out.links.size()});
+    out.ghosts.push_back({node, static_cast<std::uint32_t>(first_link), static_cast<std::uint32_t>(out.links.size())});
     if (out.links.size() - first_link > 1 || out.links[first_link].point != point)
       out.embedded |= std::uint64_t{1} << SparseGrid<dim>::local_index(node);
   }
@@ -715,7 +721,8 @@ void AdaptiveGrid<dim>::forget_changed_statuses() {
         const std::size_t shift = first_link[k] - first_link_of(was);
         for (std::uint32_t j = was.first_ghost, out = now.first_ghost; j < was.end_ghost; ++j, ++out) {
           const PendingGhost& ghost = old.ghosts[j];
-          kept.ghosts[out] = {ghost.node, ghost.first_link + shift, ghost.end_link + shift};
+          kept.ghosts[out] = {ghost.node, static_cast<std::uint32_t>(ghost.first_link + shift),
+                              static_cast<std::uint32_t>(ghost.end_link + shift)};
         }
         std::copy(old.links.begin() + static_cast<std::ptrdiff_t>(first_link_of(was)),
                   old.links.begin() + static_cast<std::ptrdiff_t>(first_link_of(was) + link_count(was)),
@@ -783,7 +790,7 @@ void AdaptiveGrid<dim>::pull_velocity(bool old) {
   for (int n = 0; n < levels(); ++n) {
     Ghosts& g = ghosts_[n];
     SparseGrid<dim>& to = levels_[n];
-    g.velocity_moment.resize(g.node.size());
+    g.velocity_moment.resize(g.spread.size());
     // Ghosts read real nodes only and write their own: in parallel.
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, g.node.size(), 512), [&](const auto& range) {
       for (std::size_t j = range.begin(); j != range.end(); ++j) {
@@ -799,7 +806,7 @@ void AdaptiveGrid<dim>::pull_velocity(bool old) {
           if (old) v_old += link.weight * from.velocity_old[i];
           moment.noalias() += link.weight * from.velocity[i] * link_offset(link, xk).transpose();
         }
-        g.velocity_moment[j] = moment;
+        if (const int m = g.moment[j]; m >= 0) g.velocity_moment[static_cast<std::size_t>(m)] = moment;
         to.velocity[k] = v;
         if (old) to.velocity_old[k] = v_old;
       }
@@ -821,7 +828,8 @@ std::size_t AdaptiveGrid<dim>::index_bytes() const {
   for (const Ghosts& g : ghosts_)
     bytes += g.node.capacity() * sizeof(Index) + g.begin.capacity() * sizeof(std::uint32_t) +
              g.link.capacity() * sizeof(GhostLink<dim>) + g.spread.capacity() * sizeof(Mat<dim>) +
-             g.of_node.capacity() * sizeof(int) + g.velocity_moment.capacity() * sizeof(Mat<dim>);
+             g.of_node.capacity() * sizeof(int) + g.velocity_moment.capacity() * sizeof(Mat<dim>) +
+             g.moment.capacity() * sizeof(int);
   for (const ParticleBuckets<dim>& b : regular_) bytes += b.memory_bytes();
   for (const ParticleBuckets<dim>& b : near_embedded_) bytes += b.memory_bytes();
   for (const std::vector<std::uint32_t>& m : near_masks_) bytes += m.capacity() * sizeof(std::uint32_t);

@@ -64,9 +64,9 @@ void apic_moments(const AdaptiveGrid<dim>& grid, int n, double h, const Vec<dim>
     v += w * vk;
     B.noalias() += w * vk * r.transpose();
     D.noalias() += w * r * r.transpose();
-    if (const int j = ghosts.of_node[k]; j >= 0) {
-      B += w * ghosts.velocity_moment[j];
-      D += w * ghosts.spread[j];
+    if (const int j = ghosts.of_node[k]; j >= 0 && ghosts.moment[j] >= 0) {
+      B += w * ghosts.velocity_moment[ghosts.moment[j]];
+      D += w * ghosts.spread[ghosts.moment[j]];
     }
   });
 }
@@ -164,9 +164,9 @@ void add_ghost_terms(Particles<dim>& P, const AdaptiveGrid<dim>& grid, int n, co
     alignas(64) std::array<double, detail::patch_nodes<dim> * Ch> patch;
     detail::for_each_patch_node<dim, 3>(g, near.block[b], [&](int node, std::size_t k) {
       double* out = patch.data() + node * Ch;
-      if (const int j = ghosts.of_node[k]; j >= 0) {
-        std::copy_n(ghosts.velocity_moment[j].data(), M, out);
-        std::copy_n(ghosts.spread[j].data(), M, out + M);
+      if (const int j = ghosts.of_node[k]; j >= 0 && ghosts.moment[j] >= 0) {
+        std::copy_n(ghosts.velocity_moment[ghosts.moment[j]].data(), M, out);
+        std::copy_n(ghosts.spread[ghosts.moment[j]].data(), M, out + M);
       } else {
         std::fill_n(out, Ch, 0.0);
       }

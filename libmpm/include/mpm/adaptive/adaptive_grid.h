@@ -53,13 +53,15 @@ struct GimpAxis {
 
 //! A ghost's link to one real node: value_ghost += weight * value(level, index). APIC's affine
 //! terms take the offset x_i - x_k from the two nodes' positions (link_offset): stored, it
-//! doubled the tables (24 of 48 bytes per link).
+//! tripled the tables (24 of 40 bytes per link). 16 bytes: a level's storage index fits in 32
+//! bits (prepare() checks).
 template <int dim>
 struct GhostLink {
-  Index index;
-  double weight;
+  std::uint32_t index;
   int level;
+  double weight;
 };
+static_assert(sizeof(GhostLink<3>) == 16);
 
 template <int dim>
 class AdaptiveGrid {
@@ -169,6 +171,9 @@ public:
     std::vector<Index> node;
     std::vector<std::uint32_t> begin{0};
     std::vector<GhostLink<dim>> link;
+    //! Per ghost: its row in spread and velocity_moment when it is embedded, -1 when it is a
+    //! real node of another level (one link of weight 1 at its own position: both vanish).
+    std::vector<int> moment;
     std::vector<Mat<dim>> spread;
     std::vector<int> of_node;  //!< per storage node: its ghost index, or -1
     //! Q_k = sum_i E_ik v_i (x_i - x_k)^T [m^2/s], filled by pull_velocity for APIC's B_p.
@@ -251,7 +256,7 @@ private:
   // it cannot reach (forget_changed_statuses()).
   struct PendingGhost {
     IVec<dim> node;  // level coordinate
-    std::size_t first_link, end_link;
+    std::uint32_t first_link, end_link;
   };
   struct BlockStatus {
     std::uint32_t first_ghost, end_ghost;

@@ -11,7 +11,8 @@
 //    particles' blocks, not the domain;
 //  - after a tree change, the grids and ghost tables equal those built from scratch;
 //  - the ghosts' push (real nodes gather their links' sums in parallel) equals the serial
-//    scatter, ghost by ghost, bit for bit;
+//    scatter, ghost by ghost, bit for bit; the embedded ghosts, and only they, keep the
+//    moments R_k (a real node of another level has none);
 //  - the ghost tables hold the nodes the stencils reach that are not real on their level, and
 //    built afresh, no other node.
 #include <mpm/adaptive/adaptive_transfer.h>
@@ -413,9 +414,25 @@ void check_push(unsigned seed) {
   }
   for (int n = 0; n < L; ++n) {
     const auto& g = grid.ghosts(n);
+    int next_moment = 0;  // the embedded ghosts' rows of spread, in ghost order
     for (std::size_t j = 0; j < g.node.size(); ++j) {
       const std::size_t k = static_cast<std::size_t>(g.node[j]);
       const Vec<dim> xk = grid.node_position(n, g.node[j]);
+      // A ghost has moments iff it is not a real node of another level (one link of weight 1
+      // at its own position), and they are its links' second moment R_k.
+      Mat<dim> R = Mat<dim>::Zero();
+      for (std::uint32_t l = g.begin[j]; l < g.begin[j + 1]; ++l) {
+        const Vec<dim> r = grid.link_offset(g.link[l], xk);
+        R += g.link[l].weight * r * r.transpose();
+      }
+      const bool collocated = g.begin[j + 1] - g.begin[j] == 1 && g.link[g.begin[j]].weight == 1.0 &&
+                              grid.link_offset(g.link[g.begin[j]], xk) == Vec<dim>::Zero();
+      if (collocated) {
+        CHECK(g.moment[j] == -1);
+      } else {
+        REQUIRE(g.moment[j] == next_moment++);
+        CHECK(g.spread[static_cast<std::size_t>(g.moment[j])] == R);
+      }
       for (std::uint32_t l = g.begin[j]; l < g.begin[j + 1]; ++l) {
         const GhostLink<dim>& link = g.link[l];
         const std::size_t i = static_cast<std::size_t>(link.index);
@@ -524,7 +541,9 @@ TEST_CASE("the ghost tables hold exactly the nodes the stencils reach that are n
   for (unsigned seed : {4u, 5u}) check_ghost_tables<3>(seed);
 }
 
-TEST_CASE("the ghosts' push gathers in parallel what the serial scatter adds, bit for bit") {
+TEST_CASE(
+    "the ghosts' push gathers in parallel what the serial scatter adds, bit for bit; only embedded ghosts keep "
+    "moments") {
   for (unsigned seed : {1u, 2u}) check_push<2>(seed);
   check_push<3>(4u);
 }
@@ -649,6 +668,8 @@ void check_tree_change(unsigned seed) {
         CHECK(a.link[l].index == b.link[l].index);
         CHECK(a.link[l].weight == b.link[l].weight);
       }
+      REQUIRE(a.moment == b.moment);
+      REQUIRE(a.spread.size() == b.spread.size());
       for (std::size_t j = 0; j < a.spread.size(); ++j) CHECK(a.spread[j] == b.spread[j]);
     }
   }
