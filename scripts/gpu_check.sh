@@ -33,7 +33,7 @@ PY
 }
 big="--set column.cells_per_width=110 --set output.particles=false --set output.png=false --quiet"
 # GPU_CHECK_FULL=1: only the 3D column collapse at 10.6 M particles to the scene's end (1 s,
-# about 86 000 steps, frames every 0.05 s: 495 s on an H200, docs/performance.md), a call of
+# 85 900 steps, frames every 0.05 s: 504 s on an H200, docs/performance.md), a call of
 # its own (the checks below take another 5 minutes).
 if [ "${GPU_CHECK_FULL:-0}" = 1 ]; then
   step collapse_full 580 "$bin/column_collapse" data/scenes/column_collapse_3d.yaml $big --set time.frame_dt=0.05 \
