@@ -196,17 +196,22 @@ void add_ghost_terms(Particles<dim>& P, const AdaptiveGrid<dim>& grid, int n, co
 
 template <int dim>
 void particles_to_grid(const Particles<dim>& P, const TransferScheme& scheme, AdaptiveGrid<dim>& grid,
-                       const std::vector<Mat<dim>>* S) {
+                       const std::vector<Mat<dim>>* S, double impulse_dt) {
   MPM_ASSERT(grid.particle_count() == P.size());
   const bool apic = scheme.type == TransferScheme::Type::apic;
+  const bool impulse = S && impulse_dt > 0.0;
   std::vector<std::vector<Mat<dim>>> affine(grid.levels());
   for (int n = 0; n < grid.levels(); ++n) {
-    mpm::particles_to_grid(P, grid.regular(n), grid.regular_kernel(), scheme, grid.level(n), S);  // zeroes first
+    mpm::particles_to_grid(P, grid.regular(n), grid.regular_kernel(), scheme, grid.level(n), S,
+                           impulse_dt);  // zeroes first
     affine[n].assign(grid.ghosts(n).node.size(), Mat<dim>::Zero());
   }
   scatter_irregular(P, grid, [&](std::size_t p, int n, Index k, double w, const Vec<dim>& grad, const Vec<dim>& xk) {
     SparseGrid<dim>& g = grid.level(n);
-    if (S) g.force[k] -= (*S)[p] * grad;
+    if (impulse)
+      g.velocity[k] -= impulse_dt * ((*S)[p] * grad);
+    else if (S)
+      g.force[k] -= (*S)[p] * grad;
     const double wm = w * P.mass[p];
     g.mass[k] += wm;
     if (apic) {
@@ -218,7 +223,7 @@ void particles_to_grid(const Particles<dim>& P, const TransferScheme& scheme, Ad
   });
   for (int n = 0; apic && n < grid.levels(); ++n) scatter_ghost_affine(P, grid, n, affine[n]);
   grid.push_momentum(affine);
-  if (S) grid.push(grid.per_level(&SparseGrid<dim>::force));
+  if (S && !impulse) grid.push(grid.per_level(&SparseGrid<dim>::force));
 }
 
 template <int dim>
@@ -310,7 +315,7 @@ std::vector<RealWeight<dim>> real_weights(const AdaptiveGrid<dim>& grid, int n, 
 
 #define MPM_INSTANTIATE(dim)                                                                                    \
   template void particles_to_grid(const Particles<dim>&, const TransferScheme&, AdaptiveGrid<dim>&,             \
-                                  const std::vector<Mat<dim>>*);                                                \
+                                  const std::vector<Mat<dim>>*, double);                                        \
   template void momentum_to_velocity(AdaptiveGrid<dim>&, const TransferScheme&);                                \
   template void stress_to_grid_forces(const std::vector<Mat<dim>>&, const Particles<dim>&, AdaptiveGrid<dim>&); \
   template void pull_velocities(AdaptiveGrid<dim>&, const TransferScheme&);                                     \

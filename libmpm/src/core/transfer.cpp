@@ -20,17 +20,19 @@ std::array<ChannelView, dim> vector_views(const std::vector<Vec<dim>>& v) {
 template <int dim>
 void particles_to_grid(const Particles<dim>& particles, const ParticleBuckets<dim>& buckets, const Kernel& kernel,
                        const TransferScheme& scheme, SparseGrid<dim>& grid,
-                       const std::vector<Mat<dim>>* weighted_stress) {
+                       const std::vector<Mat<dim>>* weighted_stress, double impulse_dt) {
   MPM_VERIFY(!weighted_stress || weighted_stress->size() == particles.size(), Error,
              "particles_to_grid: the stresses need one entry per particle");
   std::fill(grid.mass.begin(), grid.mass.end(), 0.0);
+  const bool impulse = weighted_stress && impulse_dt > 0.0;
+  if (impulse) std::vector<Vec<dim>>().swap(grid.force);  // the forces are in the momentum
   std::fill(grid.velocity.begin(), grid.velocity.end(), Vec<dim>::Zero());
   const auto run = [&](auto channel_count) {
     constexpr std::size_t Ch = decltype(channel_count)::value;
     std::array<ChannelView, Ch> channels;
     channels[0] = scalar_view(grid.mass);
     for (int a = 0; a < dim; ++a) channels[a + 1] = component_view<dim>(grid.velocity, a);
-    const Mat<dim>* S = nullptr;
+    const Mat<dim>* S = impulse ? weighted_stress->data() : nullptr;
     if constexpr (Ch > dim + 1) {
       grid.force.assign(grid.node_storage(), Vec<dim>::Zero());
       for (int a = 0; a < dim; ++a) channels[dim + 1 + a] = component_view<dim>(grid.force, a);
@@ -40,13 +42,13 @@ void particles_to_grid(const Particles<dim>& particles, const ParticleBuckets<di
         [&](const auto& k) {
           using K = std::decay_t<decltype(k)>;
           if (scheme.type == TransferScheme::Type::apic)
-            detail::p2g<dim, K, true>(particles, buckets, k, grid, channels, S);
+            detail::p2g<dim, K, true>(particles, buckets, k, grid, channels, S, impulse_dt);
           else
-            detail::p2g<dim, K, false>(particles, buckets, k, grid, channels, S);
+            detail::p2g<dim, K, false>(particles, buckets, k, grid, channels, S, impulse_dt);
         },
         kernel);
   };
-  if (weighted_stress)
+  if (weighted_stress && !impulse)
     run(std::integral_constant<std::size_t, 2 * dim + 1>{});
   else
     run(std::integral_constant<std::size_t, dim + 1>{});
@@ -205,7 +207,7 @@ void stress_to_nodes(const std::vector<Mat<dim>>& weighted_stress, const Particl
 
 #define MPM_INSTANTIATE(dim)                                                                                           \
   template void particles_to_grid(const Particles<dim>&, const ParticleBuckets<dim>&, const Kernel&,                   \
-                                  const TransferScheme&, SparseGrid<dim>&, const std::vector<Mat<dim>>*);              \
+                                  const TransferScheme&, SparseGrid<dim>&, const std::vector<Mat<dim>>*, double);      \
   template void momentum_to_velocity(SparseGrid<dim>&, const TransferScheme&);                                         \
   template void grid_to_particles(Particles<dim>&, const ParticleBuckets<dim>&, const Kernel&, const TransferScheme&,  \
                                   const SparseGrid<dim>&, double, std::vector<Mat<dim>>*, const ParticleGroupUpdate*); \

@@ -1,7 +1,8 @@
 // Grid forces of the explicit step (paper sec. 3.2, eq. 1-2), by default in the p2g scatter:
 //   f_i = - sum_p V_p^0 P(F_p^E) (F_p^E)^T grad w_ip = - sum_p V_p^0 tau_p grad w_ip,
-// with tau = P F^T the Kirchhoff stress of the elastic part (multiplicative plasticity keeps
-// all stress in F^E). The constitutive model is chosen per material by std::visit outside
+// there added to the momentum as the impulse dt f_i (no force channel) unless FLIP needs the
+// velocity before the forces; tau = P F^T is the Kirchhoff stress of the elastic part
+// (multiplicative plasticity keeps all stress in F^E). The constitutive model is chosen per material by std::visit outside
 // the particle loop. Precondition: particles sorted into buckets (stage 'sort').
 // A plastic material's tau is the one the last return map left in the stress cache
 // (solid_channels.h), computed from its SVD of F^E: one SVD per particle and step instead of
@@ -63,13 +64,16 @@ void StressForces<dim>::run(MpmState<dim>& s) {
   }
   if (!finite.load()) check_finite(weighted_stress_, name(), "particle", "Kirchhoff stress");
 
+  // The fused scatter adds the forces to the momentum as the impulse dt f where the grid
+  // update needs no velocity before the forces (all but FLIP's v_old): no force channel.
+  const double impulse_dt = s.transfer.uses_old_velocity() ? 0.0 : s.dt;
   if (s.adaptive) {
     if (fused())
-      adaptive::particles_to_grid(P, s.transfer, *s.adaptive, &weighted_stress_);
+      adaptive::particles_to_grid(P, s.transfer, *s.adaptive, &weighted_stress_, impulse_dt);
     else
       adaptive::stress_to_grid_forces(weighted_stress_, P, *s.adaptive);
   } else if (fused()) {
-    particles_to_grid(P, s.buckets, s.kernel, s.transfer, s.grid, &weighted_stress_);
+    particles_to_grid(P, s.buckets, s.kernel, s.transfer, s.grid, &weighted_stress_, impulse_dt);
   } else {
     stress_to_grid_forces(weighted_stress_, P, s.buckets, s.kernel, s.grid);
   }

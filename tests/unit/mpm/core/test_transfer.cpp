@@ -228,7 +228,46 @@ void check_fused_stress(const Kernel& kernel, const TransferScheme& scheme) {
   const std::vector<Mat<dim>> one_short(S.begin(), S.end() - 1);
   CHECK_THROWS_AS(particles_to_grid(P, buckets, kernel, scheme, grid, &one_short), Error);
 }
+
+//! P2G with the stresses as an impulse: the momentum is (m v)_i + dt f_i of the scatter with
+//! force channels to round-off, the mass bit for bit, and the force channel is released. The
+//! stress is large against the momentum, so that a missing, doubled or mis-scaled impulse
+//! (or one into the wrong channel) shows.
+template <int dim>
+void check_stress_impulse(const Kernel& kernel) {
+  CAPTURE(dim);
+  CAPTURE(kernel_name(kernel));
+  SparseGrid<dim> grid(Vec<dim>::Zero(), Vec<dim>::Ones(), 1.0 / 16);
+  Particles<dim> P = random_cloud<dim>(dim == 2 ? 2000 : 8000, Vec<dim>::Constant(0.2), Vec<dim>::Constant(0.8), 17);
+  ParticleBuckets<dim> buckets;
+  sort_into_buckets(P, kernel, grid, buckets);
+  std::vector<Mat<dim>> S(P.size());
+  for (std::size_t p = 0; p < P.size(); ++p) S[p] = 50.0 * (P.C[p].transpose() + Mat<dim>::Identity());
+  const double dt = 0.3;
+  particles_to_grid(P, buckets, kernel, TransferScheme{}, grid, &S);
+  const SparseGrid<dim> forces = grid;
+  particles_to_grid(P, buckets, kernel, TransferScheme{}, grid, &S, dt);
+  CHECK(grid.force.empty());
+  CHECK(grid.force.capacity() == 0);
+  double worst = 0.0, scale = 0.0, impulse = 0.0;
+  for (std::size_t k = 0; k < grid.node_storage(); ++k) {
+    REQUIRE(grid.mass[k] == forces.mass[k]);
+    const Vec<dim> expected = forces.velocity[k] + dt * forces.force[k];
+    worst = std::max(worst, (grid.velocity[k] - expected).norm());
+    scale = std::max(scale, expected.norm());
+    impulse = std::max(impulse, dt * forces.force[k].norm());
+  }
+  REQUIRE(impulse > 0.1 * scale);
+  CHECK(worst < 1e-14 * scale);
+}
 }  // namespace
+
+TEST_CASE("P2G with the stresses as an impulse in the momentum: (m v)_i + dt f_i, no force channel") {
+  for (const Kernel& k : {Kernel{QuadraticBSpline{}}, Kernel{CubicBSpline{}}, Kernel{UGimp{0.3}}}) {
+    check_stress_impulse<2>(k);
+    check_stress_impulse<3>(k);
+  }
+}
 
 TEST_CASE("P2G with the stress forces in one scatter: mass, momentum and forces of the two scatters, bit for bit") {
   TransferScheme flip;

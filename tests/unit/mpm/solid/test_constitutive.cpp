@@ -580,13 +580,27 @@ void check_stress_cache() {
   CHECK(on_cone > sand_particles / 10);  // the return map did work
 }
 
+// Largest |a_p - b_p| over the particles, relative to the largest |b_p|.
+template <class T>
+double relative_difference(const std::vector<T>& a, const std::vector<T>& b) {
+  double worst = 0.0, scale = 0.0;
+  for (std::size_t p = 0; p < a.size(); ++p) {
+    worst = std::max(worst, double((a[p] - b[p]).norm()));
+    scale = std::max(scale, double(b[p].norm()));
+  }
+  return scale > 0.0 ? worst / scale : worst;
+}
+
 // The explicit solver's pipeline scatters the stress forces in its p2g pass and projects each
 // bucket right after its gather (p2g_stress, g2p_plasticity). The same step assembled from the
-// separate stages (p2g, stress_forces, g2p, plasticity) must give the same particles bit for bit.
+// separate stages (p2g, stress_forces, g2p, plasticity) must give the same particles: bit for
+// bit where p2g_stress keeps a force channel (FLIP), to round-off (`tolerance`, relative to
+// each channel's largest value) where it adds the forces to the momentum as impulses (APIC).
 template <int dim>
-void check_fused_passes() {
-  INFO("dim = ", dim);
+void check_fused_passes(TransferScheme::Type scheme, double tolerance) {
+  INFO("dim = ", dim, ", flip = ", scheme == TransferScheme::Type::flip);
   solid::SolidScene<dim> fused = sand_and_jelly<dim>(), separate = sand_and_jelly<dim>();
+  fused.state.transfer.type = separate.state.transfer.type = scheme;
   Pipeline<MpmState<dim>> a = solid::make_solid_pipeline(fused);
   const std::vector<std::string> names = a.stage_names();
   CHECK(std::find(names.begin(), names.end(), "p2g_stress") != names.end());
@@ -604,18 +618,36 @@ void check_fused_passes() {
   for (int step = 0; step < 60; ++step) {
     a.step(fused.state);
     b.step(separate.state);
+    CHECK(fused.state.grid.force.empty() == (scheme == TransferScheme::Type::apic));
   }
   const Particles<dim>&P = fused.state.particles, &Q = separate.state.particles;
   REQUIRE(P.size() == Q.size());
   CHECK(fused.state.time == separate.state.time);
-  CHECK(P.x == Q.x);
-  CHECK(P.v == Q.v);
-  CHECK(P.C == Q.C);
-  CHECK(solid::elastic_F(P) == solid::elastic_F(Q));
-  CHECK(solid::plastic_state(P) == solid::plastic_state(Q));
-  const std::vector<Mat<dim>>&cp = *solid::stress_cache(P), &cq = *solid::stress_cache(Q);
-  for (std::size_t p = 0; p < P.size(); ++p)  // NaN (unknown) entries compare unequal
-    REQUIRE((cp[p] == cq[p] || (!solid::known_stress(cp[p]) && !solid::known_stress(cq[p]))));
+  const std::vector<double>&ep = solid::plastic_state(P), &eq = solid::plastic_state(Q);
+  double plastic = 0.0, plastic_scale = 0.0;
+  for (std::size_t p = 0; p < P.size(); ++p) {
+    plastic = std::max(plastic, std::abs(ep[p] - eq[p]));
+    plastic_scale = std::max(plastic_scale, std::abs(eq[p]));
+  }
+  if (tolerance == 0.0) {
+    CHECK(P.x == Q.x);
+    CHECK(P.v == Q.v);
+    CHECK(P.C == Q.C);
+    CHECK(solid::elastic_F(P) == solid::elastic_F(Q));
+    CHECK(ep == eq);
+    const std::vector<Mat<dim>>&cp = *solid::stress_cache(P), &cq = *solid::stress_cache(Q);
+    for (std::size_t p = 0; p < P.size(); ++p)  // NaN (unknown) entries compare unequal
+      REQUIRE((cp[p] == cq[p] || (!solid::known_stress(cp[p]) && !solid::known_stress(cq[p]))));
+  } else {
+    CHECK(relative_difference(P.x, Q.x) < tolerance);
+    CHECK(relative_difference(P.v, Q.v) < tolerance);
+    CHECK(relative_difference(P.C, Q.C) < tolerance);
+    CHECK(relative_difference(solid::elastic_F(P), solid::elastic_F(Q)) < tolerance);
+    CHECK(plastic <= tolerance * plastic_scale);
+  }
+  MESSAGE("x ", relative_difference(P.x, Q.x), " v ", relative_difference(P.v, Q.v), " C ",
+          relative_difference(P.C, Q.C), " F ", relative_difference(solid::elastic_F(P), solid::elastic_F(Q)),
+          " plastic ", plastic / std::max(plastic_scale, 1e-300));
   double vmax = 0.0;
   for (const Vec<dim>& v : P.v) vmax = std::max(vmax, v.norm());
   CHECK(vmax > 0.1);  // the bodies moved
@@ -623,9 +655,12 @@ void check_fused_passes() {
 
 }  // namespace
 
-TEST_CASE("the explicit step's fused passes give the separate stages' particles bit for bit (2D and 3D)") {
-  check_fused_passes<2>();
-  check_fused_passes<3>();
+TEST_CASE("the explicit step's fused passes give the separate stages' particles (2D and 3D)") {
+  check_fused_passes<2>(TransferScheme::Type::flip, 0.0);
+  check_fused_passes<3>(TransferScheme::Type::flip, 0.0);
+  // Measured after the 60 steps: 3.5e-14 (v), 6.6e-14 (C), 2.1e-13 (plastic) at most.
+  check_fused_passes<2>(TransferScheme::Type::apic, 1e-10);
+  check_fused_passes<3>(TransferScheme::Type::apic, 1e-10);
 }
 
 TEST_CASE("stress cache: one SVD per step, the same trajectory to round-off (2D and 3D)") {

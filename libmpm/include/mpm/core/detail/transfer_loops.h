@@ -134,14 +134,16 @@ template <int dim, int S, class T>
 //! the integer node offsets n_a = rel_a - rel_a[0] the value is c0 + sum_a n_a c[a+1],
 //! c0 = c[0] + sum_a rel_a[0] c[a+1]: along a row it grows by c[1] from node to node, so a node
 //! costs one multiply-add. With `A` (= -S / dx; the stencil computed with dw) the same node
-//! visit also adds A grad w_i [1/cell] into the dim channels after Node's (gradient_row).
-template <bool affine, int stride = 0, int dim, int S, class T, class Node>
+//! visit also adds A grad w_i [1/cell] into the dim channels after Node's (gradient_row), or,
+//! with `gradient_in_momentum`, into Node's channels 1 .. dim (A = -dt S / dx: an impulse).
+template <bool affine, int stride = 0, bool gradient_in_momentum = false, int dim, int S, class T, class Node>
 [[gnu::always_inline]] inline void spread(const Stencil<dim, S, T>& st, const Node (&c)[dim + 1], T* patch,
                                           const Eigen::Matrix<T, dim, dim>* A = nullptr) {
   using VecT = Eigen::Matrix<T, dim, 1>;
   constexpr int N = Node::RowsAtCompileTime;
   constexpr int Ch = stride ? stride : N;
-  constexpr bool gradient = Ch >= N + dim;
+  constexpr bool gradient = gradient_in_momentum || Ch >= N + dim;
+  constexpr int gradient_channel = gradient_in_momentum ? 1 : N;
   static_assert(Ch >= N);
   constexpr int W = patch_width<dim>;
   Node c0 = c[0];
@@ -159,7 +161,7 @@ template <bool affine, int stride = 0, int dim, int S, class T, class Node>
       if constexpr (affine) v += step;
       if constexpr (gradient) {
         const VecT f = st.w[0][i] * P + st.dw[0][i] * Q;
-        for (int a = 0; a < dim; ++a) node[N + a] += f[a];
+        for (int a = 0; a < dim; ++a) node[gradient_channel + a] += f[a];
       }
     }
   };
@@ -274,26 +276,22 @@ template <int Ch, bool gradient = false, int dim, int S, class T, class Lanes>
   }
 }
 
-//! Adds (w m_p, w m_p (v_p + C_p (x_i - x_p))) into channels {mass, momentum_0..dim-1}
-//! (C_p term only when `affine`). With 2 dim + 1 channels, the next dim channels also take the
-//! stress forces -S_p grad w_ip of `weighted_stress` (indexed like the particles) in the same
-//! pass: the sums of each channel are those of a separate scatter, bit for bit.
-template <int dim, class K, bool affine, class PS, class T, std::size_t Ch>
-void p2g(const PS& P, const ParticleBuckets<dim>& buckets, const K& kernel, const SparseGrid<dim>& grid,
-         const std::array<BasicChannelView<T>, Ch>& channels,
-         [[maybe_unused]] const Eigen::Matrix<T, dim, dim>* weighted_stress = nullptr) {
-  constexpr bool stress = Ch == 2 * dim + 1;
-  static_assert(stress || Ch == dim + 1);
+//! p2g's scatter: the stress term A = scale S_p grad w_ip into the force channels (scale =
+//! -1 / dx) or, with `impulse`, into the momentum (scale = -dt / dx).
+template <int dim, class K, bool affine, bool impulse, class PS, class T, std::size_t Ch>
+void p2g_scatter(const PS& P, const ParticleBuckets<dim>& buckets, const K& kernel, const SparseGrid<dim>& grid,
+                 const std::array<BasicChannelView<T>, Ch>& channels,
+                 [[maybe_unused]] const Eigen::Matrix<T, dim, dim>* weighted_stress, [[maybe_unused]] T scale) {
+  constexpr bool stress = impulse || Ch == 2 * dim + 1;
   using Node = Eigen::Matrix<T, dim + 1, 1>;
   using MatT = Eigen::Matrix<T, dim, dim>;
   const T dx = static_cast<T>(grid.dx());
-  const T inv_dx = 1 / dx;
   scatter_buckets<dim, int(Ch), K::support>(
       grid, buckets, channels,
       [&](const std::uint32_t* first, const std::uint32_t* last, const PatchFrame<dim>& f, T* patch) {
         Stencil<dim, K::support, T> st[chunk_size];
         Node c[chunk_size][dim + 1];
-        [[maybe_unused]] MatT A[stress ? chunk_size : 1];  // -S_p / dx
+        [[maybe_unused]] MatT A[stress ? chunk_size : 1];  // scale S_p
         in_chunks(
             first, last,
             [&](std::uint32_t p) {
@@ -308,10 +306,34 @@ void p2g(const PS& P, const ParticleBuckets<dim>& buckets, const K& kernel, cons
               const T m = P.mass[p];
               c[q][0] << m, m * P.v[p];
               for (int a = 0; a < dim; ++a) c[q][a + 1] << T(0), (m * dx) * P.C[p].col(a);
-              if constexpr (stress) A[q] = -inv_dx * weighted_stress[p];
+              if constexpr (stress) A[q] = scale * weighted_stress[p];
             },
-            [&](std::uint32_t, int q) { spread<affine, int(Ch)>(st[q], c[q], patch, stress ? &A[q] : nullptr); });
+            [&](std::uint32_t, int q) {
+              spread<affine, int(Ch), impulse>(st[q], c[q], patch, stress ? &A[q] : nullptr);
+            });
       });
+}
+
+//! Adds (w m_p, w m_p (v_p + C_p (x_i - x_p))) into channels {mass, momentum_0..dim-1}
+//! (C_p term only when `affine`). With 2 dim + 1 channels, the next dim channels also take the
+//! stress forces -S_p grad w_ip of `weighted_stress` (indexed like the particles) in the same
+//! pass: the sums of each channel are those of a separate scatter, bit for bit. With
+//! `impulse_dt` > 0 (and dim + 1 channels) the momentum takes the impulse -dt S_p grad w_ip
+//! instead: the grid update's v = (p + dt f) / m without a force channel.
+template <int dim, class K, bool affine, class PS, class T, std::size_t Ch>
+void p2g(const PS& P, const ParticleBuckets<dim>& buckets, const K& kernel, const SparseGrid<dim>& grid,
+         const std::array<BasicChannelView<T>, Ch>& channels,
+         [[maybe_unused]] const Eigen::Matrix<T, dim, dim>* weighted_stress = nullptr, T impulse_dt = 0) {
+  constexpr bool force_channels = Ch == 2 * dim + 1;
+  static_assert(force_channels || Ch == dim + 1);
+  if constexpr (!force_channels)
+    if (weighted_stress) {
+      MPM_VERIFY(impulse_dt > 0, Error, "p2g: stresses without force channels need a time step");
+      p2g_scatter<dim, K, affine, true>(P, buckets, kernel, grid, channels, weighted_stress,
+                                        -impulse_dt / T(grid.dx()));
+      return;
+    }
+  p2g_scatter<dim, K, affine, false>(P, buckets, kernel, grid, channels, weighted_stress, -1 / T(grid.dx()));
 }
 
 //! APIC (flip = false): v_p = sum w v_i, C_p = B_p D_p^-1 from `velocity` channels.

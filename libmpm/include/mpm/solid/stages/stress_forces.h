@@ -36,7 +36,8 @@ Mat<dim> weighted_kirchhoff(const Elastic& model, const Plasticity& plasticity, 
 //! every particle must hold a listed material and the loop is that of a plain solid.
 //! With Scatter::with_momentum the stage is also the step's p2g: node mass, momentum and
 //! forces in one pass over particles and grid (stage "p2g_stress", on a uniform or adaptive
-//! grid).
+//! grid); unless the scheme is FLIP (which keeps the velocity before the forces), the forces
+//! go into the momentum as the impulse dt f and grid.force is released (transfer.h).
 template <int dim>
 class StressForces final : public Stage<MpmState<dim>> {
 public:
