@@ -25,6 +25,8 @@ void particles_to_grid(const Particles<dim>& particles, const ParticleBuckets<di
              "particles_to_grid: the stresses need one entry per particle");
   std::fill(grid.mass.begin(), grid.mass.end(), 0.0);
   const bool impulse = weighted_stress && impulse_dt > 0.0;
+  MPM_VERIFY(!impulse || !scheme.uses_old_velocity(), Error,
+             "particles_to_grid: stress impulses in the momentum would enter FLIP's v_old");
   if (impulse) std::vector<Vec<dim>>().swap(grid.force);  // the forces are in the momentum
   std::fill(grid.velocity.begin(), grid.velocity.end(), Vec<dim>::Zero());
   const auto run = [&](auto channel_count) {

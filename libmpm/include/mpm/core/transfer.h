@@ -34,7 +34,7 @@ struct TransferScheme {
 //! bit for bit. With `impulse_dt` > 0 as well, the momentum takes the impulse
 //! -dt sum_p S_p grad w_ip instead and grid.force is released: a grid update's
 //! v = (p + dt f) / m without a force channel (3 fewer values per node to scatter and keep),
-//! equal to p / m + (dt / m) f up to round-off. Not for FLIP, whose v_old = p / m.
+//! equal to p / m + (dt / m) f up to round-off. Not for FLIP, whose v_old = p / m (an Error).
 template <int dim>
 void particles_to_grid(const Particles<dim>& particles, const ParticleBuckets<dim>& buckets, const Kernel& kernel,
                        const TransferScheme& scheme, SparseGrid<dim>& grid,

@@ -2,8 +2,9 @@
 //   f_i = - sum_p V_p^0 P(F_p^E) (F_p^E)^T grad w_ip = - sum_p V_p^0 tau_p grad w_ip,
 // there added to the momentum as the impulse dt f_i (no force channel) unless FLIP needs the
 // velocity before the forces; tau = P F^T is the Kirchhoff stress of the elastic part
-// (multiplicative plasticity keeps all stress in F^E). The constitutive model is chosen per material by std::visit outside
-// the particle loop. Precondition: particles sorted into buckets (stage 'sort').
+// (multiplicative plasticity keeps all stress in F^E). The constitutive model is chosen per
+// material by std::visit outside the particle loop. Precondition: particles sorted into
+// buckets (stage 'sort').
 // A plastic material's tau is the one the last return map left in the stress cache
 // (solid_channels.h), computed from its SVD of F^E: one SVD per particle and step instead of
 // two. Particles whose cached stress is unknown (the first step, after a merge or a switch of

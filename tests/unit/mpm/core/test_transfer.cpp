@@ -259,6 +259,9 @@ void check_stress_impulse(const Kernel& kernel) {
   }
   REQUIRE(impulse > 0.1 * scale);
   CHECK(worst < 1e-14 * scale);
+  TransferScheme flip;  // its v_old must not hold the impulse
+  flip.type = TransferScheme::Type::flip;
+  CHECK_THROWS_AS(particles_to_grid(P, buckets, kernel, flip, grid, &S, dt), Error);
 }
 }  // namespace
 

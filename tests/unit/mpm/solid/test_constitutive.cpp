@@ -645,9 +645,6 @@ void check_fused_passes(TransferScheme::Type scheme, double tolerance) {
     CHECK(relative_difference(solid::elastic_F(P), solid::elastic_F(Q)) < tolerance);
     CHECK(plastic <= tolerance * plastic_scale);
   }
-  MESSAGE("x ", relative_difference(P.x, Q.x), " v ", relative_difference(P.v, Q.v), " C ",
-          relative_difference(P.C, Q.C), " F ", relative_difference(solid::elastic_F(P), solid::elastic_F(Q)),
-          " plastic ", plastic / std::max(plastic_scale, 1e-300));
   double vmax = 0.0;
   for (const Vec<dim>& v : P.v) vmax = std::max(vmax, v.norm());
   CHECK(vmax > 0.1);  // the bodies moved
