@@ -8,6 +8,7 @@
 #include <atomic>
 #include <bit>
 #include <cmath>
+#include <iterator>
 #include <sstream>
 #include <tuple>
 
@@ -91,10 +92,12 @@ template <int dim>
 bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vector<std::uint16_t>& type,
                                 const std::string& stage, const MoveParticles& move) {
   MPM_VERIFY(x.size() == type.size(), InputError, "adaptive grid: one particle type per particle");
+  MPM_VERIFY(((tree_.base_cells() * tree_.scale(0)).array() < (1 << StatusLink::point_bits)).all(), Error,
+             "adaptive grid: the finest level spans more than 2^" + std::to_string(StatusLink::point_bits) +
+                 " cells on an axis, more than the node statuses address");
   const int L = levels();
   constexpr int B = SparseGrid<dim>::block_size;
-  transfer_level_.resize(x.size());
-  type_.resize(x.size());
+  class_ = std::vector<ParticleClass>(x.size());  // (resampling changes the count: no spare capacity held)
   std::vector<std::vector<BlockKey>> own_blocks(L);
   // The irregular particles by (transfer level, block of the first stencil node), and the
   // most blocks a stencil spans on an axis: the colouring's period.
@@ -110,12 +113,12 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 4096), [&](const auto& range) {
     CellId<dim> leaf;  // the last particle's leaf
     for (std::size_t p = range.begin(); p != range.end(); ++p) {
-      transfer_level_[p] = -1;  // reported below (a type out of range first)
+      class_[p].level = -1;  // reported below (a type out of range first)
       if (type[p] >= L || !x[p].allFinite()) continue;
-      type_[p] = static_cast<std::uint8_t>(type[p]);
+      class_[p].type = static_cast<std::int8_t>(type[p]);
       const double half = 0.5 * particle_size(type[p]);
       const int n = tree_.finest_level_in(x[p].array() - half, x[p].array() + half, leaf);
-      transfer_level_[p] = static_cast<std::int8_t>(n);
+      class_[p].level = static_cast<std::int8_t>(n);
       if (n < 0) continue;
       const SparseGrid<dim>& g = levels_[n];
       if (n == type[p]) {  // on its own level: regular_kernel(), whose stencil holds the general one
@@ -128,12 +131,12 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
     }
   });
   std::vector<std::vector<std::uint32_t>> by_level =
-      split_by_class(x.size(), L + 1, [&](std::size_t p) { return regular[p] ? transfer_level_[p] : L; });
+      split_by_class(x.size(), L + 1, [&](std::size_t p) { return regular[p] ? class_[p].level : L; });
   for (const std::uint32_t p : by_level[L]) {
     MPM_VERIFY(type[p] < L, InputError,
                "stage '" + stage + "': particle " + std::to_string(p) + " has type " + std::to_string(type[p]) +
                    ", outside the grid's levels [0, " + std::to_string(L - 1) + "]");
-    const int n = transfer_level_[p];
+    const int n = class_[p].level;
     if (n < 0) {
       std::ostringstream s;
       s.precision(9);
@@ -256,7 +259,7 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
         ghost.end_link += link_offset;
       }
       status.ghosts.insert(status.ghosts.end(), c.ghosts.begin(), c.ghosts.end());
-      status.links.insert(status.links.end(), c.links.begin(), c.links.end());
+      std::transform(c.links.begin(), c.links.end(), std::back_inserter(status.links), &StatusLink::pack);
       status.reached.insert(status.reached.end(), c.reached.begin(), c.reached.end());
       block.end_ghost = static_cast<std::uint32_t>(status.ghosts.size());
       block.end_reached = static_cast<std::uint32_t>(status.reached.size());
@@ -353,7 +356,7 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
     }
     ne.begin.push_back(near_total);
     ne.particle.resize(near_total);
-    near_masks_[n].resize(near_total);
+    near_masks_[n] = std::vector<std::uint32_t>(near_total);  // not the capacity of a larger step's
     tbb::parallel_for(tbb::blocked_range<int>(0, ne.count(), 16), [&](const auto& range) {
       for (int e = range.begin(); e != range.end(); ++e) {
         const int k = near_bucket[static_cast<std::size_t>(e)];
@@ -398,7 +401,9 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
     g = Ghosts{};
     MPM_VERIFY(levels_[n].node_storage() <= std::numeric_limits<std::uint32_t>::max(), Error,
                "adaptive grid: level " + std::to_string(n) + " holds more nodes than 32-bit ghost links address");
-    g.of_node.assign(levels_[n].node_storage(), -1);
+    const std::size_t storage_blocks = levels_[n].node_storage() / SparseGrid<dim>::nodes_per_block;
+    g.block_mask.assign(storage_blocks, 0);
+    g.block_first.assign(storage_blocks, 0);
     const LevelStatus& status = status_[n];
     const std::vector<BlockKey>& own = own_blocks[n];
     const auto tabled = [&](std::size_t b, const PendingGhost& ghost) {
@@ -434,17 +439,24 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
           if (!tabled(b, ghost)) continue;
           const Index k = levels_[n].node_index(ghost.node);
           const Vec<dim> xk = node_position(n, k);
-          Mat<dim> spread = Mat<dim>::Zero();
+          std::array<double, dim*(dim + 1) / 2> spread{};
           std::uint32_t l_out = g.begin[out];
           for (std::size_t l = ghost.first_link; l < ghost.end_link; ++l, ++l_out) {
-            const NodeWeight<dim>& link = status.links[l];
+            const NodeWeight<dim> link = status.links[l].unpack();
             g.link[l_out] = {
                 static_cast<std::uint32_t>(levels_[link.level].node_index(link.point / tree_.scale(link.level))),
                 link.level, link.weight};
             const Vec<dim> r = link_offset(g.link[l_out], xk);
-            spread.noalias() += link.weight * r * r.transpose();
+            for (int a = 0, e = 0; a < dim; ++a)
+              for (int c = a; c < dim; ++c, ++e) spread[e] += link.weight * r[a] * r[c];
           }
-          g.of_node[static_cast<std::size_t>(k)] = static_cast<int>(out);
+          // One block's ghosts in node order (the statuses': block_status()), so of_node()
+          // counts them.
+          const auto slot = static_cast<std::size_t>(k / SparseGrid<dim>::nodes_per_block);
+          const std::uint64_t bit = std::uint64_t{1} << (k % SparseGrid<dim>::nodes_per_block);
+          if (g.block_mask[slot] == 0) g.block_first[slot] = static_cast<std::uint32_t>(out);
+          MPM_ASSERT(g.block_mask[slot] < bit && g.block_first[slot] + std::popcount(g.block_mask[slot]) == out);
+          g.block_mask[slot] |= bit;
           g.node[out] = k;
           if (const int m = g.moment[out]; m >= 0) g.spread[static_cast<std::size_t>(m)] = spread;
           ++out;
@@ -481,10 +493,10 @@ void AdaptiveGrid<dim>::group_irregular(std::vector<std::tuple<int, BlockKey, st
 template <int dim>
 bool AdaptiveGrid<dim>::store_in_transfer_order(const MoveParticles& move) {
   std::vector<std::uint32_t> order;
-  order.reserve(transfer_level_.size());
+  order.reserve(class_.size());
   for (const ParticleBuckets<dim>& b : regular_) order.insert(order.end(), b.particle.begin(), b.particle.end());
   order.insert(order.end(), irregular_.begin(), irregular_.end());
-  MPM_ASSERT(order.size() == transfer_level_.size());
+  MPM_ASSERT(order.size() == class_.size());
   if (!scattered(order)) return false;
   move(order);
   std::vector<std::uint32_t> renamed(order.size());  // old index -> new
@@ -493,8 +505,7 @@ bool AdaptiveGrid<dim>::store_in_transfer_order(const MoveParticles& move) {
     auto old = values;
     for (std::size_t i = 0; i < order.size(); ++i) values[i] = old[order[i]];
   };
-  reorder(transfer_level_);
-  reorder(type_);
+  reorder(class_);
   std::uint32_t next = 0;
   for (ParticleBuckets<dim>& b : regular_)
     for (std::uint32_t& p : b.particle) p = next++;
@@ -564,7 +575,7 @@ std::vector<std::uint64_t> AdaptiveGrid<dim>::stencil_nodes(int n, const std::ve
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, irregular_.size(), 64), [&](const auto& range) {
     for (std::size_t i = range.begin(); i != range.end(); ++i) {
       const std::uint32_t p = irregular_[i];
-      if (transfer_level_[p] != n) continue;
+      if (class_[p].level != n) continue;
       GimpAxis axis[dim];
       axis_weights(n, half_cells(p), x[p], axis);
       IVec<dim> first, last;
@@ -586,6 +597,27 @@ std::vector<std::uint64_t> AdaptiveGrid<dim>::stencil_nodes(int n, const std::ve
     }
   });
   return reached;
+}
+
+template <int dim>
+typename AdaptiveGrid<dim>::StatusLink AdaptiveGrid<dim>::StatusLink::pack(const NodeWeight<dim>& link) {
+  std::uint64_t key = 0;
+  for (int a = 0; a < dim; ++a) {
+    MPM_ASSERT(link.point[a] >= 0 && link.point[a] < std::int64_t{1} << point_bits);  // prepare() checks the domain
+    key = key << point_bits | static_cast<std::uint64_t>(link.point[a]);
+  }
+  return {key << level_bits | static_cast<std::uint64_t>(link.level), link.weight};
+}
+
+template <int dim>
+NodeWeight<dim> AdaptiveGrid<dim>::StatusLink::unpack() const {
+  NodeWeight<dim> link;
+  link.level = static_cast<int>(key & ((1u << level_bits) - 1));
+  for (int a = 0; a < dim; ++a)
+    link.point[a] =
+        static_cast<int>(key >> (level_bits + (dim - 1 - a) * point_bits) & ((std::uint64_t{1} << point_bits) - 1));
+  link.weight = weight;
+  return link;
 }
 
 template <int dim>
@@ -759,10 +791,13 @@ void AdaptiveGrid<dim>::build_push_tables() {
   }
   for (int n = 0; n < L; ++n) {
     const Ghosts& g = ghosts_[n];
+    MPM_VERIFY(g.node.size() < std::size_t{1} << 29, Error,
+               "adaptive grid: level " + std::to_string(n) + " holds more ghosts than the push tables address (2^29)");
     for (std::uint32_t j = 0; j < g.node.size(); ++j)
       for (std::uint32_t l = g.begin[j]; l < g.begin[j + 1]; ++l) {
         const GhostLink<dim>& link = g.link[l];
-        push_tables_[link.level].source[first[link.level][static_cast<std::size_t>(link.index)]++] = {n, j, l};
+        push_tables_[link.level].source[first[link.level][static_cast<std::size_t>(link.index)]++] = {
+            static_cast<std::uint32_t>(n), j, l};
       }
   }
 }
@@ -823,19 +858,19 @@ std::size_t AdaptiveGrid<dim>::memory_bytes() const {
 
 template <int dim>
 std::size_t AdaptiveGrid<dim>::index_bytes() const {
-  std::size_t bytes = tree_.memory_bytes() + transfer_level_.capacity() + type_.capacity();
+  std::size_t bytes = tree_.memory_bytes() + class_.capacity() * sizeof(ParticleClass);
   bytes += irregular_.capacity() * sizeof(std::uint32_t);
   for (const Ghosts& g : ghosts_)
     bytes += g.node.capacity() * sizeof(Index) + g.begin.capacity() * sizeof(std::uint32_t) +
-             g.link.capacity() * sizeof(GhostLink<dim>) + g.spread.capacity() * sizeof(Mat<dim>) +
-             g.of_node.capacity() * sizeof(int) + g.velocity_moment.capacity() * sizeof(Mat<dim>) +
-             g.moment.capacity() * sizeof(int);
+             g.link.capacity() * sizeof(GhostLink<dim>) + g.spread.capacity() * sizeof(g.spread[0]) +
+             g.block_mask.capacity() * sizeof(std::uint64_t) + g.block_first.capacity() * sizeof(std::uint32_t) +
+             g.velocity_moment.capacity() * sizeof(Mat<dim>) + g.moment.capacity() * sizeof(int);
   for (const ParticleBuckets<dim>& b : regular_) bytes += b.memory_bytes();
   for (const ParticleBuckets<dim>& b : near_embedded_) bytes += b.memory_bytes();
   for (const std::vector<std::uint32_t>& m : near_masks_) bytes += m.capacity() * sizeof(std::uint32_t);
   for (const LevelStatus& s : status_)
     bytes += s.index.bytes() + s.blocks.capacity() * sizeof(BlockStatus) + s.ghosts.capacity() * sizeof(PendingGhost) +
-             s.links.capacity() * sizeof(NodeWeight<dim>) + s.reached.capacity() * sizeof(s.reached[0]);
+             s.links.capacity() * sizeof(StatusLink) + s.reached.capacity() * sizeof(s.reached[0]);
   for (const std::vector<BlockKey>& own : own_blocks_) bytes += own.capacity() * sizeof(BlockKey);
   for (const PushTable& t : push_tables_)
     bytes += t.target.capacity() * sizeof(Index) + t.begin.capacity() * sizeof(std::uint32_t) +

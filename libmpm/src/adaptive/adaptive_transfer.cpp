@@ -64,9 +64,9 @@ void apic_moments(const AdaptiveGrid<dim>& grid, int n, double h, const Vec<dim>
     v += w * vk;
     B.noalias() += w * vk * r.transpose();
     D.noalias() += w * r * r.transpose();
-    if (const int j = ghosts.of_node[k]; j >= 0 && ghosts.moment[j] >= 0) {
+    if (const int j = ghosts.of_node(k); j >= 0 && ghosts.moment[j] >= 0) {
       B += w * ghosts.velocity_moment[ghosts.moment[j]];
-      D += w * ghosts.spread[ghosts.moment[j]];
+      D += w * ghosts.spread_of(ghosts.moment[j]);
     }
   });
 }
@@ -140,7 +140,7 @@ void scatter_ghost_affine(const Particles<dim>& P, const AdaptiveGrid<dim>& grid
                         [&](int node, double w) { Eigen::Map<Mat<dim>>(patch.data() + node * M) += w * mC; });
     }
     detail::for_each_patch_node<dim, 3>(g, near.block[b], [&](int node, std::size_t k) {
-      if (const int j = ghosts.of_node[k]; j >= 0) affine[j] += Eigen::Map<const Mat<dim>>(patch.data() + node * M);
+      if (const int j = ghosts.of_node(k); j >= 0) affine[j] += Eigen::Map<const Mat<dim>>(patch.data() + node * M);
     });
   });
 }
@@ -164,9 +164,10 @@ void add_ghost_terms(Particles<dim>& P, const AdaptiveGrid<dim>& grid, int n, co
     alignas(64) std::array<double, detail::patch_nodes<dim> * Ch> patch;
     detail::for_each_patch_node<dim, 3>(g, near.block[b], [&](int node, std::size_t k) {
       double* out = patch.data() + node * Ch;
-      if (const int j = ghosts.of_node[k]; j >= 0 && ghosts.moment[j] >= 0) {
+      if (const int j = ghosts.of_node(k); j >= 0 && ghosts.moment[j] >= 0) {
         std::copy_n(ghosts.velocity_moment[ghosts.moment[j]].data(), M, out);
-        std::copy_n(ghosts.spread[ghosts.moment[j]].data(), M, out + M);
+        const Mat<dim> R = ghosts.spread_of(ghosts.moment[j]);
+        std::copy_n(R.data(), M, out + M);
       } else {
         std::fill_n(out, Ch, 0.0);
       }
@@ -216,7 +217,7 @@ void particles_to_grid(const Particles<dim>& P, const TransferScheme& scheme, Ad
     g.mass[k] += wm;
     if (apic) {
       g.velocity[k] += wm * (P.v[p] + P.C[p] * (xk - P.x[p]));
-      if (const int j = grid.ghosts(n).of_node[k]; j >= 0) affine[n][j] += wm * P.C[p];
+      if (const int j = grid.ghosts(n).of_node(k); j >= 0) affine[n][j] += wm * P.C[p];
     } else {
       g.velocity[k] += wm * P.v[p];
     }
@@ -303,7 +304,7 @@ std::vector<RealWeight<dim>> real_weights(const AdaptiveGrid<dim>& grid, int n, 
   };
   const auto& ghosts = grid.ghosts(n);
   grid.for_each_weight(n, h, x, [&](Index k, double w, const Vec<dim>& grad, const Vec<dim>&) {
-    const int j = ghosts.of_node[k];
+    const int j = ghosts.of_node(k);
     if (j < 0) return add(n, k, w, grad);
     for (std::uint32_t l = ghosts.begin[j]; l < ghosts.begin[j + 1]; ++l)
       add(ghosts.link[l].level, ghosts.link[l].index, ghosts.link[l].weight * w, ghosts.link[l].weight * grad);

@@ -28,6 +28,7 @@
 #include <mpm/core/sparse_grid.h>
 
 #include <array>
+#include <bit>
 #include <cstdint>
 #include <limits>
 #include <tuple>
@@ -101,7 +102,7 @@ public:
   //! its own tables and returns true.
   bool prepare(const std::vector<Vec<dim>>& x, const std::vector<std::uint16_t>& type,
                const std::string& stage = "prepare", const MoveParticles& move = {});
-  std::size_t particle_count() const { return transfer_level_.size(); }
+  std::size_t particle_count() const { return class_.size(); }
   //! The particles that transfer on level n as on a uniform grid: on their own level, with
   //! regular_kernel()'s stencil inside the level. The uniform loops (transfer.h) serve them, in
   //! parallel.
@@ -132,9 +133,9 @@ public:
   };
   const IrregularGroups& irregular_groups() const { return irregular_groups_; }
   //! Transfer level of particle p (after prepare).
-  int transfer_level(std::size_t p) const { return transfer_level_[p]; }
+  int transfer_level(std::size_t p) const { return class_[p].level; }
   //! Half-size of particle p's GIMP box in cells of its transfer level (after prepare).
-  double half_cells(std::size_t p) const { return half_cells_[type_[p] * max_levels + transfer_level_[p]]; }
+  double half_cells(std::size_t p) const { return half_cells_[class_[p].type * max_levels + class_[p].level]; }
 
   //! Calls fn(k, w, grad_w, x_k) for the level-n storage node k of every non-zero weight of a
   //! particle at x that transfers on level n with half-size h cells: w = w_kp (uniform GIMP),
@@ -174,8 +175,30 @@ public:
     //! Per ghost: its row in spread and velocity_moment when it is embedded, -1 when it is a
     //! real node of another level (one link of weight 1 at its own position: both vanish).
     std::vector<int> moment;
-    std::vector<Mat<dim>> spread;
-    std::vector<int> of_node;  //!< per storage node: its ghost index, or -1
+    //! R_k of the embedded ghosts, symmetric: its upper triangle row by row (spread_of()).
+    std::vector<std::array<double, dim*(dim + 1) / 2>> spread;
+    Mat<dim> spread_of(int m) const {
+      Mat<dim> R;
+      for (int a = 0, e = 0; a < dim; ++a)
+        for (int b = a; b < dim; ++b, ++e) R(a, b) = R(b, a) = spread[static_cast<std::size_t>(m)][e];
+      return R;
+    }
+    //! Per storage block: bit l set when node l of the block is a ghost, and the index of the
+    //! block's first ghost. A block's ghosts are consecutive and in node order, so a node's
+    //! ghost index is the first's plus the count of ghosts before it (12 bytes per block, not
+    //! an int per node).
+    std::vector<std::uint64_t> block_mask;
+    std::vector<std::uint32_t> block_first;
+    //! The ghost index of storage node k, or -1.
+    int of_node(Index k) const {
+      constexpr int nodes = SparseGrid<dim>::nodes_per_block;
+      static_assert(nodes <= 64);
+      const auto block = static_cast<std::size_t>(k / nodes);
+      const int local = static_cast<int>(k % nodes);
+      const std::uint64_t mask = block_mask[block];
+      if ((mask >> local & 1) == 0) return -1;
+      return static_cast<int>(block_first[block]) + std::popcount(mask & ((std::uint64_t{1} << local) - 1));
+    }
     //! Q_k = sum_i E_ik v_i (x_i - x_k)^T [m^2/s], filled by pull_velocity for APIC's B_p.
     std::vector<Mat<dim>> velocity_moment;
   };
@@ -221,10 +244,11 @@ private:
   // The ghosts' links by the real node they reach, per level of that node: push() and
   // push_momentum() gather each real node's sums in parallel, in the order (ghost level,
   // ghost, link) a serial scatter would add them (bit for bit the same result).
-  struct PushSource {
-    int level;
-    std::uint32_t ghost, link;
+  struct PushSource {  // 8 bytes (build_push_tables() checks the ghosts' count)
+    std::uint32_t level : 3, ghost : 29;
+    std::uint32_t link;
   };
+  static_assert(sizeof(PushSource) == 8 && max_levels <= 8);
   struct PushTable {
     std::vector<Index> target;         // real node of each segment
     std::vector<std::uint32_t> begin;  // segment s: source[begin[s]] .. source[begin[s + 1] - 1]
@@ -238,8 +262,14 @@ private:
   //! Sets every ghost's value to zero in each level's `channel`.
   template <class T>
   void clear_ghosts(const std::vector<std::vector<T>*>& channel) const;
-  std::vector<std::int8_t> transfer_level_;
-  std::vector<std::uint8_t> type_;  // the particles' types (levels) at prepare()
+  // Per particle: its transfer level (-1 before it is reported as outside the grid) and its
+  // type (level) at prepare(), in one byte.
+  struct ParticleClass {
+    std::int8_t level : 4;
+    std::int8_t type : 4;
+  };
+  static_assert(sizeof(ParticleClass) == 1 && max_levels <= 7);
+  std::vector<ParticleClass> class_;
   // Half-size of a particle of type t in cells of level n: half_cells_[t * max_levels + n].
   std::array<double, max_levels * max_levels> half_cells_{};
   std::vector<ParticleBuckets<dim>> regular_;
@@ -267,11 +297,21 @@ private:
     // tree change away from it leaves them as they are (forget_changed_statuses).
     IVec<dim> depends_lo, depends_hi;
   };
+  // A ghost's link as its status keeps it: the real node's lattice point and home level packed
+  // in 64 bits (the links are most of the statuses: 16 bytes instead of NodeWeight's 24).
+  struct StatusLink {
+    static constexpr int level_bits = 4, point_bits = (64 - level_bits) / dim;
+    std::uint64_t key;
+    double weight;
+    static StatusLink pack(const NodeWeight<dim>& link);
+    NodeWeight<dim> unpack() const;
+  };
+  static_assert(sizeof(StatusLink) == 16 && max_levels <= 1 << StatusLink::level_bits);
   struct LevelStatus {
     BlockTable index;  // block key -> blocks[]
     std::vector<BlockStatus> blocks;
     std::vector<PendingGhost> ghosts;
-    std::vector<NodeWeight<dim>> links;
+    std::vector<StatusLink> links;
     std::vector<std::pair<int, BlockKey>> reached;  // (level, block) of a block's ghosts' links
     std::size_t unused = 0;                         // ghosts of entries a block no longer uses
   };

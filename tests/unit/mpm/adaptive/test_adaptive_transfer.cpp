@@ -106,7 +106,7 @@ void check_conservation(unsigned seed) {
   Vec<dim> p_grid = Vec<dim>::Zero(), p_particles = Vec<dim>::Zero();
   Eigen::Vector3d L_grid = Eigen::Vector3d::Zero(), L_particles = L_grid;
   for_each_massive_node(grid, [&](int n, std::size_t k) {
-    CHECK(grid.ghosts(n).of_node[k] < 0);
+    CHECK(grid.ghosts(n).of_node(k) < 0);
     const double m = grid.level(n).mass[k];
     m_grid += m;
     p_grid += m * grid.level(n).velocity[k];
@@ -189,7 +189,7 @@ void check_forces(unsigned seed) {
   for (int n = 0; n < grid.levels(); ++n)
     for (std::size_t k = 0; k < grid.level(n).node_storage(); ++k) {
       const Vec<dim>& f = grid.level(n).force[k];
-      if (grid.ghosts(n).of_node[k] >= 0) CHECK(f.norm() == 0.0);
+      if (grid.ghosts(n).of_node(k) >= 0) CHECK(f.norm() == 0.0);
       total += f;
       torque += cross<dim>(grid.node_position(n, static_cast<Index>(k)), f);
       scale = std::max(scale, f.norm());
@@ -450,7 +450,8 @@ void check_push(unsigned seed) {
         CHECK(g.moment[j] == -1);
       } else {
         REQUIRE(g.moment[j] == next_moment++);
-        CHECK(g.spread[static_cast<std::size_t>(g.moment[j])] == R);
+        const Mat<dim> stored = g.spread_of(g.moment[j]);  // symmetric by construction
+        CHECK((stored - R).norm() <= 1e-15 * R.norm());
       }
       for (std::uint32_t l = g.begin[j]; l < g.begin[j + 1]; ++l) {
         const GhostLink<dim>& link = g.link[l];
@@ -517,9 +518,14 @@ void check_ghost_tables(unsigned seed) {
       for (const Index k : reached) {
         const IVec<dim> point = grid.level(n).node_coord(static_cast<std::size_t>(k)) * grid.tree().scale(n);
         const bool real = home_level(grid.tree(), point) == n;
-        CHECK(real != (grid.ghosts(n).of_node[static_cast<std::size_t>(k)] >= 0));
+        CHECK(real != (grid.ghosts(n).of_node(k) >= 0));
       }
       for (const Index k : grid.ghosts(n).node) unreached += !reached.count(k);
+      // Every ghost is found at its node (of_node() counts a block's ghosts before it).
+      const auto& tables = grid.ghosts(n);
+      int misplaced = 0;
+      for (std::size_t j = 0; j < tables.node.size(); ++j) misplaced += tables.of_node(tables.node[j]) != int(j);
+      CHECK(misplaced == 0);
       ghosts += grid.ghosts(n).node.size();
     }
     CHECK(ghosts > 0);
@@ -533,8 +539,8 @@ void check_ghost_tables(unsigned seed) {
       const auto& b = fresh.ghosts(n);
       for (std::size_t j = 0; j < b.node.size(); ++j) {
         const Vec<dim> x = fresh.node_position(n, b.node[j]);
-        const int i = a.of_node[static_cast<std::size_t>(
-            grid.level(n).node_index(fresh.level(n).node_coord(static_cast<std::size_t>(b.node[j]))))];
+        const int i =
+            a.of_node(grid.level(n).node_index(fresh.level(n).node_coord(static_cast<std::size_t>(b.node[j]))));
         REQUIRE(i >= 0);
         REQUIRE(a.begin[i + 1] - a.begin[i] == b.begin[j + 1] - b.begin[j]);
         for (std::uint32_t l = 0; l < b.begin[j + 1] - b.begin[j]; ++l) {
