@@ -48,29 +48,6 @@ void gather_irregular(const AdaptiveGrid<dim>& grid, Fn&& fn, const ParticleGrou
                          });
 }
 
-// APIC's B_p and D_p of particle p on level n through its ghosts (adaptive_transfer.h): the
-// sums over the stencil plus each ghost's velocity moment Q_k and spread R_k.
-template <int dim>
-void apic_moments(const AdaptiveGrid<dim>& grid, int n, double h, const Vec<dim>& xp, Vec<dim>& v, Mat<dim>& B,
-                  Mat<dim>& D) {
-  const SparseGrid<dim>& g = grid.level(n);
-  const auto& ghosts = grid.ghosts(n);
-  v.setZero();
-  B.setZero();
-  D.setZero();
-  grid.for_each_weight(n, h, xp, [&](Index k, double w, const Vec<dim>&, const Vec<dim>& xk) {
-    const Vec<dim>& vk = g.velocity[k];
-    const Vec<dim> r = xk - xp;
-    v += w * vk;
-    B.noalias() += w * vk * r.transpose();
-    D.noalias() += w * r * r.transpose();
-    if (const int j = ghosts.of_node(k); j >= 0 && ghosts.moment[j] >= 0) {
-      B += w * ghosts.velocity_moment[ghosts.moment[j]];
-      D += w * ghosts.spread_of(ghosts.moment[j]);
-    }
-  });
-}
-
 // The particles near embedded ghosts (AdaptiveGrid::near_embedded), bucket by bucket: fn(b,
 // kernel) for every bucket b of level n in parallel, with regular_kernel() as its 3-node type.
 // A scatter goes colour by colour (the patches of one colour's buckets share no node); a gather
@@ -265,27 +242,36 @@ void grid_to_particles(Particles<dim>& P, const TransferScheme& scheme, const Ad
   gather_irregular(
       grid,
       [&](std::size_t p, int n) {
+        // One walk over the particle's stencil: the velocity gradient for F, the PIC velocity,
+        // and APIC's B_p and D_p with each embedded ghost's velocity moment Q_k and spread R_k
+        // (or FLIP's velocity change). Each sum in the order of the walk.
         const SparseGrid<dim>& g = grid.level(n);
+        const auto& ghosts = grid.ghosts(n);
         const Vec<dim> xp = P.x[p];
-        if (F) {
-          Mat<dim> G = Mat<dim>::Zero();
-          grid.for_each_weight(n, grid.half_cells(p), xp, [&](Index k, double, const Vec<dim>& grad, const Vec<dim>&) {
-            G.noalias() += g.velocity[k] * grad.transpose();
-          });
-          (*F)[p] = (Mat<dim>::Identity() + dt * G) * (*F)[p];
-        }
-        Vec<dim> v_pic = Vec<dim>::Zero();
+        Mat<dim> G = Mat<dim>::Zero(), B = Mat<dim>::Zero(), D = Mat<dim>::Zero();
+        Vec<dim> v_pic = Vec<dim>::Zero(), dv = Vec<dim>::Zero();
+        const auto add_node = [&](Index k, double w, const Vec<dim>& grad, const Vec<dim>& xk) {
+          const Vec<dim>& vk = g.velocity[k];
+          if (F) G.noalias() += vk * grad.transpose();
+          v_pic += w * vk;
+          if (!apic) {
+            dv += w * (vk - g.velocity_old[k]);
+            return;
+          }
+          const Vec<dim> r = xk - xp;
+          B.noalias() += w * vk * r.transpose();
+          D.noalias() += w * r * r.transpose();
+          if (const int j = ghosts.of_node(k); j >= 0 && ghosts.moment[j] >= 0) {
+            B += w * ghosts.velocity_moment[ghosts.moment[j]];
+            D += w * ghosts.spread_of(ghosts.moment[j]);
+          }
+        };
+        grid.for_each_weight(n, grid.half_cells(p), xp, add_node);
+        if (F) (*F)[p] = (Mat<dim>::Identity() + dt * G) * (*F)[p];
         if (apic) {
-          Mat<dim> B, D;
-          apic_moments(grid, n, grid.half_cells(p), xp, v_pic, B, D);
           P.v[p] = v_pic;
           P.C[p] = B * D.inverse();
         } else {
-          Vec<dim> dv = Vec<dim>::Zero();
-          grid.for_each_weight(n, grid.half_cells(p), xp, [&](Index k, double w, const Vec<dim>&, const Vec<dim>&) {
-            v_pic += w * g.velocity[k];
-            dv += w * (g.velocity[k] - g.velocity_old[k]);
-          });
           P.v[p] = scheme.flip_ratio * (P.v[p] + dv) + (1.0 - scheme.flip_ratio) * v_pic;
           P.C[p].setZero();
         }
