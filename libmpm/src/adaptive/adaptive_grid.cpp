@@ -92,9 +92,9 @@ template <int dim>
 bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vector<std::uint16_t>& type,
                                 const std::string& stage, const MoveParticles& move) {
   MPM_VERIFY(x.size() == type.size(), InputError, "adaptive grid: one particle type per particle");
-  MPM_VERIFY(((tree_.base_cells() * tree_.scale(0)).array() < (1 << StatusLink::point_bits)).all(), Error,
-             "adaptive grid: the finest level spans more than 2^" + std::to_string(StatusLink::point_bits) +
-                 " cells on an axis, more than the node statuses address");
+  // The node statuses pack lattice points in StatusLink::point_bits per axis: CellTree refuses a
+  // finest level of 2^20 or more cells per axis.
+  MPM_ASSERT(((tree_.base_cells() * tree_.scale(0)).array() < (1 << StatusLink::point_bits)).all());
   const int L = levels();
   constexpr int B = SparseGrid<dim>::block_size;
   class_ = std::vector<ParticleClass>(x.size());  // (resampling changes the count: no spare capacity held)

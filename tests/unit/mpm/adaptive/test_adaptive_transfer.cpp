@@ -656,6 +656,57 @@ TEST_CASE("a 3D grid spanning 2^13 finest cells per axis holds memory for the pa
 }
 
 namespace {
+// The ghost tables of level n as (ghost node, links (level, node, weight)) with the lattice
+// coordinates taken relative to `shift` level-0 cells along axis 0.
+using Coord = std::array<int, 3>;
+using GhostSet = std::set<std::tuple<Coord, std::vector<std::tuple<int, Coord, double>>>>;
+GhostSet relative_ghosts(const AdaptiveGrid<3>& grid, int n, int shift) {
+  const auto relative = [&](int level, Index k) {
+    const IVec<3> c = grid.level(level).node_coord(static_cast<std::size_t>(k));
+    return Coord{c[0] - (shift << level), c[1], c[2]};
+  };
+  const auto& g = grid.ghosts(n);
+  GhostSet out;
+  for (std::size_t j = 0; j < g.node.size(); ++j) {
+    std::vector<std::tuple<int, Coord, double>> links;
+    for (std::uint32_t l = g.begin[j]; l < g.begin[j + 1]; ++l)
+      links.emplace_back(g.link[l].level, relative(g.link[l].level, g.link[l].index), g.link[l].weight);
+    out.emplace(relative(n, g.node[j]), links);
+  }
+  return out;
+}
+}  // namespace
+
+TEST_CASE("the widest tree's far end has the ghost tables of its near end (packed node statuses)") {
+  // The node statuses pack a lattice point in 20 bits per axis in 3D, as many as a tree
+  // addresses: a tree of 2^18 - 1 level-0 cells over 3 levels spans 2^20 - 4 finest cells.
+  // The same refinement and particles at its far end and at the origin of a small tree give
+  // the same ghost tables, up to the shift.
+  const int far = (1 << 18) - 1, near = 8, shift = far - near;
+  std::vector<std::uint16_t> type;
+  const Particles<3> P = test::random_cloud<3>(300, Vec<3>(1.2, 1.2, 1.2), Vec<3>(6.8, 2.8, 2.8), 5);
+  for (const Vec<3>& x : P.x) type.push_back(x[0] < 4.0 ? 2 : 0);
+  const auto prepared = [&](int cells, int offset) {
+    CellTree<3> tree(Vec<3>::Zero(), IVec<3>(cells, 4, 4), 1.0, 3);
+    const Vec<3> lo(offset, 0, 0), hi(offset + 4.0, 4, 4);
+    tree.refine_where([&](const Vec<3>& a, const Vec<3>&) { return a[0] < hi[0] - 0.5 && a[1] < 3.0 ? 2 : 0; }, lo, hi);
+    AdaptiveGrid<3> grid(tree);
+    std::vector<Vec<3>> x = P.x;
+    for (Vec<3>& xi : x) xi[0] += offset;
+    grid.prepare(x, type);
+    return grid;
+  };
+  const AdaptiveGrid<3> small = prepared(near, 0), widest = prepared(far, shift);
+  std::size_t ghosts = 0;
+  for (int n = 0; n < 3; ++n) {
+    ghosts += small.ghosts(n).node.size();
+    CHECK(relative_ghosts(widest, n, shift) == relative_ghosts(small, n, 0));
+  }
+  CHECK(ghosts > 50);
+  CHECK_THROWS_AS(CellTree<3>(Vec<3>::Zero(), IVec<3>(1 << 18, 4, 4), 1.0, 3), Error);  // 2^20: one too many
+}
+
+namespace {
 // prepare() after a tree change keeps the node statuses the change cannot reach: its grids and
 // ghost tables equal those of a grid prepared on the new tree from scratch.
 template <int dim>
