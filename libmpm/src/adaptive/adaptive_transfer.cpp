@@ -93,6 +93,58 @@ void for_each_embedded(const detail::Stencil<dim, 3>& st, std::uint32_t mask, Fn
   }
 }
 
+// The nodes of a bucket's patch that the ghosts' terms visit, one by one: each node's storage
+// index, and a bit per node so that each is set up once (a bucket's particles reach a few of
+// its patch's nodes through their masks; the uniform loops' patch walk visits all of them).
+template <int dim>
+class VisitedNodes {
+public:
+  static constexpr int W = detail::patch_width<dim>, B = SparseGrid<dim>::block_size;
+
+  VisitedNodes(const SparseGrid<dim>& g, BlockKey block) {
+    const IVec<dim> origin = g.block_coord(block) * B;
+    for (int corner = 0; corner < (1 << dim); ++corner) {
+      IVec<dim> c = origin;
+      for (int a = 0; a < dim; ++a) c[a] += ((corner >> a) & 1) * B;
+      const int slot = g.slot(g.block_id(c));  // a bucket's patch blocks are all active (prepare)
+      MPM_ASSERT(slot >= 0);
+      first_[corner] = static_cast<std::size_t>(slot) * SparseGrid<dim>::nodes_per_block;
+    }
+  }
+  //! True the first time `node` (a patch index) is passed.
+  bool first_visit(int node) {
+    std::uint64_t& word = seen_[static_cast<std::size_t>(node) / 64];
+    const std::uint64_t bit = std::uint64_t{1} << (node % 64);
+    const bool first = (word & bit) == 0;
+    word |= bit;
+    return first;
+  }
+  //! fn(patch index, storage index) for the nodes visited, in patch order.
+  template <class Fn>
+  void for_each_visited(Fn&& fn) const {
+    for (std::size_t i = 0; i < seen_.size(); ++i)
+      for (std::uint64_t word = seen_[i]; word != 0; word &= word - 1) {
+        const int node = static_cast<int>(64 * i) + std::countr_zero(word);
+        fn(node, storage_index(node));
+      }
+  }
+  //! The storage index of patch node `node` (axis 0 fastest, W nodes per axis).
+  std::size_t storage_index(int node) const {
+    int corner = 0;
+    IVec<dim> local;
+    for (int a = 0; a < dim; ++a, node /= W) {
+      const int i = node % W;
+      corner |= (i >= B) << a;
+      local[a] = i & (B - 1);
+    }
+    return first_[corner] + static_cast<std::size_t>(SparseGrid<dim>::local_index(local));
+  }
+
+private:
+  std::array<std::size_t, 1 << dim> first_;  // storage index of each patch block's first node
+  std::array<std::uint64_t, (detail::patch_nodes<dim> + 63) / 64> seen_{};
+};
+
 // APIC's G_k = sum_p w_kp m_p C_p of the embedded ghosts from the particles near them, which
 // the uniform loops gave their mass and momentum: per bucket into its patch, then onto the
 // patch's ghosts.
@@ -105,19 +157,24 @@ void scatter_ghost_affine(const Particles<dim>& P, const AdaptiveGrid<dim>& grid
   const ParticleBuckets<dim>& near = grid.near_embedded(n);
   const std::vector<std::uint32_t>& masks = grid.near_embedded_masks(n);
   for_each_near_bucket(grid, n, Walk::scatter, [&](int b, const auto& kernel) {
-    alignas(64) std::array<double, detail::patch_nodes<dim> * M> patch;
-    patch.fill(0.0);
+    alignas(64) std::array<double, detail::patch_nodes<dim> * M> patch;  // set where visited
+    VisitedNodes<dim> visited(g, near.block[b]);
     const detail::PatchFrame<dim> frame(g, near.block[b]);
     for (std::uint32_t e = near.begin[b]; e < near.begin[b + 1]; ++e) {
       const std::uint32_t p = near.particle[e];
       detail::Stencil<dim, 3> st;
       st.template compute<false>(kernel, frame.cells(P.x[p]), frame.origin);
       const Mat<dim> mC = P.mass[p] * P.C[p];
-      for_each_embedded(st, masks[e],
-                        [&](int node, double w) { Eigen::Map<Mat<dim>>(patch.data() + node * M) += w * mC; });
+      for_each_embedded(st, masks[e], [&](int node, double w) {
+        Eigen::Map<Mat<dim>> sum(patch.data() + node * M);
+        if (visited.first_visit(node)) sum.setZero();
+        sum += w * mC;
+      });
     }
-    detail::for_each_patch_node<dim, 3>(g, near.block[b], [&](int node, std::size_t k) {
-      if (const int j = ghosts.of_node(k); j >= 0) affine[j] += Eigen::Map<const Mat<dim>>(patch.data() + node * M);
+    visited.for_each_visited([&](int node, std::size_t k) {
+      const int j = ghosts.of_node(k);
+      MPM_ASSERT(j >= 0);  // the masks flag embedded ghosts
+      affine[j] += Eigen::Map<const Mat<dim>>(patch.data() + node * M);
     });
   });
 }
@@ -127,8 +184,7 @@ void scatter_ghost_affine(const Particles<dim>& P, const AdaptiveGrid<dim>& grid
 // D_p^u, the uniform loops' own (diagonal: the tensor weights reproduce linear fields). From
 // the uniform C^u = B^u (D^u)^-1, C_p = (C^u D^u + dB) (D^u + dD)^-1. Ghosts that are real
 // nodes of another level add nothing (their Q_k and R_k vanish): only the embedded ones are
-// visited. Per bucket, the patch's Q_k and R_k are read once (zero where a node is no ghost);
-// x_before: the particles' positions at P2G, in the order of near_embedded(n).particle.
+// visited. Per bucket, each visited node's Q_k and R_k are read once; x_before: the particles' positions at P2G, in the order of near_embedded(n).particle.
 template <int dim>
 void add_ghost_terms(Particles<dim>& P, const AdaptiveGrid<dim>& grid, int n, const std::vector<Vec<dim>>& x_before) {
   constexpr int M = dim * dim, Ch = 2 * M;  // Q_k, then R_k
@@ -138,17 +194,18 @@ void add_ghost_terms(Particles<dim>& P, const AdaptiveGrid<dim>& grid, int n, co
   const std::vector<std::uint32_t>& masks = grid.near_embedded_masks(n);
   const double dx = g.dx();
   for_each_near_bucket(grid, n, Walk::gather, [&](int b, const auto& kernel) {
-    alignas(64) std::array<double, detail::patch_nodes<dim> * Ch> patch;
-    detail::for_each_patch_node<dim, 3>(g, near.block[b], [&](int node, std::size_t k) {
+    alignas(64) std::array<double, detail::patch_nodes<dim> * Ch> patch;  // read in where visited
+    VisitedNodes<dim> visited(g, near.block[b]);
+    const auto terms = [&](int node) -> const double* {
       double* out = patch.data() + node * Ch;
-      if (const int j = ghosts.of_node(k); j >= 0 && ghosts.moment[j] >= 0) {
-        std::copy_n(ghosts.velocity_moment[ghosts.moment[j]].data(), M, out);
-        const Mat<dim> R = ghosts.spread_of(ghosts.moment[j]);
-        std::copy_n(R.data(), M, out + M);
-      } else {
-        std::fill_n(out, Ch, 0.0);
-      }
-    });
+      if (!visited.first_visit(node)) return out;
+      const int j = ghosts.of_node(visited.storage_index(node));
+      MPM_ASSERT(j >= 0 && ghosts.moment[j] >= 0);  // the masks flag embedded ghosts
+      std::copy_n(ghosts.velocity_moment[ghosts.moment[j]].data(), M, out);
+      const Mat<dim> R = ghosts.spread_of(ghosts.moment[j]);
+      std::copy_n(R.data(), M, out + M);
+      return out;
+    };
     const detail::PatchFrame<dim> frame(g, near.block[b]);
     for (std::uint32_t e = near.begin[b]; e < near.begin[b + 1]; ++e) {
       detail::Stencil<dim, 3> st;
@@ -161,8 +218,9 @@ void add_ghost_terms(Particles<dim>& P, const AdaptiveGrid<dim>& grid, int n, co
       }
       Mat<dim> dB = Mat<dim>::Zero(), D = D_uniform.asDiagonal();
       for_each_embedded(st, masks[e], [&](int node, double w) {
-        dB.noalias() += w * Eigen::Map<const Mat<dim>>(patch.data() + node * Ch);
-        D.noalias() += w * Eigen::Map<const Mat<dim>>(patch.data() + node * Ch + M);
+        const double* QR = terms(node);
+        dB.noalias() += w * Eigen::Map<const Mat<dim>>(QR);
+        D.noalias() += w * Eigen::Map<const Mat<dim>>(QR + M);
       });
       const std::uint32_t p = near.particle[e];
       P.C[p] = (P.C[p] * D_uniform.asDiagonal() + dB) * D.inverse();
