@@ -706,6 +706,48 @@ TEST_CASE("the widest tree's far end has the ghost tables of its near end (packe
   CHECK_THROWS_AS(CellTree<3>(Vec<3>::Zero(), IVec<3>(1 << 18, 4, 4), 1.0, 3), Error);  // 2^20: one too many
 }
 
+TEST_CASE("two clouds far apart get the blocks and ghosts of each alone (block lists of a wide bounding box)") {
+  // prepare() sorts a level's block list through a bitmap over the blocks' bounding box, or by
+  // comparison when the box is much larger than the list: here the same cloud and refinement
+  // near the origin and 4 000 level-0 cells away, against the cloud alone.
+  const int shift = 4000;  // a multiple of the block size: blocks shift whole
+  std::vector<std::uint16_t> type;
+  const Particles<3> P = test::random_cloud<3>(300, Vec<3>(1.2, 1.2, 1.2), Vec<3>(6.8, 2.8, 2.8), 5);
+  for (const Vec<3>& x : P.x) type.push_back(x[0] < 4.0 ? 2 : 0);
+  const auto prepared = [&](int cells, const std::vector<int>& offsets) {
+    CellTree<3> tree(Vec<3>::Zero(), IVec<3>(cells, 4, 4), 1.0, 3);
+    tree.refine_where([&](const Vec<3>& a, const Vec<3>&) {
+      const double x = a[0] >= shift ? a[0] - shift : a[0];
+      return x < 3.5 && a[1] < 3.0 ? 2 : 0;
+    });
+    AdaptiveGrid<3> grid(tree);
+    std::vector<Vec<3>> x;
+    std::vector<std::uint16_t> types;
+    for (const int offset : offsets)
+      for (std::size_t p = 0; p < P.size(); ++p) {
+        x.push_back(P.x[p] + Vec<3>(offset, 0, 0));
+        types.push_back(type[p]);
+      }
+    grid.prepare(x, types);
+    return grid;
+  };
+  const AdaptiveGrid<3> alone = prepared(8, {0}), both = prepared(shift + 8, {0, shift});
+  for (int n = 0; n < 3; ++n) {
+    const SparseGrid<3>& g = alone.level(n);
+    std::vector<BlockKey> expected = g.active_blocks();
+    for (const BlockKey key : g.active_blocks()) {
+      IVec<3> c = g.block_coord(key) * SparseGrid<3>::block_size;
+      c[0] += shift << n;  // in level-n nodes
+      expected.push_back(both.level(n).block_id(c));
+    }
+    std::sort(expected.begin(), expected.end());
+    CHECK(both.level(n).active_blocks() == expected);
+    CHECK(both.ghosts(n).node.size() == 2 * alone.ghosts(n).node.size());
+    CHECK(both.ghosts(n).link.size() == 2 * alone.ghosts(n).link.size());
+  }
+  CHECK(alone.ghosts(2).node.size() > 20);
+}
+
 namespace {
 // prepare() after a tree change keeps the node statuses the change cannot reach: its grids and
 // ghost tables equal those of a grid prepared on the new tree from scratch.
