@@ -323,6 +323,45 @@ TEST_CASE_TEMPLATE("resampling a block by the distance bands", T, std::integral_
     CHECK(again.v == P.v);
   }
 
+  SUBCASE("merges and splits in one call: the merged particles' slots filled from the end") {
+    // A fine block merges inside while a coarse slab stored after it splits near the surface:
+    // the slab's particles, split ones among them, move into the merged ones' slots.
+    Particles<dim> P = block(tree, 2, lo, hi);
+    Vec<dim> slab_lo = lo, slab_hi = hi;
+    slab_lo[0] = hi[0];
+    slab_hi[0] = hi[0] + 2 * h;
+    const Particles<dim> slab = block(tree, 1, slab_lo, slab_hi);
+    const std::size_t fine = P.size();
+    P.resize(fine + slab.size());
+    P.for_each_channel([&](const ChannelInfo& info, auto& values) {
+      const auto& from = *slab.template find_channel<typename std::decay_t<decltype(values)>::value_type>(info.name);
+      std::copy(from.begin(), from.end(), values.begin() + static_cast<std::ptrdiff_t>(fine));
+    });
+    std::mt19937 rng(5);
+    for (std::size_t p = 0; p < P.size(); ++p) {
+      const double V = P.volume0[p];
+      randomise(P, p, rng);
+      P.volume0[p] = V;
+    }
+    const Totals t0 = totals(P);
+    const std::size_t n0 = P.size();
+    const Particles<dim> copy = P;
+    const ResampleSettings bands{0.0, 1.55 * h, 1.6 * h, 1};  // the slab (d = h/2, 3h/2) splits
+    const ResampleCounts c = resample_particles(P, tree, 2, bands, {"F"}, 0);
+    CHECK(c.split > 0);
+    CHECK(c.merged > 0);
+    CHECK(P.size() == n0 - c.merged + c.groups + ((1 << dim) - 1) * c.split);
+    const Totals t1 = totals(P);
+    CHECK(t1.mass == doctest::Approx(t0.mass).epsilon(tight));
+    CHECK(t1.volume == doctest::Approx(t0.volume).epsilon(tight));
+    CHECK((t1.momentum - t0.momentum).norm() < 1e-12 * t0.mass);
+    CHECK((t1.moment - t0.moment).norm() < 1e-12 * t0.moment.norm());
+    Particles<dim> again = copy;
+    resample_particles(again, tree, 2, bands, {"F"}, 0);
+    CHECK(again.x == P.x);
+    CHECK(again.mass == P.mass);
+  }
+
   SUBCASE("a coarse block splits in the band, one level per resampling") {
     Particles<dim> P = block<dim>(tree, 0, Vec<dim>::Constant(0.0), Vec<dim>::Constant(4.0));
     const Totals t0 = totals(P);
