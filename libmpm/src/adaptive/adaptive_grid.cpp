@@ -3,6 +3,8 @@
 #include <mpm/core/error.h>
 #include <mpm/core/kernels.h>
 
+#include "lattice_keys.h"
+
 #include <algorithm>
 #include <array>
 #include <atomic>
@@ -47,46 +49,6 @@ std::vector<std::vector<std::uint32_t>> split_by_class(std::size_t n, int classe
     }
   });
   return out;
-}
-
-// Sorts block keys of grid g and drops the repeats (a bucket adds its 2^dim patch blocks, most
-// of them also its neighbours'): a bitmap over the keys' bounding box, read in key order (the
-// lexicographic order, last axis slowest), when the box is not much larger than the list;
-// otherwise a comparison sort.
-template <int dim>
-void sort_unique_blocks(std::vector<BlockKey>& keys, const SparseGrid<dim>& g) {
-  if (keys.empty()) return;
-  IVec<dim> lo = g.block_coord(keys.front()), hi = lo;
-  for (const BlockKey key : keys) {
-    const IVec<dim> c = g.block_coord(key);
-    lo = lo.cwiseMin(c);
-    hi = hi.cwiseMax(c);
-  }
-  const IVec<dim> extent = hi - lo + IVec<dim>::Ones();
-  const double box = extent.template cast<double>().prod();
-  if (box > 64.0 * static_cast<double>(keys.size()) + 4096.0) {
-    std::sort(keys.begin(), keys.end());
-    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
-    return;
-  }
-  std::vector<std::uint64_t> bits((static_cast<std::size_t>(box) + 63) / 64, 0);
-  for (const BlockKey key : keys) {
-    const IVec<dim> c = g.block_coord(key) - lo;
-    std::size_t flat = 0;
-    for (int a = dim - 1; a >= 0; --a) flat = flat * static_cast<std::size_t>(extent[a]) + c[a];
-    bits[flat / 64] |= std::uint64_t{1} << (flat % 64);
-  }
-  keys.clear();
-  for (std::size_t i = 0; i < bits.size(); ++i)
-    for (std::uint64_t word = bits[i]; word != 0; word &= word - 1) {
-      std::size_t flat = 64 * i + static_cast<std::size_t>(std::countr_zero(word));
-      IVec<dim> c;
-      for (int a = 0; a < dim; ++a) {
-        c[a] = lo[a] + static_cast<int>(flat % static_cast<std::size_t>(extent[a]));
-        flat /= static_cast<std::size_t>(extent[a]);
-      }
-      keys.push_back(g.block_id(c * SparseGrid<dim>::block_size));
-    }
 }
 
 // The colour of a block (parity of its coordinates): buckets of one colour share no node.
@@ -255,7 +217,7 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
   std::vector<std::vector<std::uint64_t>> reached_nodes(L);
   for (int n = 0; n < L; ++n) {
     std::vector<BlockKey>& own = own_blocks[n];
-    sort_unique_blocks(own, levels_[n]);
+    detail::sort_unique_points<dim>(own, SparseGrid<dim>::key_bits);
     reached_nodes[n] = stencil_nodes(n, x, own);
   }
 
@@ -416,7 +378,7 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
   // node reached.
   bool same_blocks = same_tree && own_blocks == own_blocks_;
   for (int n = 0; n < L; ++n) {
-    sort_unique_blocks(blocks[n], levels_[n]);
+    detail::sort_unique_points<dim>(blocks[n], SparseGrid<dim>::key_bits);
     same_blocks = same_blocks && blocks[n] == levels_[n].active_blocks();
   }
   if (same_blocks) {

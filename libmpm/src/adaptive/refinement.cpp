@@ -10,6 +10,8 @@
 
 #include <tbb/parallel_for.h>
 
+#include "lattice_keys.h"
+
 namespace mpm::adaptive {
 
 int levels_of(const Config& scene) {
@@ -147,17 +149,19 @@ CellTree<dim> build_tree(const RefinementSettings<dim>& r, const SceneSettings<d
 namespace {
 
 //! A cell of one level as a sortable key: 21 bits per axis (2^21 cells per axis and level).
+constexpr int cell_key_bits = 21;
 template <int dim>
 std::uint64_t cell_key(const IVec<dim>& cell) {
   std::uint64_t key = 0;
-  for (int a = dim - 1; a >= 0; --a) key = (key << 21) | static_cast<std::uint64_t>(cell[a]);
+  for (int a = dim - 1; a >= 0; --a) key = (key << cell_key_bits) | static_cast<std::uint64_t>(cell[a]);
   return key;
 }
 
 template <int dim>
 IVec<dim> key_cell(std::uint64_t key) {
   IVec<dim> cell;
-  for (int a = 0; a < dim; ++a, key >>= 21) cell[a] = static_cast<int>(key & ((std::uint64_t{1} << 21) - 1));
+  for (int a = 0; a < dim; ++a, key >>= cell_key_bits)
+    cell[a] = static_cast<int>(key & ((std::uint64_t{1} << cell_key_bits) - 1));
   return cell;
 }
 
@@ -187,10 +191,10 @@ public:
   //! Adds the keys `other` holds.
   void absorb(const DistinctKeys& other) { absorb_keys(other.keys_); }
   void absorb_keys(const std::vector<std::uint64_t>& keys) { keys_.insert(keys_.end(), keys.begin(), keys.end()); }
-  //! The keys added, sorted, each once.
+  //! The keys added (cell_key<dim>), sorted, each once.
+  template <int dim>
   std::vector<std::uint64_t> take() {
-    std::sort(keys_.begin(), keys_.end());
-    keys_.erase(std::unique(keys_.begin(), keys_.end()), keys_.end());
+    detail::sort_unique_points<dim>(keys_, cell_key_bits);
     return std::move(keys_);
   }
 
@@ -264,7 +268,7 @@ void refine_level(CellTree<dim>& tree, const std::vector<Vec<dim>>& x, const std
   });
   DistinctKeys holding;
   for (const Found& f : found) holding.absorb(f.holding);
-  const std::vector<std::uint64_t> held = holding.take();
+  const std::vector<std::uint64_t> held = holding.take<dim>();
   for (const std::uint64_t key : held) refine_down_to(tree, key_cell<dim>(key), q - 1);  // the particles' cells
   if (!padding || held.empty()) return;
 
@@ -274,12 +278,12 @@ void refine_level(CellTree<dim>& tree, const std::vector<Vec<dim>>& x, const std
   for (int l = q - 1; l >= 0; --l) {
     DistinctKeys level_met, level_reached;
     for (const Found& f : found) level_met.absorb(f.met[l]);
-    met[l] = level_met.take();
+    met[l] = level_met.take<dim>();
     level_reached.absorb_keys(met[l]);
     if (l + 1 < q)
       for (const std::uint64_t key : reached[l + 1])
         level_reached.add(cell_key<dim>(IVec<dim>(key_cell<dim>(key) / 2)));
-    reached[l] = level_reached.take();
+    reached[l] = level_reached.take<dim>();
   }
   const auto listed = [](const std::vector<std::uint64_t>& keys, const IVec<dim>& c) {
     return std::binary_search(keys.begin(), keys.end(), cell_key<dim>(c));
@@ -310,7 +314,7 @@ void refine_level(CellTree<dim>& tree, const std::vector<Vec<dim>>& x, const std
   DistinctKeys padded;
   for (const DistinctKeys& c : candidates) padded.absorb(c);
   // In key order: the same tree whatever the particles' order.
-  for (const std::uint64_t key : padded.take()) refine_down_to(tree, key_cell<dim>(key), q - 1);
+  for (const std::uint64_t key : padded.take<dim>()) refine_down_to(tree, key_cell<dim>(key), q - 1);
 }
 
 }  // namespace
