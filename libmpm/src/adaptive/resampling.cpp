@@ -365,38 +365,30 @@ ResampleCounts resample_particles(Particles<dim>& P, const CellTree<dim>& tree, 
     }
   }
 
-  // The merged-away particles' slots filled from the end, then per split its 2^dim - 1 copies
-  // appended: a few particles moved where a stable compaction moves all of them (the next sort
-  // into buckets takes the new order in).
+  // The merged-away particles dropped and the split ones' children appended in one gather: the
+  // particles kept, in order, then per split its 2^dim - 1 copies (the order of splitting
+  // each in turn and then erasing, without growing every channel and compacting it again).
   if (allowed_splits.empty() && counts.merged == 0) return counts;
   constexpr std::size_t copies = (1 << dim) - 1;
-  const std::size_t kept = n - counts.merged + counts.groups;  // a group keeps its first particle
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> moves;  // (to, from)
-  for (std::size_t hole = 0, from = n; hole < kept; ++hole) {
-    if (!erase[hole]) continue;
-    do --from;
-    while (erase[from]);  // from >= kept: the holes below `kept` are the kept particles above it
-    moves.emplace_back(static_cast<std::uint32_t>(hole), static_cast<std::uint32_t>(from));
-  }
-  const std::size_t fills = moves.size();
-  std::vector<std::size_t> split_at;  // the split particles' indices after the fills
-  for (const std::size_t p : allowed_splits) {
-    MPM_ASSERT(!erase[p]);  // none merged
-    std::size_t at = p;
-    if (p >= kept) {  // moved: the fills take their particles from the end down
-      const auto it = std::lower_bound(moves.begin(), moves.begin() + static_cast<std::ptrdiff_t>(fills), p,
-                                       [](const auto& move, std::size_t q) { return move.second > q; });
-      MPM_ASSERT(it != moves.begin() + static_cast<std::ptrdiff_t>(fills) && it->second == p);
-      at = it->first;
+  std::vector<std::uint32_t> order;
+  order.reserve(n + copies * allowed_splits.size());
+  std::vector<std::size_t> split_at;  // the split particles' indices after the gather
+  split_at.reserve(allowed_splits.size());
+  for (std::size_t p = 0, next = 0; p < n; ++p) {
+    if (erase[p]) continue;
+    if (next < allowed_splits.size() && allowed_splits[next] == p) {
+      split_at.push_back(order.size());
+      ++next;
     }
-    split_at.push_back(at);
-    for (std::size_t c = 0; c < copies; ++c)
-      moves.emplace_back(static_cast<std::uint32_t>(kept + moves.size() - fills), static_cast<std::uint32_t>(at));
+    order.push_back(static_cast<std::uint32_t>(p));
   }
-  P.copy_within(moves, kept + copies * allowed_splits.size());
+  MPM_ASSERT(split_at.size() == allowed_splits.size());  // ascending, none merged
+  for (std::size_t p : allowed_splits) order.insert(order.end(), copies, static_cast<std::uint32_t>(p));
+  const std::size_t first_copy = order.size() - copies * allowed_splits.size();
+  P.permute(order);
   for (std::size_t i = 0; i < allowed_splits.size(); ++i) {
     const std::size_t p = allowed_splits[i];
-    place_children(P, split_at[i], kept + copies * i, tree, points_per_axis, random_rotation<dim>(mix(step) ^ p));
+    place_children(P, split_at[i], first_copy + copies * i, tree, points_per_axis, random_rotation<dim>(mix(step) ^ p));
     ++counts.split;
   }
   return counts;

@@ -75,10 +75,8 @@ std::vector<double> surface_distance(const CellTree<dim>& tree, const std::vecto
 
 //! Splits and merges the particles of P (channel "level") by the rules above; `deformation`
 //! names the Mat channels averaged by average_deformation on merge (the solid's "F"); `step`
-//! seeds the split rotations. A merge keeps the group's first particle; the slots of the others
-//! are filled by the last particles, and the split particles' children are appended (the order
-//! changes where particles leave: the same for the same input). The buckets of the state must
-//! be rebuilt afterwards (a sort stage follows).
+//! seeds the split rotations. Particles that are not split or merged keep their order; the
+//! buckets of the state must be rebuilt afterwards (a sort stage follows).
 template <int dim>
 ResampleCounts resample_particles(Particles<dim>& P, const CellTree<dim>& tree, int points_per_axis,
                                   const ResampleSettings& settings, const std::vector<std::string>& deformation,

@@ -182,18 +182,6 @@ struct Particles {
     });
   }
 
-  //! Copies particle `from` onto particle `to` in every channel for each (to, from) of `moves`,
-  //! in order, with every channel first grown to max(size(), n); then keeps the first n. Moves a
-  //! few particles where permute() gathers all: removing particles by filling their slots from
-  //! the end, appending copies.
-  void copy_within(const std::vector<std::pair<std::uint32_t, std::uint32_t>>& moves, std::size_t n) {
-    resize(std::max(size(), n));
-    for_each_channel([&](const ChannelInfo&, auto& values) {
-      for (const auto& [to, from] : moves) values[to] = values[from];
-    });
-    resize(n);
-  }
-
   //! Removes every particle p with flagged[p] != 0 (flagged.size() == size()) from every
   //! channel; the others keep their order (stable). O(N): one scan for the kept indices, then
   //! the parallel gather of permute(). Returns the number removed.

@@ -323,9 +323,10 @@ TEST_CASE_TEMPLATE("resampling a block by the distance bands", T, std::integral_
     CHECK(again.v == P.v);
   }
 
-  SUBCASE("merges and splits in one call: the merged particles' slots filled from the end") {
+  SUBCASE("merges and splits in one call") {
     // A fine block merges inside while a coarse slab stored after it splits near the surface:
-    // the slab's particles, split ones among them, move into the merged ones' slots.
+    // the merged-away particles are dropped and the children appended in one gather, the split
+    // particles among those that move.
     Particles<dim> P = block(tree, 2, lo, hi);
     Vec<dim> slab_lo = lo, slab_hi = hi;
     slab_lo[0] = hi[0];
