@@ -217,7 +217,7 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
   std::vector<std::vector<std::uint64_t>> reached_nodes(L);
   for (int n = 0; n < L; ++n) {
     std::vector<BlockKey>& own = own_blocks[n];
-    detail::sort_unique_points<dim>(own, SparseGrid<dim>::key_bits);
+    sort_unique_points<dim>(own, SparseGrid<dim>::key_bits);
     reached_nodes[n] = stencil_nodes(n, x, own);
   }
 
@@ -378,7 +378,7 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
   // node reached.
   bool same_blocks = same_tree && own_blocks == own_blocks_;
   for (int n = 0; n < L; ++n) {
-    detail::sort_unique_points<dim>(blocks[n], SparseGrid<dim>::key_bits);
+    sort_unique_points<dim>(blocks[n], SparseGrid<dim>::key_bits);
     same_blocks = same_blocks && blocks[n] == levels_[n].active_blocks();
   }
   if (same_blocks) {

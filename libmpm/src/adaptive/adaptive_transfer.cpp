@@ -184,7 +184,8 @@ void scatter_ghost_affine(const Particles<dim>& P, const AdaptiveGrid<dim>& grid
 // D_p^u, the uniform loops' own (diagonal: the tensor weights reproduce linear fields). From
 // the uniform C^u = B^u (D^u)^-1, C_p = (C^u D^u + dB) (D^u + dD)^-1. Ghosts that are real
 // nodes of another level add nothing (their Q_k and R_k vanish): only the embedded ones are
-// visited. Per bucket, each visited node's Q_k and R_k are read once; x_before: the particles' positions at P2G, in the order of near_embedded(n).particle.
+// visited. Per bucket, each visited node's Q_k and R_k are read once; x_before: the
+// particles' positions at P2G, in the order of near_embedded(n).particle.
 template <int dim>
 void add_ghost_terms(Particles<dim>& P, const AdaptiveGrid<dim>& grid, int n, const std::vector<Vec<dim>>& x_before) {
   constexpr int M = dim * dim, Ch = 2 * M;  // Q_k, then R_k

@@ -8,7 +8,7 @@
 #include <cstdint>
 #include <vector>
 
-namespace mpm::adaptive::detail {
+namespace mpm::adaptive {
 
 //! Sorts `keys` and drops the repeats, where a key packs a point of a lattice in `bits` bits per
 //! axis, axis 0 in the lowest bits (SparseGrid's block keys, CellTree's cell keys): so the key
@@ -59,4 +59,4 @@ void sort_unique_points(std::vector<std::uint64_t>& keys, int bits) {
     }
 }
 
-}  // namespace mpm::adaptive::detail
+}  // namespace mpm::adaptive

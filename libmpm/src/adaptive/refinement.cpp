@@ -194,7 +194,7 @@ public:
   //! The keys added (cell_key<dim>), sorted, each once.
   template <int dim>
   std::vector<std::uint64_t> take() {
-    detail::sort_unique_points<dim>(keys_, cell_key_bits);
+    sort_unique_points<dim>(keys_, cell_key_bits);
     return std::move(keys_);
   }
 
