@@ -635,7 +635,7 @@ bool run_adaptive(const Options& o, const Particles<3>& uniform_input) {
   }
   const bool ok = mass_error < 1e-12 && momentum_error < 1e-12 && affine_error < 1e-10;
   std::size_t irregular = in.grid.irregular().size(), near = 0;
-  for (int n = 0; n < in.grid.levels(); ++n) near += in.grid.near_embedded(n).particle.size();
+  for (int group = 0; group < in.grid.regular_groups(); ++group) near += in.grid.near_embedded(group).particle.size();
   std::printf(
       "\nadaptive, double precision: %zu particles (%zu on the uniform lattice), 3 levels, finest dx = %g, "
       "refined where x < 1/2; %zu particles near embedded ghosts, %zu irregular; P2G conserves mass to %.1e, "

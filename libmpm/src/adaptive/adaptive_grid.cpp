@@ -21,6 +21,30 @@ namespace mpm::adaptive {
 namespace {
 const Eigen::IOFormat kList(Eigen::FullPrecision, Eigen::DontAlignCols, ", ", ", ");
 
+// Room for `extra` more elements in v, the capacity grown by at least a quarter when it runs out.
+template <class T>
+void reserve_more(std::vector<T>& v, std::size_t extra) {
+  if (v.size() + extra > v.capacity()) v.reserve(v.size() + std::max(extra, v.size() / 4));
+}
+
+// A node's coordinates within its block packed into one byte (block_bits per axis), and back:
+// prepare() finds each regular particle's stencil base once and its later passes read the byte.
+template <int dim>
+std::uint8_t pack_in_block(const IVec<dim>& node) {
+  static_assert(dim * SparseGrid<dim>::block_bits <= 8);
+  int packed = 0;
+  for (int a = dim - 1; a >= 0; --a)
+    packed = packed << SparseGrid<dim>::block_bits | (node[a] & (SparseGrid<dim>::block_size - 1));
+  return static_cast<std::uint8_t>(packed);
+}
+template <int dim>
+IVec<dim> unpack_in_block(std::uint8_t packed) {
+  IVec<dim> local;
+  for (int a = 0; a < dim; ++a, packed >>= SparseGrid<dim>::block_bits)
+    local[a] = packed & (SparseGrid<dim>::block_size - 1);
+  return local;
+}
+
 // Splits 0 .. n-1 by class (class_of(i) in [0, classes)) into one list per class, each in
 // ascending order, in parallel: every chunk counts its members per class, then writes them
 // after the earlier chunks' (the result does not depend on the thread count).
@@ -85,9 +109,9 @@ AdaptiveGrid<dim>::AdaptiveGrid(CellTree<dim> tree, int points_per_axis)
   for (int t = 0; t < tree_.levels(); ++t)
     for (int n = 0; n < tree_.levels(); ++n) half_cells_[t * max_levels + n] = 0.5 * particle_size(t) / levels_[n].dx();
   ghosts_.resize(tree_.levels());
-  regular_.resize(tree_.levels());
-  near_embedded_.resize(tree_.levels());
-  near_masks_.resize(tree_.levels());
+  regular_.resize(static_cast<std::size_t>(regular_groups()));
+  near_embedded_.resize(static_cast<std::size_t>(regular_groups()));
+  near_masks_.resize(static_cast<std::size_t>(regular_groups()));
 }
 
 template <int dim>
@@ -106,11 +130,13 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
   std::vector<std::tuple<int, BlockKey, std::uint32_t>> irregular_at;
   int span = 1;
 
-  // Transfer level, half-size and, for a particle on its own level whose stencil lies inside
-  // the level, its bucket's block, in parallel (the tree walk is the cost). Those (regular)
-  // go in buckets for the uniform loops; the loop after it reports the first bad particle and
-  // takes the others (irregular) through their general stencil.
-  std::vector<std::uint8_t> regular(x.size(), 0);
+  // Transfer level, half-size and, for a particle of a regular group (on its own level, or with
+  // a box of one cell of its level) whose stencil lies inside the level, its bucket's block, in
+  // parallel (the tree walk is the cost). Those (regular) go in buckets for the uniform loops;
+  // the loop after it reports the first bad particle and takes the others (irregular) through
+  // their general stencil.
+  const int G = regular_groups();
+  std::vector<std::uint8_t> group(x.size(), static_cast<std::uint8_t>(G)), base_in_block(x.size());
   std::vector<BlockKey> bucket(x.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 4096), [&](const auto& range) {
     CellId<dim> leaf;  // the last particle's leaf
@@ -123,18 +149,21 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
       class_[p].level = static_cast<std::int8_t>(n);
       if (n < 0) continue;
       const SparseGrid<dim>& g = levels_[n];
-      if (n == type[p]) {  // on its own level: regular_kernel(), whose stencil holds the general one
+      // On its own level, regular_kernel()'s stencil holds the general one; with a box of one
+      // cell, the general weights are the quadratic B-spline's.
+      if (n == type[p] || type[p] == cell_box_type(n)) {
         const IVec<dim> base = uniform_base(n, x[p]);
         if ((base.array() >= 0).all() && (base.array() + 2 < g.node_counts().array()).all()) {
           bucket[p] = g.block_id(base);
-          regular[p] = 1;
+          base_in_block[p] = pack_in_block<dim>(base);
+          group[p] = static_cast<std::uint8_t>(groups_per_level * n + (n != type[p]));
         }
       }
     }
   });
-  std::vector<std::vector<std::uint32_t>> by_level =
-      split_by_class(x.size(), L + 1, [&](std::size_t p) { return regular[p] ? class_[p].level : L; });
-  for (const std::uint32_t p : by_level[L]) {
+  std::vector<std::vector<std::uint32_t>> by_group =
+      split_by_class(x.size(), G + 1, [&](std::size_t p) { return group[p]; });
+  for (const std::uint32_t p : by_group[G]) {
     MPM_VERIFY(type[p] < L, InputError,
                "stage '" + stage + "': particle " + std::to_string(p) + " has type " + std::to_string(type[p]) +
                    ", outside the grid's levels [0, " + std::to_string(L - 1) + "]");
@@ -179,17 +208,18 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
       if (a == dim) break;
     }
   }
-  // The regular particles of each level in buckets: a stable sort by block, in parallel. A
+  // The regular particles of each group in buckets: a stable sort by block, in parallel. A
   // bucket's patch covers its block and the +1 neighbours on every axis.
   std::vector<std::vector<BlockKey>> blocks(L);
-  for (int n = 0; n < L; ++n) {
-    const std::vector<std::uint32_t>& members = by_level[n];
+  for (int grp = 0; grp < G; ++grp) {
+    const int n = group_level(grp);
+    const std::vector<std::uint32_t>& members = by_group[grp];
     std::vector<BlockKey> keys(members.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, members.size(), 1 << 14), [&](const auto& range) {
       for (std::size_t i = range.begin(); i != range.end(); ++i) keys[i] = bucket[members[i]];
     });
     KeyOrder sorted = sort_keys(keys);
-    ParticleBuckets<dim>& b = regular_[n];
+    ParticleBuckets<dim>& b = regular_[grp];
     b = ParticleBuckets<dim>{};
     if (sorted.identity) {
       b.particle = members;
@@ -218,7 +248,7 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
   for (int n = 0; n < L; ++n) {
     std::vector<BlockKey>& own = own_blocks[n];
     sort_unique_points<dim>(own, SparseGrid<dim>::key_bits);
-    reached_nodes[n] = stencil_nodes(n, x, own);
+    reached_nodes[n] = stencil_nodes(n, x, base_in_block, own);
   }
 
   // Status of the nodes reached: real on its level, or a ghost with links given by lattice
@@ -250,6 +280,18 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
       for (std::size_t i = range.begin(); i != range.end(); ++i)
         computed[i] = block_status(n, own[fresh[i]], fresh_nodes[i]);
     });
+    // The statuses stay between steps and their capacity is memory held: grown by a quarter
+    // when full, not doubled as by the appends.
+    std::size_t more_ghosts = 0, more_links = 0, more_reached = 0;
+    for (const FreshStatus& c : computed) {
+      more_ghosts += c.ghosts.size();
+      more_links += c.links.size();
+      more_reached += c.reached.size();
+    }
+    reserve_more(status.ghosts, more_ghosts);
+    reserve_more(status.links, more_links);
+    reserve_more(status.reached, more_reached);
+    reserve_more(status.blocks, fresh.size());
     for (std::size_t i = 0; i < fresh.size(); ++i) {
       FreshStatus& c = computed[i];
       const auto link_offset = static_cast<std::uint32_t>(status.links.size());
@@ -287,7 +329,8 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
 
   // The bucketed particles whose stencil holds an embedded ghost are also listed: APIC adds
   // the ghosts' affine terms for them (adaptive_transfer.cpp).
-  for (int n = 0; n < L; ++n) {
+  for (int grp = 0; grp < G; ++grp) {
+    const int n = group_level(grp);
     const SparseGrid<dim>& g = levels_[n];
     const LevelStatus& status = status_[n];
     auto embedded_mask = [&](const IVec<dim>& block_coord) -> std::uint64_t {
@@ -295,8 +338,13 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
       return m >= 0 ? status.blocks[static_cast<std::size_t>(m)].embedded : 0;
     };
     // Whether each bucketed particle's 3^dim stencil holds an embedded ghost, in parallel by
-    // bucket (one patch of block masks per bucket), and how many per bucket.
-    const ParticleBuckets<dim>& reg = regular_[n];
+    // bucket, and how many per bucket. Per bucket, the embedded bits of its patch as rows of
+    // W = 2B nodes along axis 0 (from the block masks); per particle, the three bits of each
+    // of its stencil's rows shifted out of them.
+    constexpr int W = 2 * B, rows = ipow(W, dim - 1);
+    constexpr std::uint64_t block_row = (std::uint64_t{1} << B) - 1;
+    static_assert(W <= 32);
+    const ParticleBuckets<dim>& reg = regular_[grp];
     std::vector<std::uint32_t> near(reg.particle.size(), 0);  // the stencil's embedded ghosts, by bit
     std::vector<std::uint32_t> near_count(static_cast<std::size_t>(reg.count()), 0);
     tbb::parallel_for(tbb::blocked_range<int>(0, reg.count(), 8), [&](const auto& range) {
@@ -311,30 +359,23 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
           check_nodes = check_nodes || patch_mask[corner] != 0;
         }
         if (!check_nodes) continue;
-        const IVec<dim> first = c * B;
+        std::array<std::uint32_t, rows> row;
+        for (int r = 0; r < rows; ++r) {
+          int corner = 0, shift = 0;  // the row's corner block (axes >= 1) and its first node's bit
+          for (int a = 1, rest = r; a < dim; ++a, rest /= W) {
+            corner |= (rest % W >= B) << a;
+            shift |= (rest % W & (B - 1)) << (a * SparseGrid<dim>::block_bits);
+          }
+          row[static_cast<std::size_t>(r)] = static_cast<std::uint32_t>(
+              (patch_mask[corner] >> shift & block_row) | (patch_mask[corner | 1] >> shift & block_row) << B);
+        }
         for (std::uint32_t i = reg.begin[k]; i < reg.begin[k + 1]; ++i) {
-          // The 3^dim stencil nodes lie in the patch: test their bits. Per axis, the patch
-          // block (corner bit) and the local index bits of the three nodes; the nodes combine
-          // them.
-          const IVec<dim> base = uniform_base(n, x[reg.particle[i]]);
-          int corner_bit[dim][3], local_bits[dim][3];
-          for (int a = 0; a < dim; ++a)
-            for (int r = 0; r < 3; ++r) {
-              const int offset = base[a] + r - first[a];  // in [0, 2B)
-              corner_bit[a][r] = (offset >= B) << a;
-              local_bits[a][r] = (offset & (B - 1)) << (a * SparseGrid<dim>::block_bits);
-            }
+          const IVec<dim> base = unpack_in_block<dim>(base_in_block[reg.particle[i]]);
           std::uint32_t bits = 0;
           for (int j = 0; j < ipow(3, dim); j += 3) {  // a row of three nodes along axis 0
-            int corner = 0, local = 0;
-            for (int a = 1; a < dim; ++a) {
-              corner |= corner_bit[a][stencil_offsets[j][a]];
-              local |= local_bits[a][stencil_offsets[j][a]];
-            }
-            for (int r = 0; r < 3; ++r)
-              bits |=
-                  static_cast<std::uint32_t>((patch_mask[corner | corner_bit[0][r]] >> (local | local_bits[0][r])) & 1)
-                  << (j + r);
+            int r = 0;
+            for (int a = dim - 1; a >= 1; --a) r = r * W + base[a] + stencil_offsets[j][a];
+            bits |= static_cast<std::uint32_t>(row[static_cast<std::size_t>(r)] >> base[0] & 7) << j;
           }
           near[i] = bits;
           near_count[static_cast<std::size_t>(k)] += bits != 0;
@@ -343,7 +384,7 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
     });
     // The near ones in buckets of their own: the buckets that hold any, then their particles
     // and masks filled per bucket in parallel.
-    ParticleBuckets<dim>& ne = near_embedded_[n];
+    ParticleBuckets<dim>& ne = near_embedded_[grp];
     ne = ParticleBuckets<dim>{};
     std::vector<int> near_bucket;  // bucket of reg behind each bucket of ne
     std::uint32_t near_total = 0;
@@ -357,7 +398,7 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
     }
     ne.begin.push_back(near_total);
     ne.particle.resize(near_total);
-    near_masks_[n] = std::vector<std::uint32_t>(near_total);  // not the capacity of a larger step's
+    near_masks_[grp] = std::vector<std::uint32_t>(near_total);  // not the capacity of a larger step's
     tbb::parallel_for(tbb::blocked_range<int>(0, ne.count(), 16), [&](const auto& range) {
       for (int e = range.begin(); e != range.end(); ++e) {
         const int k = near_bucket[static_cast<std::size_t>(e)];
@@ -365,7 +406,7 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
         for (std::uint32_t i = reg.begin[k]; i < reg.begin[k + 1]; ++i)
           if (near[i]) {
             ne.particle[out] = reg.particle[i];
-            near_masks_[n][out++] = near[i];
+            near_masks_[grp][out++] = near[i];
           }
       }
     });
@@ -517,6 +558,7 @@ bool AdaptiveGrid<dim>::store_in_transfer_order(const MoveParticles& move) {
 
 template <int dim>
 std::vector<std::uint64_t> AdaptiveGrid<dim>::stencil_nodes(int n, const std::vector<Vec<dim>>& x,
+                                                            const std::vector<std::uint8_t>& base_in_block,
                                                             const std::vector<BlockKey>& own) const {
   constexpr int B = SparseGrid<dim>::block_size, W = 2 * B;  // a bucket's patch: 2 blocks per axis
   constexpr int rows = ipow(W, dim - 1);                     // its rows of W nodes along axis 0
@@ -531,46 +573,49 @@ std::vector<std::uint64_t> AdaptiveGrid<dim>::stencil_nodes(int n, const std::ve
     std::atomic_ref<std::uint64_t>(reached[static_cast<std::size_t>(it - own.begin())])
         .fetch_or(bits, std::memory_order_relaxed);
   };
-  // The regular particles' 3^dim stencils, per bucket: the stencils' first nodes marked in the
-  // patch's rows, dilated by two nodes along each axis, then cut into the patch's blocks.
-  const ParticleBuckets<dim>& reg = regular_[n];
-  tbb::parallel_for(tbb::blocked_range<int>(0, reg.count(), 8), [&](const auto& range) {
-    for (int k = range.begin(); k != range.end(); ++k) {
-      const IVec<dim> first = g.block_coord(reg.block[k]) * B;
-      std::array<std::uint32_t, rows> row{};
-      for (std::uint32_t i = reg.begin[k]; i < reg.begin[k + 1]; ++i) {
-        const IVec<dim> base = uniform_base(n, x[reg.particle[i]]) - first;  // in [0, B) on every axis
-        int r = 0;
-        for (int a = dim - 1; a >= 1; --a) r = r * W + base[a];
-        row[static_cast<std::size_t>(r)] |= 1u << base[0];
-      }
-      for (std::uint32_t& r : row) r |= r << 1 | r << 2;
-      for (int a = 1, stride = 1; a < dim; ++a, stride *= W)
-        for (int r = rows - 1; r >= 0; --r) {  // from the top: the rows below are not yet dilated
-          const int c = r / stride % W;
-          if (c >= 1) row[static_cast<std::size_t>(r)] |= row[static_cast<std::size_t>(r - stride)];
-          if (c >= 2) row[static_cast<std::size_t>(r)] |= row[static_cast<std::size_t>(r - 2 * stride)];
+  // The regular particles' 3^dim stencils, per bucket of the level's groups: the stencils'
+  // first nodes marked in the patch's rows, dilated by two nodes along each axis, then cut
+  // into the patch's blocks.
+  for (int grp = groups_per_level * n; grp < groups_per_level * (n + 1); ++grp) {
+    const ParticleBuckets<dim>& reg = regular_[grp];
+    tbb::parallel_for(tbb::blocked_range<int>(0, reg.count(), 8), [&](const auto& range) {
+      for (int k = range.begin(); k != range.end(); ++k) {
+        const IVec<dim> first = g.block_coord(reg.block[k]) * B;
+        std::array<std::uint32_t, rows> row{};
+        for (std::uint32_t i = reg.begin[k]; i < reg.begin[k + 1]; ++i) {
+          const IVec<dim> base = unpack_in_block<dim>(base_in_block[reg.particle[i]]);
+          int r = 0;
+          for (int a = dim - 1; a >= 1; --a) r = r * W + base[a];
+          row[static_cast<std::size_t>(r)] |= 1u << base[0];
         }
-      for (int corner = 0; corner < (1 << dim); ++corner) {
-        std::uint64_t bits = 0;
-        for (int r = 0; r < rows; ++r) {
-          IVec<dim> local = IVec<dim>::Zero();  // the row's first node in the corner's block
-          bool in_corner = true;
-          for (int a = 1, rest = r; a < dim; ++a, rest /= W) {
-            local[a] = rest % W - ((corner >> a) & 1) * B;
-            in_corner = in_corner && local[a] >= 0 && local[a] < B;
+        for (std::uint32_t& r : row) r |= r << 1 | r << 2;
+        for (int a = 1, stride = 1; a < dim; ++a, stride *= W)
+          for (int r = rows - 1; r >= 0; --r) {  // from the top: the rows below are not yet dilated
+            const int c = r / stride % W;
+            if (c >= 1) row[static_cast<std::size_t>(r)] |= row[static_cast<std::size_t>(r - stride)];
+            if (c >= 2) row[static_cast<std::size_t>(r)] |= row[static_cast<std::size_t>(r - 2 * stride)];
           }
-          if (in_corner)
-            bits |=
-                static_cast<std::uint64_t>((row[static_cast<std::size_t>(r)] >> ((corner & 1) * B)) & ((1u << B) - 1))
-                << SparseGrid<dim>::local_index(local);
+        for (int corner = 0; corner < (1 << dim); ++corner) {
+          std::uint64_t bits = 0;
+          for (int r = 0; r < rows; ++r) {
+            IVec<dim> local = IVec<dim>::Zero();  // the row's first node in the corner's block
+            bool in_corner = true;
+            for (int a = 1, rest = r; a < dim; ++a, rest /= W) {
+              local[a] = rest % W - ((corner >> a) & 1) * B;
+              in_corner = in_corner && local[a] >= 0 && local[a] < B;
+            }
+            if (in_corner)
+              bits |=
+                  static_cast<std::uint64_t>((row[static_cast<std::size_t>(r)] >> ((corner & 1) * B)) & ((1u << B) - 1))
+                  << SparseGrid<dim>::local_index(local);
+          }
+          IVec<dim> block = first / B;
+          for (int a = 0; a < dim; ++a) block[a] += (corner >> a) & 1;
+          if (bits) add(g.block_id(block * B), bits);
         }
-        IVec<dim> block = first / B;
-        for (int a = 0; a < dim; ++a) block[a] += (corner >> a) & 1;
-        if (bits) add(g.block_id(block * B), bits);
       }
-    }
-  });
+    });
+  }
   // The irregular particles' general stencils, node by node.
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, irregular_.size(), 64), [&](const auto& range) {
     for (std::size_t i = range.begin(); i != range.end(); ++i) {

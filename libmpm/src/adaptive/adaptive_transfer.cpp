@@ -35,6 +35,17 @@ void scatter_irregular(const Particles<dim>& P, const AdaptiveGrid<dim>& grid, F
     });
 }
 
+// The regular groups of level n with their kernels, for the uniform scatters.
+template <int dim>
+std::array<BucketGroup<dim>, AdaptiveGrid<dim>::groups_per_level> level_groups(const AdaptiveGrid<dim>& grid, int n) {
+  std::array<BucketGroup<dim>, AdaptiveGrid<dim>::groups_per_level> groups;
+  for (int i = 0; i < AdaptiveGrid<dim>::groups_per_level; ++i) {
+    const int group = AdaptiveGrid<dim>::groups_per_level * n + i;
+    groups[i] = {&grid.regular(group), grid.group_kernel(group)};
+  }
+  return groups;
+}
+
 // fn(p, n) for every irregular particle p (transfer level n), in parallel (G2P-like gathers);
 // with `then`, each range of them goes through it right after its gathers.
 template <int dim, class Fn>
@@ -49,13 +60,13 @@ void gather_irregular(const AdaptiveGrid<dim>& grid, Fn&& fn, const ParticleGrou
 }
 
 // The particles near embedded ghosts (AdaptiveGrid::near_embedded), bucket by bucket: fn(b,
-// kernel) for every bucket b of level n in parallel, with regular_kernel() as its 3-node type.
-// A scatter goes colour by colour (the patches of one colour's buckets share no node); a gather
-// needs no colours.
+// kernel) for every bucket b of a regular group in parallel, with the group's kernel as its
+// 3-node type. A scatter goes colour by colour (the patches of one colour's buckets share no
+// node); a gather needs no colours.
 enum class Walk { gather, scatter };
 template <int dim, class Fn>
-void for_each_near_bucket(const AdaptiveGrid<dim>& grid, int n, Walk walk, Fn&& fn) {
-  const ParticleBuckets<dim>& near = grid.near_embedded(n);
+void for_each_near_bucket(const AdaptiveGrid<dim>& grid, int group, Walk walk, Fn&& fn) {
+  const ParticleBuckets<dim>& near = grid.near_embedded(group);
   const bool serial = near.particle.size() < detail::serial_below_particles;
   std::visit(
       [&](const auto& kernel) {
@@ -73,7 +84,7 @@ void for_each_near_bucket(const AdaptiveGrid<dim>& grid, int n, Walk walk, Fn&& 
           MPM_VERIFY(false, Error, "adaptive grid: the regular kernel has a 3-node stencil");
         }
       },
-      grid.regular_kernel());
+      grid.group_kernel(group));
 }
 
 // fn(patch index, w) for the embedded ghosts of a particle's regular stencil `st`: the nodes
@@ -145,18 +156,19 @@ private:
   std::array<std::uint64_t, (detail::patch_nodes<dim> + 63) / 64> seen_{};
 };
 
-// APIC's G_k = sum_p w_kp m_p C_p of the embedded ghosts from the particles near them, which
-// the uniform loops gave their mass and momentum: per bucket into its patch, then onto the
-// patch's ghosts.
+// APIC's G_k = sum_p w_kp m_p C_p of the embedded ghosts from the particles of a regular group
+// near them, which the uniform loops gave their mass and momentum: per bucket into its patch,
+// then onto the patch's ghosts (affine: the group's level's).
 template <int dim>
-void scatter_ghost_affine(const Particles<dim>& P, const AdaptiveGrid<dim>& grid, int n,
+void scatter_ghost_affine(const Particles<dim>& P, const AdaptiveGrid<dim>& grid, int group,
                           std::vector<Mat<dim>>& affine) {
   constexpr int M = dim * dim;
+  const int n = AdaptiveGrid<dim>::group_level(group);
   const SparseGrid<dim>& g = grid.level(n);
   const auto& ghosts = grid.ghosts(n);
-  const ParticleBuckets<dim>& near = grid.near_embedded(n);
-  const std::vector<std::uint32_t>& masks = grid.near_embedded_masks(n);
-  for_each_near_bucket(grid, n, Walk::scatter, [&](int b, const auto& kernel) {
+  const ParticleBuckets<dim>& near = grid.near_embedded(group);
+  const std::vector<std::uint32_t>& masks = grid.near_embedded_masks(group);
+  for_each_near_bucket(grid, group, Walk::scatter, [&](int b, const auto& kernel) {
     alignas(64) std::array<double, detail::patch_nodes<dim> * M> patch;  // set where visited
     VisitedNodes<dim> visited(g, near.block[b]);
     const detail::PatchFrame<dim> frame(g, near.block[b]);
@@ -185,16 +197,18 @@ void scatter_ghost_affine(const Particles<dim>& P, const AdaptiveGrid<dim>& grid
 // the uniform C^u = B^u (D^u)^-1, C_p = (C^u D^u + dB) (D^u + dD)^-1. Ghosts that are real
 // nodes of another level add nothing (their Q_k and R_k vanish): only the embedded ones are
 // visited. Per bucket, each visited node's Q_k and R_k are read once; x_before: the
-// particles' positions at P2G, in the order of near_embedded(n).particle.
+// particles' positions at P2G, in the order of near_embedded(group).particle.
 template <int dim>
-void add_ghost_terms(Particles<dim>& P, const AdaptiveGrid<dim>& grid, int n, const std::vector<Vec<dim>>& x_before) {
+void add_ghost_terms(Particles<dim>& P, const AdaptiveGrid<dim>& grid, int group,
+                     const std::vector<Vec<dim>>& x_before) {
   constexpr int M = dim * dim, Ch = 2 * M;  // Q_k, then R_k
+  const int n = AdaptiveGrid<dim>::group_level(group);
   const SparseGrid<dim>& g = grid.level(n);
   const auto& ghosts = grid.ghosts(n);
-  const ParticleBuckets<dim>& near = grid.near_embedded(n);
-  const std::vector<std::uint32_t>& masks = grid.near_embedded_masks(n);
+  const ParticleBuckets<dim>& near = grid.near_embedded(group);
+  const std::vector<std::uint32_t>& masks = grid.near_embedded_masks(group);
   const double dx = g.dx();
-  for_each_near_bucket(grid, n, Walk::gather, [&](int b, const auto& kernel) {
+  for_each_near_bucket(grid, group, Walk::gather, [&](int b, const auto& kernel) {
     alignas(64) std::array<double, detail::patch_nodes<dim> * Ch> patch;  // read in where visited
     VisitedNodes<dim> visited(g, near.block[b]);
     const auto terms = [&](int node) -> const double* {
@@ -239,8 +253,7 @@ void particles_to_grid(const Particles<dim>& P, const TransferScheme& scheme, Ad
   const bool impulse = S && impulse_dt > 0.0;
   std::vector<std::vector<Mat<dim>>> affine(grid.levels());
   for (int n = 0; n < grid.levels(); ++n) {
-    mpm::particles_to_grid(P, grid.regular(n), grid.regular_kernel(), scheme, grid.level(n), S,
-                           impulse_dt);  // zeroes first
+    mpm::particles_to_grid<dim>(P, level_groups(grid, n), scheme, grid.level(n), S, impulse_dt);  // zeroes first
     affine[n].assign(grid.ghosts(n).node.size(), Mat<dim>::Zero());
   }
   scatter_irregular(P, grid, [&](std::size_t p, int n, Index k, double w, const Vec<dim>& grad, const Vec<dim>& xk) {
@@ -258,7 +271,8 @@ void particles_to_grid(const Particles<dim>& P, const TransferScheme& scheme, Ad
       g.velocity[k] += wm * P.v[p];
     }
   });
-  for (int n = 0; apic && n < grid.levels(); ++n) scatter_ghost_affine(P, grid, n, affine[n]);
+  for (int group = 0; apic && group < grid.regular_groups(); ++group)
+    scatter_ghost_affine(P, grid, group, affine[AdaptiveGrid<dim>::group_level(group)]);
   grid.push_momentum(affine);
   if (S && !impulse) grid.push(grid.per_level(&SparseGrid<dim>::force));
 }
@@ -272,7 +286,7 @@ template <int dim>
 void stress_to_grid_forces(const std::vector<Mat<dim>>& S, const Particles<dim>& P, AdaptiveGrid<dim>& grid) {
   MPM_ASSERT(grid.particle_count() == P.size());
   for (int n = 0; n < grid.levels(); ++n)  // zeroes first
-    mpm::stress_to_grid_forces(S, P, grid.regular(n), grid.regular_kernel(), grid.level(n));
+    mpm::stress_to_grid_forces<dim>(S, P, level_groups(grid, n), grid.level(n));
   scatter_irregular(P, grid, [&](std::size_t p, int n, Index k, double, const Vec<dim>& grad, const Vec<dim>&) {
     grid.level(n).force[k] -= S[p] * grad;
   });
@@ -292,12 +306,17 @@ void grid_to_particles(Particles<dim>& P, const TransferScheme& scheme, const Ad
   // The uniform loops' C_p has neither the ghosts' terms nor their D_p: the particles near
   // embedded ghosts add them, at their positions before the advection (a small copy: a
   // scratch of the terms themselves would cost more in fresh pages than their walk).
-  std::vector<std::vector<Vec<dim>>> x_before(grid.levels());
-  for (int n = 0; apic && n < grid.levels(); ++n)
-    for (const std::uint32_t p : grid.near_embedded(n).particle) x_before[n].push_back(P.x[p]);
-  for (int n = 0; n < grid.levels(); ++n)
-    mpm::grid_to_particles(P, grid.regular(n), grid.regular_kernel(), scheme, grid.level(n), dt, F, then);
-  for (int n = 0; apic && n < grid.levels(); ++n) add_ghost_terms(P, grid, n, x_before[n]);
+  const int groups = grid.regular_groups();
+  std::vector<std::vector<Vec<dim>>> x_before(static_cast<std::size_t>(groups));
+  for (int group = 0; apic && group < groups; ++group) {
+    const std::vector<std::uint32_t>& near = grid.near_embedded(group).particle;
+    x_before[group].resize(near.size());
+    for (std::size_t i = 0; i < near.size(); ++i) x_before[group][i] = P.x[near[i]];
+  }
+  for (int group = 0; group < groups; ++group)
+    mpm::grid_to_particles(P, grid.regular(group), grid.group_kernel(group), scheme,
+                           grid.level(AdaptiveGrid<dim>::group_level(group)), dt, F, then);
+  for (int group = 0; apic && group < groups; ++group) add_ghost_terms(P, grid, group, x_before[group]);
   gather_irregular(
       grid,
       [&](std::size_t p, int n) {

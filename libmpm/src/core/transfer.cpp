@@ -17,8 +17,50 @@ std::array<ChannelView, dim> vector_views(const std::vector<Vec<dim>>& v) {
   return views;
 }
 
+namespace {
+// out_i -= sum_p S_p grad w_ip for the particles of one group (out sized to the node storage).
+template <int dim>
+void add_stress_to_nodes(const std::vector<Mat<dim>>& weighted_stress, const Particles<dim>& P,
+                         const BucketGroup<dim>& group, const SparseGrid<dim>& g, std::vector<Vec<dim>>& out) {
+  std::array<ChannelView, dim> channels;
+  for (int a = 0; a < dim; ++a) channels[a] = component_view<dim>(out, a);
+  const double inv_dx = 1.0 / g.dx();
+  // The set-up of a chunk of particles (weights, -S / dx) at once, as in P2G (detail::in_chunks).
+  std::visit(
+      [&](const auto& k) {
+        using K = std::decay_t<decltype(k)>;
+        detail::scatter_buckets<dim, dim>(
+            g, *group.buckets, channels,
+            [&](const std::uint32_t* first, const std::uint32_t* last, const PatchFrame<dim>& f, double* patch) {
+              Stencil<dim, K::support> st[detail::chunk_size];
+              Mat<dim> A[detail::chunk_size];
+              detail::in_chunks(
+                  first, last,
+                  [&](std::uint32_t p) {
+                    detail::prefetch(P.x[p]);
+                    detail::prefetch(weighted_stress[p]);
+                  },
+                  [&](std::uint32_t p, int q) {
+                    st[q].compute(k, f.cells(P.x[p]), f.origin);
+                    A[q] = -inv_dx * weighted_stress[p];
+                  },
+                  [&](std::uint32_t, int q) { detail::spread_gradient<dim>(st[q], A[q], patch, 0); });
+            });
+      },
+      group.kernel);
+}
+}  // namespace
+
 template <int dim>
 void particles_to_grid(const Particles<dim>& particles, const ParticleBuckets<dim>& buckets, const Kernel& kernel,
+                       const TransferScheme& scheme, SparseGrid<dim>& grid,
+                       const std::vector<Mat<dim>>* weighted_stress, double impulse_dt) {
+  const BucketGroup<dim> group{&buckets, kernel};
+  particles_to_grid(particles, std::span<const BucketGroup<dim>>(&group, 1), scheme, grid, weighted_stress, impulse_dt);
+}
+
+template <int dim>
+void particles_to_grid(const Particles<dim>& particles, std::span<const BucketGroup<dim>> groups,
                        const TransferScheme& scheme, SparseGrid<dim>& grid,
                        const std::vector<Mat<dim>>* weighted_stress, double impulse_dt) {
   MPM_VERIFY(!weighted_stress || weighted_stress->size() == particles.size(), Error,
@@ -29,14 +71,15 @@ void particles_to_grid(const Particles<dim>& particles, const ParticleBuckets<di
              "particles_to_grid: stress impulses in the momentum would enter FLIP's v_old");
   if (impulse) std::vector<Vec<dim>>().swap(grid.force);  // the forces are in the momentum
   std::fill(grid.velocity.begin(), grid.velocity.end(), Vec<dim>::Zero());
-  const auto run = [&](auto channel_count) {
+  const bool force_channel = weighted_stress && !impulse;
+  if (force_channel) grid.force.assign(grid.node_storage(), Vec<dim>::Zero());
+  const auto run = [&](auto channel_count, const BucketGroup<dim>& group) {
     constexpr std::size_t Ch = decltype(channel_count)::value;
     std::array<ChannelView, Ch> channels;
     channels[0] = scalar_view(grid.mass);
     for (int a = 0; a < dim; ++a) channels[a + 1] = component_view<dim>(grid.velocity, a);
     const Mat<dim>* S = impulse ? weighted_stress->data() : nullptr;
     if constexpr (Ch > dim + 1) {
-      grid.force.assign(grid.node_storage(), Vec<dim>::Zero());
       for (int a = 0; a < dim; ++a) channels[dim + 1 + a] = component_view<dim>(grid.force, a);
       S = weighted_stress->data();
     }
@@ -44,16 +87,18 @@ void particles_to_grid(const Particles<dim>& particles, const ParticleBuckets<di
         [&](const auto& k) {
           using K = std::decay_t<decltype(k)>;
           if (scheme.type == TransferScheme::Type::apic)
-            detail::p2g<dim, K, true>(particles, buckets, k, grid, channels, S, impulse_dt);
+            detail::p2g<dim, K, true>(particles, *group.buckets, k, grid, channels, S, impulse_dt);
           else
-            detail::p2g<dim, K, false>(particles, buckets, k, grid, channels, S, impulse_dt);
+            detail::p2g<dim, K, false>(particles, *group.buckets, k, grid, channels, S, impulse_dt);
         },
-        kernel);
+        group.kernel);
   };
-  if (weighted_stress && !impulse)
-    run(std::integral_constant<std::size_t, 2 * dim + 1>{});
-  else
-    run(std::integral_constant<std::size_t, dim + 1>{});
+  for (const BucketGroup<dim>& group : groups) {
+    if (force_channel)
+      run(std::integral_constant<std::size_t, 2 * dim + 1>{}, group);
+    else
+      run(std::integral_constant<std::size_t, dim + 1>{}, group);
+  }
 }
 
 template <int dim>
@@ -175,41 +220,27 @@ void stress_to_grid_forces(const std::vector<Mat<dim>>& weighted_stress, const P
 }
 
 template <int dim>
+void stress_to_grid_forces(const std::vector<Mat<dim>>& weighted_stress, const Particles<dim>& P,
+                           std::span<const BucketGroup<dim>> groups, SparseGrid<dim>& g) {
+  g.force.assign(g.node_storage(), Vec<dim>::Zero());
+  for (const BucketGroup<dim>& group : groups) add_stress_to_nodes(weighted_stress, P, group, g, g.force);
+}
+
+template <int dim>
 void stress_to_nodes(const std::vector<Mat<dim>>& weighted_stress, const Particles<dim>& P,
                      const ParticleBuckets<dim>& buckets, const Kernel& kernel, const SparseGrid<dim>& g,
                      std::vector<Vec<dim>>& out) {
   out.assign(g.node_storage(), Vec<dim>::Zero());
-  std::array<ChannelView, dim> channels;
-  for (int a = 0; a < dim; ++a) channels[a] = component_view<dim>(out, a);
-  const double inv_dx = 1.0 / g.dx();
-  // The set-up of a chunk of particles (weights, -S / dx) at once, as in P2G (detail::in_chunks).
-  std::visit(
-      [&](const auto& k) {
-        using K = std::decay_t<decltype(k)>;
-        detail::scatter_buckets<dim, dim>(
-            g, buckets, channels,
-            [&](const std::uint32_t* first, const std::uint32_t* last, const PatchFrame<dim>& f, double* patch) {
-              Stencil<dim, K::support> st[detail::chunk_size];
-              Mat<dim> A[detail::chunk_size];
-              detail::in_chunks(
-                  first, last,
-                  [&](std::uint32_t p) {
-                    detail::prefetch(P.x[p]);
-                    detail::prefetch(weighted_stress[p]);
-                  },
-                  [&](std::uint32_t p, int q) {
-                    st[q].compute(k, f.cells(P.x[p]), f.origin);
-                    A[q] = -inv_dx * weighted_stress[p];
-                  },
-                  [&](std::uint32_t, int q) { detail::spread_gradient<dim>(st[q], A[q], patch, 0); });
-            });
-      },
-      kernel);
+  add_stress_to_nodes(weighted_stress, P, BucketGroup<dim>{&buckets, kernel}, g, out);
 }
 
 #define MPM_INSTANTIATE(dim)                                                                                           \
   template void particles_to_grid(const Particles<dim>&, const ParticleBuckets<dim>&, const Kernel&,                   \
                                   const TransferScheme&, SparseGrid<dim>&, const std::vector<Mat<dim>>*, double);      \
+  template void particles_to_grid(const Particles<dim>&, std::span<const BucketGroup<dim>>, const TransferScheme&,     \
+                                  SparseGrid<dim>&, const std::vector<Mat<dim>>*, double);                             \
+  template void stress_to_grid_forces(const std::vector<Mat<dim>>&, const Particles<dim>&,                             \
+                                      std::span<const BucketGroup<dim>>, SparseGrid<dim>&);                            \
   template void momentum_to_velocity(SparseGrid<dim>&, const TransferScheme&);                                         \
   template void grid_to_particles(Particles<dim>&, const ParticleBuckets<dim>&, const Kernel&, const TransferScheme&,  \
                                   const SparseGrid<dim>&, double, std::vector<Mat<dim>>*, const ParticleGroupUpdate*); \

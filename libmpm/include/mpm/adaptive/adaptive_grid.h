@@ -86,10 +86,16 @@ public:
   double particle_size(int type) const { return tree_.dx(type) / points_per_axis_; }
   int points_per_axis() const { return points_per_axis_; }
   //! The uniform weights of a particle on its own level: uGIMP with h = 1 / (2k) (the quadratic
-  //! B-spline for k = 1). The regular particles transfer with them.
+  //! B-spline for k = 1). The regular particles of type n on level n transfer with them.
   Kernel regular_kernel() const {
     if (points_per_axis_ == 1) return QuadraticBSpline{};
     return UGimp{0.5 / points_per_axis_};
+  }
+  //! The type whose GIMP box is one cell of level n (k = 2^m points per axis: type n - m), or
+  //! -1 when there is none other than n itself.
+  int cell_box_type(int n) const {
+    const int m = std::countr_zero(static_cast<unsigned>(points_per_axis_));
+    return points_per_axis_ > 1 && std::has_single_bit(static_cast<unsigned>(points_per_axis_)) && n >= m ? n - m : -1;
   }
 
   //! Finds the transfer level of every particle (positions x, types `type`), allocates the
@@ -103,17 +109,26 @@ public:
   bool prepare(const std::vector<Vec<dim>>& x, const std::vector<std::uint16_t>& type,
                const std::string& stage = "prepare", const MoveParticles& move = {});
   std::size_t particle_count() const { return class_.size(); }
-  //! The particles that transfer on level n as on a uniform grid: on their own level, with
-  //! regular_kernel()'s stencil inside the level. The uniform loops (transfer.h) serve them, in
-  //! parallel.
-  const ParticleBuckets<dim>& regular(int n) const { return regular_[n]; }
-  //! The regular particles of level n whose stencil holds an embedded ghost, in their buckets:
+  //! The particles that transfer on a level as on a uniform grid (regular), in two groups per
+  //! level n, with 3^dim stencils inside the level: group 2n, the particles of type n, with
+  //! regular_kernel(); group 2n + 1, those whose GIMP box is one cell of level n (the type
+  //! log2 k levels coarser, for k = 2, 4, ... points per axis), with the quadratic B-spline,
+  //! which is uGIMP for a box of one cell (empty for other k). The uniform loops (transfer.h)
+  //! serve them, in parallel.
+  static constexpr int groups_per_level = 2;
+  int regular_groups() const { return groups_per_level * levels(); }
+  static int group_level(int group) { return group / groups_per_level; }
+  Kernel group_kernel(int group) const {
+    return group % groups_per_level == 0 ? regular_kernel() : Kernel{QuadraticBSpline{}};
+  }
+  const ParticleBuckets<dim>& regular(int group) const { return regular_[group]; }
+  //! The regular particles of a group whose stencil holds an embedded ghost, in their buckets:
   //! APIC adds the ghosts' affine terms for them beside the uniform loops (adaptive_transfer.h).
-  const ParticleBuckets<dim>& near_embedded(int n) const { return near_embedded_[n]; }
-  //! Per entry of near_embedded(n).particle: which nodes of its regular stencil are embedded
+  const ParticleBuckets<dim>& near_embedded(int group) const { return near_embedded_[group]; }
+  //! Per entry of near_embedded(group).particle: which nodes of its stencil are embedded
   //! ghosts, bit i_0 + 3 i_1 (+ 9 i_2) for node uniform_base() + (i_0, i_1, i_2) (the offsets
   //! of bit j: stencil_offsets[j]). The ghosts' APIC terms visit only these nodes.
-  const std::vector<std::uint32_t>& near_embedded_masks(int n) const { return near_masks_[n]; }
+  const std::vector<std::uint32_t>& near_embedded_masks(int group) const { return near_masks_[group]; }
   //! The node offsets (i_0, i_1, i_2) of bit j of a stencil mask.
   static constexpr auto stencil_offsets = [] {
     std::array<std::array<std::int8_t, 3>, 27> offsets{};
@@ -335,7 +350,10 @@ private:
   std::vector<std::vector<BlockKey>> own_blocks_;  // per level: the blocks of the ghost tables
   //! Per block of own (sorted) of level n, the nodes the particles' stencils on level n reach
   //! (bit local_index): the ghosts a table needs; the others receive and give nothing.
+  //! base_in_block: per particle, its regular stencil's first node in its bucket's block
+  //! (packed by prepare()), read for the regular particles.
   std::vector<std::uint64_t> stencil_nodes(int n, const std::vector<Vec<dim>>& x,
+                                           const std::vector<std::uint8_t>& base_in_block,
                                            const std::vector<BlockKey>& own) const;
   std::vector<std::vector<std::uint64_t>> tabled_;  // per level and own block: the tabled nodes
 };

@@ -13,6 +13,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <span>
 #include <string>
 
 namespace mpm {
@@ -28,6 +29,15 @@ struct TransferScheme {
   bool uses_old_velocity() const { return type == Type::flip; }
 };
 
+//! Particles in buckets and the kernel they transfer with. The scatters below also take several
+//! groups into one grid: an adaptive level's own particles and those whose GIMP box is one of
+//! its cells transfer with different weights.
+template <int dim>
+struct BucketGroup {
+  const ParticleBuckets<dim>* buckets;
+  Kernel kernel;
+};
+
 //! Accumulates node mass and momentum (into grid.velocity); zeroes both first. With
 //! `weighted_stress` (S_p per particle, as in stress_to_grid_forces) the same pass also forms
 //! grid.force = - sum_p S_p grad w_ip: one scatter instead of two, with the sums of the two,
@@ -37,6 +47,11 @@ struct TransferScheme {
 //! equal to p / m + (dt / m) f up to round-off. Not for FLIP, whose v_old = p / m (an Error).
 template <int dim>
 void particles_to_grid(const Particles<dim>& particles, const ParticleBuckets<dim>& buckets, const Kernel& kernel,
+                       const TransferScheme& scheme, SparseGrid<dim>& grid,
+                       const std::vector<Mat<dim>>* weighted_stress = nullptr, double impulse_dt = 0.0);
+//! The same for the particles of several groups, one after the other.
+template <int dim>
+void particles_to_grid(const Particles<dim>& particles, std::span<const BucketGroup<dim>> groups,
                        const TransferScheme& scheme, SparseGrid<dim>& grid,
                        const std::vector<Mat<dim>>* weighted_stress = nullptr, double impulse_dt = 0.0);
 
@@ -74,6 +89,10 @@ void grid_to_scalar(const std::vector<double>& values, const Particles<dim>& par
 template <int dim>
 void stress_to_grid_forces(const std::vector<Mat<dim>>& weighted_stress, const Particles<dim>& particles,
                            const ParticleBuckets<dim>& buckets, const Kernel& kernel, SparseGrid<dim>& grid);
+//! The same for the particles of several groups, one after the other.
+template <int dim>
+void stress_to_grid_forces(const std::vector<Mat<dim>>& weighted_stress, const Particles<dim>& particles,
+                           std::span<const BucketGroup<dim>> groups, SparseGrid<dim>& grid);
 
 //! The same sum into any node array `out` (sized to the node storage): the force differential
 //! of an implicit solve.

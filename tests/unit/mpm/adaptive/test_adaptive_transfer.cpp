@@ -64,7 +64,7 @@ AdaptiveGrid<dim> prepared_grid(unsigned seed, Particles<dim>& P, std::vector<st
 template <int dim>
 std::size_t near_embedded_count(const AdaptiveGrid<dim>& grid) {
   std::size_t count = 0;
-  for (int n = 0; n < grid.levels(); ++n) count += grid.near_embedded(n).particle.size();
+  for (int group = 0; group < grid.regular_groups(); ++group) count += grid.near_embedded(group).particle.size();
   return count;
 }
 
@@ -99,6 +99,15 @@ void check_conservation(unsigned seed) {
   // ghosts' APIC terms (the plain uniform loops: the one-level test below).
   CHECK(!grid.irregular().empty());
   CHECK(near_embedded_count(grid) > 0);
+  // The uniform loops serve both regular groups: particles on their own level, and those one
+  // level coarser whose box is a cell of the level (the quadratic B-spline), ghosts' terms too.
+  std::size_t cell_boxes = 0, cell_boxes_near = 0;
+  for (int n = 0; n < grid.levels(); ++n) {
+    cell_boxes += grid.regular(AdaptiveGrid<dim>::groups_per_level * n + 1).particle.size();
+    cell_boxes_near += grid.near_embedded(AdaptiveGrid<dim>::groups_per_level * n + 1).particle.size();
+  }
+  CHECK(cell_boxes > 0);
+  CHECK(cell_boxes_near > 0);
   particles_to_grid(P, TransferScheme{}, grid);
   adaptive::momentum_to_velocity(grid, TransferScheme{});
 
@@ -281,8 +290,8 @@ void check_transfer_order(unsigned seed) {
   REQUIRE(order.size() == A.size());
   REQUIRE(near_embedded_count(moving) > 0);
   std::uint32_t next = 0;  // storage order is transfer order
-  for (int n = 0; n < moving.levels(); ++n)
-    for (const std::uint32_t p : moving.regular(n).particle) CHECK(p == next++);
+  for (int group = 0; group < moving.regular_groups(); ++group)
+    for (const std::uint32_t p : moving.regular(group).particle) CHECK(p == next++);
   for (const std::uint32_t p : moving.irregular()) CHECK(p == next++);
   for (std::size_t i = 0; i < order.size(); ++i) {
     CHECK(moving.transfer_level(i) == in_place.transfer_level(order[i]));
@@ -487,7 +496,10 @@ std::set<Index> reached_nodes(const AdaptiveGrid<dim>& grid, const Particles<dim
     for_each_in_box<dim>(first, IVec<dim>(first + count - IVec<dim>::Ones()),
                          [&](const IVec<dim>& node) { reached.insert(g.node_index(node)); });
   };
-  for (const std::uint32_t p : grid.regular(n).particle) add_box(grid.uniform_base(n, P.x[p]), IVec<dim>::Constant(3));
+  for (int group = AdaptiveGrid<dim>::groups_per_level * n; group < AdaptiveGrid<dim>::groups_per_level * (n + 1);
+       ++group)
+    for (const std::uint32_t p : grid.regular(group).particle)
+      add_box(grid.uniform_base(n, P.x[p]), IVec<dim>::Constant(3));
   for (const std::uint32_t p : grid.irregular()) {
     if (grid.transfer_level(p) != n) continue;
     GimpAxis axis[dim];
@@ -769,8 +781,8 @@ void check_tree_change(unsigned seed) {
     AdaptiveGrid<dim> fresh(*tree);
     fresh.prepare(P.x, type);
     CHECK(changing.irregular() == fresh.irregular());
-    for (int n = 0; n < fresh.levels(); ++n)
-      CHECK(changing.near_embedded(n).particle == fresh.near_embedded(n).particle);
+    for (int group = 0; group < fresh.regular_groups(); ++group)
+      CHECK(changing.near_embedded(group).particle == fresh.near_embedded(group).particle);
     for (int n = 0; n < fresh.levels(); ++n) {
       CHECK(changing.level(n).active_blocks() == fresh.level(n).active_blocks());
       const auto& a = changing.ghosts(n);
