@@ -87,8 +87,24 @@ void for_each_near_bucket(const AdaptiveGrid<dim>& grid, int group, Walk walk, F
       grid.group_kernel(group));
 }
 
+// The nodes of a 3^dim stencil whose weight is not zero, by bit as in a mask (bit i_0 + 3 i_1
+// + 9 i_2): a uGIMP box smaller than a cell leaves an outer node without weight on half of an
+// axis's positions, so most embedded ghosts of the near particles' masks carry none.
+template <int dim>
+std::uint32_t weighted_nodes(const detail::Stencil<dim, 3>& st) {
+  std::uint32_t nodes = 1;  // over the axes so far: 3^a bits
+  for (int a = 0, width = 1; a < dim; ++a, width *= 3) {
+    std::uint32_t wider = 0;
+    for (int i = 0; i < 3; ++i)
+      if (st.w[a][i] != 0.0) wider |= nodes << (width * i);
+    nodes = wider;
+  }
+  return nodes;
+}
+
 // fn(patch index, w) for the embedded ghosts of a particle's regular stencil `st`: the nodes
-// flagged in `mask` (AdaptiveGrid::near_embedded_masks), w their weight.
+// flagged in `mask` (AdaptiveGrid::near_embedded_masks, and'ed with weighted_nodes()), w their
+// weight.
 template <int dim, class Fn>
 void for_each_embedded(const detail::Stencil<dim, 3>& st, std::uint32_t mask, Fn&& fn) {
   constexpr int W = detail::patch_width<dim>;
@@ -176,8 +192,10 @@ void scatter_ghost_affine(const Particles<dim>& P, const AdaptiveGrid<dim>& grid
       const std::uint32_t p = near.particle[e];
       detail::Stencil<dim, 3> st;
       st.template compute<false>(kernel, frame.cells(P.x[p]), frame.origin);
+      const std::uint32_t mask = masks[e] & weighted_nodes(st);
+      if (mask == 0) continue;
       const Mat<dim> mC = P.mass[p] * P.C[p];
-      for_each_embedded(st, masks[e], [&](int node, double w) {
+      for_each_embedded(st, mask, [&](int node, double w) {
         Eigen::Map<Mat<dim>> sum(patch.data() + node * M);
         if (visited.first_visit(node)) sum.setZero();
         sum += w * mC;
@@ -225,6 +243,9 @@ void add_ghost_terms(Particles<dim>& P, const AdaptiveGrid<dim>& grid, int group
     for (std::uint32_t e = near.begin[b]; e < near.begin[b + 1]; ++e) {
       detail::Stencil<dim, 3> st;
       st.template compute<false>(kernel, frame.cells(x_before[e]), frame.origin);
+      const std::uint32_t mask = masks[e] & weighted_nodes(st);
+      if (mask == 0) continue;  // no ghost term: the uniform loops' C_p stands
+
       Vec<dim> D_uniform;  // [m^2]
       for (int a = 0; a < dim; ++a) {
         double D = 0;
@@ -232,7 +253,7 @@ void add_ghost_terms(Particles<dim>& P, const AdaptiveGrid<dim>& grid, int group
         D_uniform[a] = D * dx * dx;
       }
       Mat<dim> dB = Mat<dim>::Zero(), D = D_uniform.asDiagonal();
-      for_each_embedded(st, masks[e], [&](int node, double w) {
+      for_each_embedded(st, mask, [&](int node, double w) {
         const double* QR = terms(node);
         dB.noalias() += w * Eigen::Map<const Mat<dim>>(QR);
         D.noalias() += w * Eigen::Map<const Mat<dim>>(QR + M);
