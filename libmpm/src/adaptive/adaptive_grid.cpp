@@ -27,6 +27,52 @@ void reserve_more(std::vector<T>& v, std::size_t extra) {
   if (v.size() + extra > v.capacity()) v.reserve(v.size() + std::max(extra, v.size() / 4));
 }
 
+// A bucket's patch (its block and the +1 neighbours: 2B nodes per axis) in two layouts of one
+// set of nodes: rows of 2B node bits along axis 0 (row r = i_1 + 2B i_2), and the 64-bit node
+// masks of its 2^dim blocks (bit local_index, block `corner`: bit a set for the upper half on
+// axis a). The rows are where stencils are marked and read; the masks are the grid's.
+template <int dim>
+using PatchRows = std::array<std::uint32_t, ipow(2 * SparseGrid<dim>::block_size, dim - 1)>;
+template <int dim>
+using PatchBlocks = std::array<std::uint64_t, 1 << dim>;
+// Row r's two blocks (corner and corner | 1, axis 0 below and above) and its first node's bit.
+template <int dim>
+void place_patch_row(int r, int& corner, int& shift) {
+  constexpr int B = SparseGrid<dim>::block_size, W = 2 * B;
+  corner = shift = 0;
+  for (int a = 1, rest = r; a < dim; ++a, rest /= W) {
+    corner |= (rest % W >= B) << a;
+    shift |= (rest % W & (B - 1)) << (a * SparseGrid<dim>::block_bits);
+  }
+}
+template <int dim>
+PatchRows<dim> rows_of_blocks(const PatchBlocks<dim>& block) {
+  constexpr int B = SparseGrid<dim>::block_size;
+  constexpr std::uint64_t block_row = (std::uint64_t{1} << B) - 1;
+  static_assert(2 * B <= 32);
+  PatchRows<dim> row;
+  for (int r = 0; r < static_cast<int>(row.size()); ++r) {
+    int corner, shift;
+    place_patch_row<dim>(r, corner, shift);
+    row[static_cast<std::size_t>(r)] = static_cast<std::uint32_t>((block[corner] >> shift & block_row) |
+                                                                  (block[corner | 1] >> shift & block_row) << B);
+  }
+  return row;
+}
+template <int dim>
+PatchBlocks<dim> blocks_of_rows(const PatchRows<dim>& row) {
+  constexpr int B = SparseGrid<dim>::block_size;
+  constexpr std::uint64_t block_row = (std::uint64_t{1} << B) - 1;
+  PatchBlocks<dim> block{};
+  for (int r = 0; r < static_cast<int>(row.size()); ++r) {
+    int corner, shift;
+    place_patch_row<dim>(r, corner, shift);
+    block[corner] |= (row[static_cast<std::size_t>(r)] & block_row) << shift;
+    block[corner | 1] |= (row[static_cast<std::size_t>(r)] >> B & block_row) << shift;
+  }
+  return block;
+}
+
 // A node's coordinates within its block packed into one byte (block_bits per axis), and back:
 // prepare() finds each regular particle's stencil base once and its later passes read the byte.
 template <int dim>
@@ -338,19 +384,16 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
       return m >= 0 ? status.blocks[static_cast<std::size_t>(m)].embedded : 0;
     };
     // Whether each bucketed particle's 3^dim stencil holds an embedded ghost, in parallel by
-    // bucket, and how many per bucket. Per bucket, the embedded bits of its patch as rows of
-    // W = 2B nodes along axis 0 (from the block masks); per particle, the three bits of each
-    // of its stencil's rows shifted out of them.
-    constexpr int W = 2 * B, rows = ipow(W, dim - 1);
-    constexpr std::uint64_t block_row = (std::uint64_t{1} << B) - 1;
-    static_assert(W <= 32);
+    // bucket, and how many per bucket: per bucket, the embedded bits of its patch as rows; per
+    // particle, the three bits of each of its stencil's rows shifted out of them.
+    constexpr int W = 2 * B;
     const ParticleBuckets<dim>& reg = regular_[grp];
     std::vector<std::uint32_t> near(reg.particle.size(), 0);  // the stencil's embedded ghosts, by bit
     std::vector<std::uint32_t> near_count(static_cast<std::size_t>(reg.count()), 0);
     tbb::parallel_for(tbb::blocked_range<int>(0, reg.count(), 8), [&](const auto& range) {
       for (int k = range.begin(); k != range.end(); ++k) {
         const IVec<dim> c = g.block_coord(reg.block[k]);
-        std::uint64_t patch_mask[1 << dim] = {};  // embedded masks of the patch's blocks
+        PatchBlocks<dim> patch_mask;  // embedded masks of the patch's blocks
         bool check_nodes = false;
         for (int corner = 0; corner < (1 << dim); ++corner) {
           IVec<dim> nb = c;
@@ -359,16 +402,7 @@ bool AdaptiveGrid<dim>::prepare(const std::vector<Vec<dim>>& x, const std::vecto
           check_nodes = check_nodes || patch_mask[corner] != 0;
         }
         if (!check_nodes) continue;
-        std::array<std::uint32_t, rows> row;
-        for (int r = 0; r < rows; ++r) {
-          int corner = 0, shift = 0;  // the row's corner block (axes >= 1) and its first node's bit
-          for (int a = 1, rest = r; a < dim; ++a, rest /= W) {
-            corner |= (rest % W >= B) << a;
-            shift |= (rest % W & (B - 1)) << (a * SparseGrid<dim>::block_bits);
-          }
-          row[static_cast<std::size_t>(r)] = static_cast<std::uint32_t>(
-              (patch_mask[corner] >> shift & block_row) | (patch_mask[corner | 1] >> shift & block_row) << B);
-        }
+        const PatchRows<dim> row = rows_of_blocks<dim>(patch_mask);
         for (std::uint32_t i = reg.begin[k]; i < reg.begin[k + 1]; ++i) {
           const IVec<dim> base = unpack_in_block<dim>(base_in_block[reg.particle[i]]);
           std::uint32_t bits = 0;
@@ -581,7 +615,7 @@ std::vector<std::uint64_t> AdaptiveGrid<dim>::stencil_nodes(int n, const std::ve
     tbb::parallel_for(tbb::blocked_range<int>(0, reg.count(), 8), [&](const auto& range) {
       for (int k = range.begin(); k != range.end(); ++k) {
         const IVec<dim> first = g.block_coord(reg.block[k]) * B;
-        std::array<std::uint32_t, rows> row{};
+        PatchRows<dim> row{};
         for (std::uint32_t i = reg.begin[k]; i < reg.begin[k + 1]; ++i) {
           const IVec<dim> base = unpack_in_block<dim>(base_in_block[reg.particle[i]]);
           int r = 0;
@@ -595,23 +629,11 @@ std::vector<std::uint64_t> AdaptiveGrid<dim>::stencil_nodes(int n, const std::ve
             if (c >= 1) row[static_cast<std::size_t>(r)] |= row[static_cast<std::size_t>(r - stride)];
             if (c >= 2) row[static_cast<std::size_t>(r)] |= row[static_cast<std::size_t>(r - 2 * stride)];
           }
+        const PatchBlocks<dim> bits = blocks_of_rows<dim>(row);
         for (int corner = 0; corner < (1 << dim); ++corner) {
-          std::uint64_t bits = 0;
-          for (int r = 0; r < rows; ++r) {
-            IVec<dim> local = IVec<dim>::Zero();  // the row's first node in the corner's block
-            bool in_corner = true;
-            for (int a = 1, rest = r; a < dim; ++a, rest /= W) {
-              local[a] = rest % W - ((corner >> a) & 1) * B;
-              in_corner = in_corner && local[a] >= 0 && local[a] < B;
-            }
-            if (in_corner)
-              bits |=
-                  static_cast<std::uint64_t>((row[static_cast<std::size_t>(r)] >> ((corner & 1) * B)) & ((1u << B) - 1))
-                  << SparseGrid<dim>::local_index(local);
-          }
           IVec<dim> block = first / B;
           for (int a = 0; a < dim; ++a) block[a] += (corner >> a) & 1;
-          if (bits) add(g.block_id(block * B), bits);
+          if (bits[corner]) add(g.block_id(block * B), bits[corner]);
         }
       }
     });
