@@ -11,7 +11,8 @@
 //  - the surface distance counts face steps of the finest cells, with coarse particles' boxes
 //    covering the cells they stand for;
 //  - resampling a block merges deep inside and splits near the surface by the bands and
-//    guards, conserves mass and momentum, and is deterministic.
+//    guards, conserves mass and momentum, is deterministic, and keeps every channel of the
+//    particles it leaves alone.
 #include <mpm/adaptive/particle_levels.h>
 #include <mpm/adaptive/resampling.h>
 
@@ -20,6 +21,7 @@
 
 #include "angular_momentum.h"
 
+#include <map>
 #include <random>
 
 using namespace mpm;
@@ -76,6 +78,32 @@ void randomise(Particles<dim>& P, std::size_t p, std::mt19937& rng) {
 }
 
 constexpr double tight = 1e-12;
+
+// The particles of `before` that resampling left alone (same position and level: not split,
+// not merged) are each in `after` once with every channel equal: returns how many.
+template <int dim>
+std::size_t untouched_particles_kept(const Particles<dim>& before, const Particles<dim>& after) {
+  const auto& level_before = before.template channel<std::uint16_t>(kParticleLevel);
+  const auto& level_after = after.template channel<std::uint16_t>(kParticleLevel);
+  const auto key = [](const Vec<dim>& x) {
+    std::array<double, dim> k;
+    for (int a = 0; a < dim; ++a) k[a] = x[a];
+    return k;
+  };
+  std::map<std::array<double, dim>, std::size_t> row_of;  // random positions: distinct
+  for (std::size_t p = 0; p < after.size(); ++p) row_of.emplace(key(after.x[p]), p);
+  std::size_t kept = 0;
+  for (std::size_t p = 0; p < before.size(); ++p) {
+    const auto it = row_of.find(key(before.x[p]));
+    if (it == row_of.end() || level_after[it->second] != level_before[p]) continue;
+    before.for_each_channel([&](const ChannelInfo& info, const auto& values) {
+      using T = typename std::decay_t<decltype(values)>::value_type;
+      CHECK_MESSAGE(after.template channel<T>(info.name)[it->second] == values[p], info.name);
+    });
+    ++kept;
+  }
+  return kept;
+}
 
 }  // namespace
 
@@ -304,6 +332,7 @@ TEST_CASE_TEMPLATE("resampling a block by the distance bands", T, std::integral_
     CHECK(c.split == 0);
     CHECK(c.merged > 0);
     CHECK(P.size() == n0 - c.merged + c.groups);
+    CHECK(untouched_particles_kept(copy, P) == n0 - c.merged);
     const Totals t1 = totals(P);
     CHECK(t1.mass == doctest::Approx(t0.mass).epsilon(tight));
     CHECK((t1.momentum - t0.momentum).norm() < 1e-12 * t0.mass);
@@ -352,6 +381,7 @@ TEST_CASE_TEMPLATE("resampling a block by the distance bands", T, std::integral_
     CHECK(c.split > 0);
     CHECK(c.merged > 0);
     CHECK(P.size() == n0 - c.merged + c.groups + ((1 << dim) - 1) * c.split);
+    CHECK(untouched_particles_kept(copy, P) == n0 - c.merged - c.split);
     const Totals t1 = totals(P);
     CHECK(t1.mass == doctest::Approx(t0.mass).epsilon(tight));
     CHECK(t1.volume == doctest::Approx(t0.volume).epsilon(tight));
