@@ -21,6 +21,7 @@
 
 #include "angular_momentum.h"
 
+#include <array>
 #include <map>
 #include <random>
 
