@@ -21,15 +21,15 @@
 // summary.json: max_scour_depth, final_scour_depth, final_deposition_height [m],
 // sediment_outflow_mass [kg], fluid_mass_balance_error and sediment_mass_balance_error
 // (|M(0) + M_in - M_out - M| / (M(0) + M_in), round-off), the water's particle spacing, and with
-// `pipeline: {diameter: D}` the comparison with pipeline-scour experiments
-// (coupling/pipeline_scour.h, data/reference/sumer_fredsoe2002.md), in the bed's time (the flow's
-// since sediment.hold_until, times the bed-load closure's morphological_factor,
+// `pipeline: {diameter: D}` (2D) or `pile: {diameter: D}` (3D) the comparison with scour
+// experiments (coupling/scour_prediction.h, data/reference/sumer_fredsoe2002.md), in the bed's
+// time (the flow's since sediment.hold_until, times the bed-load closure's morphological_factor,
 // coupling/bed_load.h).
 // --check: both mass balances below 1e-12 and a scour hole formed (max_scour_depth > 0).
 #include <coupling/bed_profile.h>
 #include <coupling/coupled_runner.h>
-#include <coupling/pipeline_scour.h>
 #include <coupling/scene_loader.h>
+#include <coupling/scour_prediction.h>
 #include <coupling/stages/reclassify_sediment.h>
 #include <mpm/core/app.h>
 #include <mpm/core/command_line.h>
@@ -57,18 +57,22 @@ int run(const CommandLine& cl, const Config& scene) {
                      scene.file() + ": sediment_transport needs a `fluid`, a `sediment` and a sediment body");
   const Config window = scene.child("scour_window");
   const Vec<dim> window_lo = window.template vector<dim>("lo"), window_hi = window.template vector<dim>("hi");
-  // The comparison with pipeline-scour experiments (coupling/pipeline_scour.h): the undisturbed
-  // current is the inflow's (speed along its face, depth = the inlet's height), the grains the
-  // drag law's, the pipe the scene's `pipeline.diameter`.
-  std::optional<coupling::PipelineScourPrediction> predicted;
-  if (const std::optional<Config> pipe = scene.optional_child("pipeline")) {
-    const double diameter = pipe->number("diameter", Range::positive());
-    verify<InputError>(flume.flow.inflow.has_value(), scene.file() + ": `pipeline` needs an `inflow` (the current)");
+  // The comparison with scour experiments (coupling/scour_prediction.h) below a `pipeline` or
+  // around a `pile` of the scene's diameter: the undisturbed current is the inflow's (speed
+  // along its face, depth = the inlet's height), the grains the drag law's.
+  std::optional<coupling::ScourPrediction> predicted;
+  const std::optional<Config> pipe = scene.optional_child("pipeline"), pile = scene.optional_child("pile");
+  verify<InputError>(!(pipe && pile), scene.file() + ": give `pipeline` or `pile`, not both");
+  if (pipe || pile) {
+    const double diameter = (pipe ? *pipe : *pile).number("diameter", Range::positive());
+    verify<InputError>(flume.flow.inflow.has_value(), scene.file() + ": `" + std::string(pipe ? "pipeline" : "pile") +
+                                                          "` needs an `inflow` (the current)");
     const auto& in = *flume.flow.inflow;
-    predicted =
-        coupling::predict_pipeline_scour(diameter, std::abs(in.velocity[in.face.axis]), in.hi[1] - in.lo[1],
+    const coupling::ScourCurrent current{std::abs(in.velocity[in.face.axis]), in.hi[1] - in.lo[1],
                                          scene.child("drag").number("grain_diameter", Range::positive()),
-                                         flume.sediment->density / flume.fluid->density, flume.settings.gravity.norm());
+                                         flume.sediment->density / flume.fluid->density, flume.settings.gravity.norm()};
+    predicted =
+        pipe ? coupling::predict_pipeline_scour(diameter, current) : coupling::predict_pile_scour(diameter, current);
   }
   scene.reject_unknown_keys();
 

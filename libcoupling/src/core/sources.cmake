@@ -6,7 +6,7 @@ list(APPEND COUPLING_SOURCES
   src/core/scene_loader.cpp
   src/core/coupled_runner.cpp
   src/core/bed_profile.cpp
-  src/core/pipeline_scour.cpp
+  src/core/scour_prediction.cpp
   src/core/pressure_probe.cpp
   src/core/bed_load.cpp
 )

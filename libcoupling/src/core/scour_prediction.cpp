@@ -1,5 +1,5 @@
-// Pipeline scour predictions and the exponential fit (pipeline_scour.h).
-#include <coupling/pipeline_scour.h>
+// Scour predictions for a pipeline and a pile, and the exponential fit (scour_prediction.h).
+#include <coupling/scour_prediction.h>
 
 #include <mpm/core/error.h>
 
@@ -9,23 +9,46 @@
 
 namespace coupling {
 
-PipelineScourPrediction predict_pipeline_scour(double pipe_diameter, double speed, double depth, double grain_diameter,
-                                               double relative_density, double gravity) {
-  const double roughness = 2.5 * grain_diameter;
-  mpm::verify<mpm::InputError>(pipe_diameter > 0.0 && speed > 0.0 && grain_diameter > 0.0 && gravity > 0.0,
-                               "pipeline scour: pipe diameter, current speed, grain diameter and gravity must be > 0");
-  mpm::verify<mpm::InputError>(11.0 * depth > roughness, "pipeline scour: water depth " + std::to_string(depth) +
-                                                             " m is not above the roughness height k_s / 11 = " +
-                                                             std::to_string(roughness / 11.0) + " m of the log law");
-  mpm::verify<mpm::InputError>(relative_density > 1.0,
-                               "pipeline scour: relative density " + std::to_string(relative_density) + " must be > 1");
-  PipelineScourPrediction p;
-  p.friction_velocity = speed / (2.5 * std::log(11.0 * depth / roughness));
-  const double reduced = gravity * (relative_density - 1.0);
-  p.shields_number = p.friction_velocity * p.friction_velocity / (reduced * grain_diameter);
+namespace {
+//! g (s - 1) [m/s^2].
+double reduced_gravity(const ScourCurrent& c) { return c.gravity * (c.relative_density - 1.0); }
+
+//! T = T* D^2 / sqrt(g (s - 1) d^3) [s].
+double time_scale(double t_star, double diameter, const ScourCurrent& c) {
+  return t_star * diameter * diameter / std::sqrt(reduced_gravity(c) * std::pow(c.grain_diameter, 3));
+}
+
+//! The current's friction velocity and Shields number after checking the obstacle's diameter and
+//! the current; `what` names the obstacle in errors.
+ScourPrediction undisturbed_current(const char* what, double diameter, const ScourCurrent& c) {
+  const std::string name = what;
+  const double roughness = 2.5 * c.grain_diameter;
+  mpm::verify<mpm::InputError>(diameter > 0.0 && c.speed > 0.0 && c.grain_diameter > 0.0 && c.gravity > 0.0,
+                               name + ": diameter, current speed, grain diameter and gravity must be > 0");
+  mpm::verify<mpm::InputError>(11.0 * c.depth > roughness, name + ": water depth " + std::to_string(c.depth) +
+                                                               " m is not above the roughness height k_s / 11 = " +
+                                                               std::to_string(roughness / 11.0) + " m of the log law");
+  mpm::verify<mpm::InputError>(c.relative_density > 1.0,
+                               name + ": relative density " + std::to_string(c.relative_density) + " must be > 1");
+  ScourPrediction p;
+  p.friction_velocity = c.speed / (2.5 * std::log(11.0 * c.depth / roughness));
+  p.shields_number = p.friction_velocity * p.friction_velocity / (reduced_gravity(c) * c.grain_diameter);
+  return p;
+}
+}  // namespace
+
+ScourPrediction predict_pipeline_scour(double pipe_diameter, const ScourCurrent& current) {
+  ScourPrediction p = undisturbed_current("pipeline scour", pipe_diameter, current);
   p.scour_depth = 0.6 * pipe_diameter;
-  const double t_star = std::pow(p.shields_number, -5.0 / 3.0) / 50.0;
-  p.time_scale = t_star * pipe_diameter * pipe_diameter / std::sqrt(reduced * std::pow(grain_diameter, 3));
+  p.time_scale = time_scale(std::pow(p.shields_number, -5.0 / 3.0) / 50.0, pipe_diameter, current);
+  return p;
+}
+
+ScourPrediction predict_pile_scour(double pile_diameter, const ScourCurrent& current) {
+  ScourPrediction p = undisturbed_current("pile scour", pile_diameter, current);
+  p.scour_depth = 1.3 * pile_diameter;
+  p.time_scale =
+      time_scale(current.depth / pile_diameter * std::pow(p.shields_number, -2.2) / 2000.0, pile_diameter, current);
   return p;
 }
 
@@ -81,7 +104,7 @@ ScourFit fit_scour_history(const std::vector<double>& time, const std::vector<do
 }
 
 double scour_history_error(const std::vector<double>& time, const std::vector<double>& depth,
-                           const PipelineScourPrediction& prediction) {
+                           const ScourPrediction& prediction) {
   mpm::verify<mpm::InputError>(
       time.size() == depth.size() && prediction.scour_depth > 0.0 && prediction.time_scale > 0.0,
       "scour history error: one depth per time and a positive prediction");
