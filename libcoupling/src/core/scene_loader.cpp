@@ -181,6 +181,24 @@ void require_support(const CoupledScene<dim>& scene, const mpm::Config& body, st
 }  // namespace
 
 namespace {
+//! The seeding lattice of `body` without the points inside the scene's own colliders (the first
+//! `obstacles` of scene.colliders, phi < 0 at t = 0): an obstacle holds neither water nor grains,
+//! so a pile through the bed or a pipe in the current starts empty. The flow boundaries'
+//! colliders, appended after them (the inflow's section, which holds water), do not count.
+template <int dim>
+mpm::geometry::BodyParticles<dim> seed_outside_obstacles(const mpm::Config& body, const CoupledScene<dim>& scene,
+                                                         std::size_t obstacles) {
+  mpm::geometry::BodyParticles<dim> b = mpm::geometry::seed_body_shape<dim>(body, scene.settings);
+  const auto& colliders = scene.colliders.colliders();
+  std::erase_if(b.x, [&](const mpm::Vec<dim>& x) {
+    for (std::size_t i = 0; i < obstacles; ++i)
+      if (colliders[i].phi(x, 0.0) < 0.0) return true;
+    return false;
+  });
+  if (b.x.empty()) body.fail("shape", "the body lies inside the colliders: no particle is left to seed");
+  return b;
+}
+
 //! The bed-load closure's keys (coupling/bed_load.h); the grains' diameter is the drag law's.
 template <int dim>
 BedLoadLaw parse_bed_load(const mpm::Config& bed, const mpm::Config& scene, const CoupledScene<dim>& out) {
@@ -264,6 +282,7 @@ CoupledScene<dim> load_coupled_scene(const mpm::Config& scene) {
     if (sediment->has("packing_fraction")) default_packing = sediment->number("packing_fraction", *packing);
   }
 
+  const std::size_t obstacles = scene.list("colliders").size();  // parse_colliders added them first
   const std::vector<mpm::Config> bodies = scene.list("bodies");
   std::vector<std::string> phase;
   for (const mpm::Config& body : bodies) {
@@ -281,7 +300,7 @@ CoupledScene<dim> load_coupled_scene(const mpm::Config& scene) {
     const mpm::Config& body = bodies[n];
     const double phi = default_packing ? body.number("packing_fraction", *default_packing, *packing)
                                        : body.number("packing_fraction", *packing);
-    const mpm::geometry::BodyParticles<dim> b = mpm::geometry::seed_body_shape<dim>(body, out.settings);
+    const mpm::geometry::BodyParticles<dim> b = seed_outside_obstacles(body, out, obstacles);
     const std::size_t first = out.state.sediment.particles.size();
     add_sediment_particles(out, b.x, phi * b.volume, body.vector<dim>("velocity", Vec::Zero()), body.path());
     if (body.flag("geostatic", false)) {
@@ -301,7 +320,7 @@ CoupledScene<dim> load_coupled_scene(const mpm::Config& scene) {
   for (std::size_t n = 0; n < bodies.size(); ++n) {
     if (phase[n] != "fluid") continue;
     const mpm::Config& body = bodies[n];
-    const mpm::geometry::BodyParticles<dim> b = mpm::geometry::seed_body_shape<dim>(body, out.settings);
+    const mpm::geometry::BodyParticles<dim> b = seed_outside_obstacles(body, out, obstacles);
     const Vec v = body.vector<dim>("velocity", Vec::Zero());
     std::vector<Vec> clear;
     std::vector<std::vector<Vec>> in_pores(pores.size());
