@@ -57,8 +57,8 @@ TEST_CASE("scene bodies: a pipe through the bed and the current starts empty; th
   const auto& water = piped.state.fluid.particles.x;
   CHECK(within(grains, centre, radius) == 0);
   CHECK(within(water, centre, radius) == 0);
-  // Without the pipe its disc holds lattice points of both bodies: the bed's lower half disc
-  // and the water's whole disc (4 per cell), pi r^2 / (dx^2 / 4) = 113 in all.
+  // Without the pipe its disc holds lattice points of both bodies (4 per cell, pi r^2 / (dx^2 / 4)
+  // = 113 for the whole disc): the bed's in the lower half disc, the water's in all of it.
   const std::size_t grains_in_disc = within(open.state.sediment.particles.x, centre, radius);
   const std::size_t water_in_disc = within(open.state.fluid.particles.x, centre, radius);
   CHECK(grains_in_disc > 40);
