@@ -5,6 +5,8 @@ Bad input: every case writes a small scene, runs an app on it and asserts exit s
 stderr that is exactly one line "<app>: input error: <file>:<line>:<col>: key '<path>' =
 <value>: <accepted range>" (the substrings of each case are checked), nothing on stdout and
 no --out folder (an app validates the whole scene before it writes anything).
+Threads: --threads outside [1, the cores this process may use] exits 2 naming the option, the
+value and the range, before anything is written; --threads 1 runs, and the summary records it.
 Numerical stop: a valid scene whose gravity overflows the grid velocity to infinity in the
 first step must exit 3 with one message naming the stage, the grid node and the quantity.
 
@@ -12,6 +14,8 @@ first step must exit 3 with one message naming the stage, the grid node and the 
                 --work DIR
 """
 import argparse
+import json
+import os
 import pathlib
 import shutil
 import subprocess
@@ -237,6 +241,36 @@ def check_numerical_stop(apps, work):
     return problems, stderr
 
 
+def check_threads(apps, work):
+    """--threads: out of range is refused before any output; in range is what the run used."""
+    folder = work / "threads"
+    folder.mkdir(parents=True)
+    scene = folder / "scene.yaml"
+    scene.write_text(JELLO.format(**JELLO_DEFAULTS))
+    problems, messages = [], []
+    for bad in ["0", str(len(os.sched_getaffinity(0)) + 1)]:
+        out = folder / f"out_{bad}"
+        status, stdout, stderr = run(apps["jello_collide"], scene, out, ["--threads", bad])
+        first = stderr.splitlines()[0] if stderr else ""
+        messages.append(first)
+        if status != 2:
+            problems.append(f"--threads {bad}: exit status {status}, expected 2")
+        for text in ["jello_collide: --threads", f"Value {bad} not in range 1 to"]:
+            if text not in first:
+                problems.append(f"--threads {bad}: the first line of stderr lacks '{text}'")
+        if out.exists():
+            problems.append(f"--threads {bad}: the output folder {out} was created")
+    out = folder / "out_1"
+    status, _, stderr = run(apps["jello_collide"], scene, out, ["--threads", "1"])
+    if status != 0:
+        problems.append(f"--threads 1: exit status {status}, expected 0: {stderr.strip()}")
+    else:
+        threads = json.loads((out / "summary.json").read_text())["info"].get("threads")
+        if threads != "1":
+            problems.append(f"--threads 1: the summary's info.threads is {threads!r}, expected '1'")
+    return problems, " / ".join(messages)
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     for app in ["column_collapse", "jello_collide", "goo_slits", "vibrating_bar"]:
@@ -247,6 +281,7 @@ def main():
     shutil.rmtree(args.work, ignore_errors=True)
 
     results = [(c["name"], *check_input_error(c, apps, args.work)) for c in CASES]
+    results.append(("threads", *check_threads(apps, args.work)))
     results.append(("numerical_overflow", *check_numerical_stop(apps, args.work)))
     failed = 0
     for name, problems, stderr in results:

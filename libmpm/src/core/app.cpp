@@ -6,9 +6,13 @@
 #include <mpm/core/scene_settings.h>
 #include <mpm/core/stop_signals.h>
 
+#include <tbb/global_control.h>
+
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <optional>
 
 namespace mpm {
 
@@ -17,6 +21,9 @@ int run_app(int argc, char** argv, const std::string& app_name, const std::strin
   const CommandLine cl = parse_command_line(argc, argv, app_name, description);
   keep_freed_memory();
   if (cl.max_memory_gb) cap_memory(*cl.max_memory_gb * 1e9);
+  // Held for the whole run: every parallel loop of the process uses at most this many threads.
+  std::optional<tbb::global_control> thread_limit;
+  if (cl.threads) thread_limit.emplace(tbb::global_control::max_allowed_parallelism, *cl.threads);
   try {
     const int code = body(cl);
     return code == 0 && cl.check && any_check_failed() ? 1 : code;
@@ -51,6 +58,12 @@ bool g_check_failed = false;
 }  // namespace
 
 bool any_check_failed() { return g_check_failed; }
+
+int worker_threads() {
+  return static_cast<int>(
+      std::min<std::size_t>(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism),
+                            static_cast<std::size_t>(available_cores())));
+}
 
 bool check_value(const std::string& name, double value, double expected, double tolerance) {
   const bool ok = std::fabs(value - expected) <= tolerance;

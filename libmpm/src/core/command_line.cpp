@@ -1,11 +1,14 @@
 #include <mpm/core/command_line.h>
 
+#include <tbb/info.h>
 #include <CLI/CLI.hpp>
 
 #include <cstdlib>
 #include <iostream>
 
 namespace mpm {
+
+int available_cores() { return tbb::info::default_concurrency(); }
 
 CommandLine parse_command_line(int argc, char** argv, const std::string& app_name, const std::string& description) {
   CommandLine cl;
@@ -26,6 +29,11 @@ CommandLine parse_command_line(int argc, char** argv, const std::string& app_nam
   app.add_option("--max-memory", max_memory,
                  "Refuse a scene whose estimated memory exceeds this many GB (default: the memory available)")
       ->check(CLI::PositiveNumber);
+  const int cores = available_cores();
+  int threads = 0;
+  app.add_option("--threads", threads,
+                 "Threads for the run's parallel loops (default: every core this process may use)")
+      ->check(CLI::Range(1, cores, "thread count in [1, cores this process may use = " + std::to_string(cores) + "]"));
 
   try {
     app.parse(argc, argv);
@@ -36,6 +44,7 @@ CommandLine parse_command_line(int argc, char** argv, const std::string& app_nam
   }
   if (!restart.empty()) cl.restart = restart;
   if (max_memory > 0.0) cl.max_memory_gb = max_memory;
+  if (threads > 0) cl.threads = threads;
   return cl;
 }
 

@@ -23,6 +23,10 @@ using SceneRunner = int (*)(const CommandLine&, const Config&);
 int run_scene_app(int argc, char** argv, const std::string& app_name, const std::string& description,
                   SceneRunner run_2d, SceneRunner run_3d);
 
+//! The threads the parallel loops of this process may use: --threads, else every core it may
+//! run on (the summary's "threads").
+int worker_threads();
+
 //! Prints "check <name>: value (expected ..., tolerance ...) ok|FAILED" and returns whether
 //! |value - expected| <= tolerance. A failed check is also recorded: run_app then exits with 1
 //! under --check even when the app's own verdict was 0, so checks made outside the app (the

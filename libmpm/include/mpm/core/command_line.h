@@ -1,7 +1,7 @@
 #pragma once
 //! The command-line contract shared by every app:
 //!   APP scene.yaml [--set key.path=value]... [--out DIR] [--check] [--restart CHECKPOINT]
-//!       [--quiet] [--max-memory GB]
+//!       [--quiet] [--max-memory GB] [--threads N]
 #include <optional>
 #include <string>
 #include <vector>
@@ -16,7 +16,13 @@ struct CommandLine {
   std::optional<std::string> restart;   //!< checkpoint to continue from
   bool quiet = false;                   //!< no progress line
   std::optional<double> max_memory_gb;  //!< cap on the memory a scene may claim (core/memory_budget.h)
+  //! Threads the run's parallel loops may use, in [1, the cores this process may run on];
+  //! default: all of them.
+  std::optional<int> threads;
 };
+
+//! The cores this process may run on (its CPU mask), the largest --threads accepted.
+int available_cores();
 
 //! Parses argv. On --help prints usage and exits 0; on a malformed command line prints the
 //! error with usage to stderr and exits 2.

@@ -503,6 +503,7 @@ void Runner<dim, State>::write_summary(const std::vector<std::pair<std::string, 
   for (const auto& s : stage_names_) stages += (stages.empty() ? "" : ",") + s;
   info.emplace_back("stages", stages);
   info.emplace_back("steps", std::to_string(steps_at_last_frame_));
+  info.emplace_back("threads", std::to_string(worker_threads()));
   info.emplace_back("particles", std::to_string(particle_count_));
   info.emplace_back("grid_nodes", std::to_string(grid_nodes_));
   for (const auto& [name, bytes] : memory_) info.emplace_back("memory_bytes." + name, std::to_string(bytes));
