@@ -231,6 +231,7 @@ template <int dim>
 ModulatedMultigrid<dim>::ModulatedMultigrid(const CellOperator<dim>& op, const Options& options)
     : options_(options), periodic_(op.periodic) {
   mpm::verify<mpm::InputError>(options.near_null_ratio > 0.0, "ModulatedMultigrid: near_null_ratio must be > 0");
+  mpm::verify<mpm::InputError>(options.additive_depth >= 0, "ModulatedMultigrid: additive_depth must be >= 0");
   std::vector<std::int64_t> compact;
   detail::number_fluid_cells(op, compact, fluid_cells_);
   fine_ = std::make_unique<Space>();
@@ -464,7 +465,8 @@ void ModulatedMultigrid<dim>::gauss_seidel(Space& s, bool forward) const {
 }
 
 template <int dim>
-void ModulatedMultigrid<dim>::cycle(Space& s, bool fine) {
+void ModulatedMultigrid<dim>::cycle(Space& s, int depth) {
+  const bool fine = depth == 0;
   if (s.bottom.size() > 0) {
     s.x.noalias() = s.bottom * s.b;
     return;
@@ -499,12 +501,12 @@ void ModulatedMultigrid<dim>::cycle(Space& s, bool fine) {
     });
   };
   const int K = static_cast<int>(s.children.size());
-  if (fine) {
-    // Additive: all children from one residual (one product with the largest matrix). Their
+  if (depth < options_.additive_depth) {
+    // Additive: all children from one residual (one product with this space's matrix). Their
     // subtrees share nothing, so they run in parallel; the sum is taken in a fixed order.
     if (K > 0) update_residual();
     for (const Child& child : s.children) restrict_residual(child);
-    tbb::parallel_for(0, K, [&](int k) { cycle(*s.children[k].space, false); });
+    tbb::parallel_for(0, K, [&](int k) { cycle(*s.children[k].space, depth + 1); });
     for (const Child& child : s.children) add_correction(child);
   } else {
     // Multiplicative, children 0 .. K-1 .. 0, each from the updated residual (header).
@@ -512,7 +514,7 @@ void ModulatedMultigrid<dim>::cycle(Space& s, bool fine) {
       const Child& child = s.children[step < K ? step : 2 * K - 2 - step];
       update_residual();
       restrict_residual(child);
-      cycle(*child.space, false);
+      cycle(*child.space, depth + 1);
       add_correction(child);
     }
   }
@@ -527,7 +529,7 @@ void ModulatedMultigrid<dim>::apply(const std::vector<double>& r, std::vector<do
   if (fine.A.rows() == 0) return;
   for_each_entry(fluid_cells_.size(),
                  [&](std::size_t i) { fine.b[static_cast<Eigen::Index>(i)] = r[fluid_cells_[i]]; });
-  cycle(fine, true);
+  cycle(fine, 0);
   for_each_entry(fluid_cells_.size(),
                  [&](std::size_t i) { z[fluid_cells_[i]] = fine.x[static_cast<Eigen::Index>(i)]; });
 }

@@ -34,15 +34,21 @@
 //!    little: in a two-level prototype the separate coarse systems took more iterations than
 //!    the coupled one, at a fraction of its nonzeros (docs/performance.md, 'Multigrid design
 //!    measurements').
-//!  * Combining the children: on the fine level additively (all from one residual: one
-//!    product with the largest matrix); on every coarser space multiplicatively, children
-//!    0, 1, .., K-1, .., 1, 0, each from the updated residual. The palindrome keeps the cycle
-//!    symmetric, and it makes each child's cycle a convergent iteration (an A-norm
-//!    contraction), which the additive sum is not where children overlap: additive on every
-//!    space let the iteration count grow with resolution (two cycles per child even broke CG
-//!    down: the sum overcorrects); this way it stays flat. Multiplicative on the fine level
-//!    too saves iterations but costs more time than it saves (docs/performance.md, 'Multigrid
-//!    design measurements').
+//!  * Combining the children: on the fine space and its children additively (all from one
+//!    residual: one product with the space's matrix; the subtrees run in parallel); on every
+//!    deeper space multiplicatively, children 0, 1, .., K-1, .., 1, 0, each from the updated
+//!    residual. The palindrome keeps the cycle symmetric, and it makes each child's cycle a
+//!    convergent iteration (an A-norm contraction), which the additive sum is not where
+//!    children overlap: additive on every space let the iteration count grow with resolution
+//!    (two cycles per child even broke CG down: the sum overcorrects). Additive on the first
+//!    two depths keeps it flat (12 iterations on the 3D dam break from 32^3 to 96^3, against
+//!    9-10 with only the fine space additive) and saves 2K - 2 of the 2K - 1 residual
+//!    products of each depth-1 space (together 39 % of a cycle's work): the shipped 3D
+//!    scenes' solves are faster (docs/performance.md,
+//!    'The pressure multigrid's first coarse spaces additive'). Multiplicative on the fine
+//!    level too saves iterations but costs more time than it saves ('Multigrid design
+//!    measurements'). Whatever the combination, each sum of symmetric positive semi-definite
+//!    corrections between adjoint smoothers keeps the cycle symmetric positive definite.
 //!  * Smoother: one forward Gauss-Seidel sweep before the coarse corrections and one backward
 //!    sweep after (the adjoint), so the cycle is a symmetric positive definite map on the
 //!    range of A and CG stays valid. On spaces of at least 4096 unknowns the sweep goes colour
@@ -78,6 +84,9 @@ public:
     double near_null_ratio = 0.3;           //!< a pattern is a child when its median energy ratio is below this
     std::int64_t max_bottom_unknowns = 64;  //!< invert spaces of at most this many unknowns
     int smoothing_sweeps = 1;               //!< Gauss-Seidel sweeps before and after the coarse corrections
+    //! The spaces of depth below this (the fine one: 0) combine their children additively,
+    //! deeper ones multiplicatively (header); >= 0
+    int additive_depth = 2;
     //! refresh(): the share of the fine cells that may lack their own coarse cell
     double max_orphan_share = 0.02;
   };
@@ -146,8 +155,9 @@ private:
   //! Builds the subtree below `s` (its matrix, extent and cells set); the children's
   //! subtrees in parallel (each touches only its own spaces: the result is the serial one).
   void build(Space& s) const;
-  //! `fine`: the root, whose children combine additively (header).
-  void cycle(Space& s, bool fine);
+  //! `depth`: of `s` in the tree (the root: 0); above Options::additive_depth the children
+  //! combine additively (header).
+  void cycle(Space& s, int depth);
   void gauss_seidel(Space& s, bool forward) const;
   template <class Fn>
   static void for_each_space(const Space& s, Fn&& fn);

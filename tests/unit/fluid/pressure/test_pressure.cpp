@@ -207,15 +207,21 @@ void check_symmetric_positive(const CellOperator<dim>& op, Apply&& apply) {
 }
 
 //! x^T M y = y^T M x and x^T M x > 0 for the cycle the MGPCG of `op` uses, with a deep
-//! hierarchy.
+//! hierarchy; for the modulated one with children combined multiplicatively from the fine
+//! space on, additively down to depth 2 (the default) and additively everywhere.
 template <int dim>
 void check_vcycle_symmetry(const CellOperator<dim>& op) {
   if (!Multigrid<dim>::supports(op)) {
-    typename ModulatedMultigrid<dim>::Options options;
-    options.max_bottom_unknowns = 16;
-    ModulatedMultigrid<dim> multigrid(op, options);
-    REQUIRE(multigrid.space_count() >= 4);
-    check_symmetric_positive(op, [&](const std::vector<double>& r, std::vector<double>& z) { multigrid.apply(r, z); });
+    for (int additive_depth : {0, 2, 100}) {
+      typename ModulatedMultigrid<dim>::Options options;
+      options.max_bottom_unknowns = 16;
+      options.additive_depth = additive_depth;
+      ModulatedMultigrid<dim> multigrid(op, options);
+      REQUIRE(multigrid.space_count() >= 4);
+      CAPTURE(additive_depth);
+      check_symmetric_positive(op,
+                               [&](const std::vector<double>& r, std::vector<double>& z) { multigrid.apply(r, z); });
+    }
     return;
   }
   typename Multigrid<dim>::Options options;
@@ -402,8 +408,9 @@ TEST_CASE("MGPCG iteration count flat under refinement (NodeCell dam break, Pois
   CAPTURE(coarse_3d);
   CAPTURE(fine_3d);
   CHECK(fine_3d <= 1.2 * coarse_3d);
-  // 3D NodeCell (modulated_multigrid.h): 12 -> 10; the geometric V-cycle took 173 -> 686,
-  // plain CG takes 388 -> 1354, and the same hierarchy with additive children 13 -> 14.
+  // 3D NodeCell (modulated_multigrid.h): 13 -> 12 (12 -> 10 with only the fine space's
+  // children additive); the geometric V-cycle took 173 -> 686, plain CG takes 388 -> 1354, and
+  // the same hierarchy with additive children on every space 13 -> 14.
   const int coarse_node_cell = mgpcg_iterations(dam_break_problem<3>(16, OperatorKind<3>::node_cell));
   const int fine_node_cell = mgpcg_iterations(dam_break_problem<3>(32, OperatorKind<3>::node_cell));
   CAPTURE(coarse_node_cell);
@@ -448,7 +455,7 @@ TEST_CASE("modulated multigrid: droplets in the air do not spoil the hierarchy")
   const int spray = mgpcg_iterations(op);
   CAPTURE(clean);
   CAPTURE(spray);
-  CHECK(spray <= 16);  // measured 15 (clean: 10)
+  CHECK(spray <= 19);  // measured 18 (clean: 12)
 }
 
 TEST_CASE("modulated multigrid: a coarse space for each near-null family of the NodeCell operator") {
