@@ -43,8 +43,8 @@
 //!    (two cycles per child even broke CG down: the sum overcorrects). Additive on the first
 //!    two depths keeps it flat (12 iterations on the 3D dam break from 32^3 to 96^3, against
 //!    9-10 with only the fine space additive) and saves 2K - 2 of the 2K - 1 residual
-//!    products of each depth-1 space (together 39 % of a cycle's work): the shipped 3D
-//!    scenes' solves are faster (docs/performance.md,
+//!    products of each depth-1 space (together 39 % of a cycle's work): the 3D flagship's
+//!    solves are faster (docs/performance.md,
 //!    'The pressure multigrid's first coarse spaces additive'). Multiplicative on the fine
 //!    level too saves iterations but costs more time than it saves ('Multigrid design
 //!    measurements'). Whatever the combination, each sum of symmetric positive semi-definite
