@@ -11,7 +11,7 @@ index tables (particle buckets; an adaptive grid's tree, ghost tables and transf
 hold, as the apps' summary.json reports it (memory_bytes.*: capacities, not sizes). docs/performance.md has the figures and the command.
 
     python3 bench/adaptive_table2.py --bin build/apps [--case jello|sand|jello_paper|sand_paper|all] [--repeat N]
-        [--set KEY=VALUE]
+        [--set KEY=VALUE] [--threads N]
 """
 import argparse
 import json
@@ -55,9 +55,10 @@ CASES["sand_paper"] = dict(CASES["sand"], uniform=["column.cells_per_width=60", 
                                      "adaptive.resample.d_large=0.005"])
 
 
-def run(binary, scene, sets, out):
-    """Runs one app; returns (stage seconds, steps, particles, memory held [B], peak RSS [B], wall [s])."""
-    cmd = [binary, scene, "--out", out] + QUIET
+def run(binary, scene, sets, out, extra=()):
+    """Runs one app (`extra`: more of its options); returns (stage seconds, steps, particles, memory
+    held [B], peak RSS [B], wall [s])."""
+    cmd = [binary, scene, "--out", out] + QUIET + list(extra)
     for s in sets:
         cmd += ["--set", s]
     start = time.monotonic()
@@ -81,12 +82,12 @@ def run(binary, scene, sets, out):
     return stages, steps, particles, memory, rss_kb * 1024, wall
 
 
-def measure(binary, scene, sets):
+def measure(binary, scene, sets, extra):
     """One run in a fresh interpreter, so that ru_maxrss is this run's alone."""
     with tempfile.TemporaryDirectory() as out:
         code = ("import sys; sys.path.insert(0, %r); import adaptive_table2 as t; "
-                "print(*t.run(%r, %r, %r, %r))" % (os.path.dirname(os.path.abspath(__file__)), binary, scene, sets,
-                                                     out))
+                "print(*t.run(%r, %r, %r, %r, %r))" % (os.path.dirname(os.path.abspath(__file__)), binary, scene,
+                                                         sets, out, extra))
         proc = subprocess.run([sys.executable, "-B", "-c", code], capture_output=True, text=True)
         if proc.returncode != 0:
             sys.exit(proc.stdout + proc.stderr)
@@ -102,9 +103,15 @@ def main():
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                         help="a scene override added to both runs, after the case's own (repeatable)")
     parser.add_argument("--repeat", type=int, default=1, help="alternating runs of each grid; the best is kept")
+    parser.add_argument("--threads", type=int, help="the apps' --threads (default: every core this process may use)")
     args = parser.parse_args()
     if args.repeat < 1:
         sys.exit(f"adaptive_table2: --repeat {args.repeat}: accepted range is >= 1")
+    cores = len(os.sched_getaffinity(0))
+    if args.threads is not None and not 1 <= args.threads <= cores:
+        sys.exit(f"adaptive_table2: --threads {args.threads}: accepted range is [1, {cores}] (the cores this "
+                 "process may use)")
+    extra = ["--threads", str(args.threads)] if args.threads is not None else []
     names = ["jello", "sand"] if args.case == "all" else [args.case]
     print("| case | grid | particles (end) | steps | stages [s/step] | memory held [MB] | peak RSS [MB] | wall [s] |")
     print("|---|---|---:|---:|---:|---:|---:|---:|")
@@ -117,7 +124,7 @@ def main():
         for _ in range(args.repeat):
             for grid, sets in (("uniform", case["uniform"] + args.set),
                                ("adaptive", case["uniform"] + case["adaptive"] + args.set)):
-                r = measure(binary, case["scene"], sets)
+                r = measure(binary, case["scene"], sets, extra)
                 if grid not in best or r[0] / r[1] < best[grid][0] / best[grid][1]:
                     best[grid] = r
         for grid in ("uniform", "adaptive"):
