@@ -162,10 +162,21 @@ void CellOperator<dim>::diagonal(std::vector<double>& d) const {
 
 template <int dim>
 void CellOperator<dim>::for_each_entry(const std::function<void(std::int64_t, std::int64_t, double)>& f) const {
+  for_each_entry(0, cell_count(), f);
+}
+
+template <int dim>
+void CellOperator<dim>::for_each_entry(std::int64_t first, std::int64_t last,
+                                       const std::function<void(std::int64_t, std::int64_t, double)>& f) const {
   const double s2 = 1.0 / ((1 << (2 * dim - 2)) * dx * dx);
   std::vector<std::pair<std::int64_t, double>> row;
-  for_each_cell<dim>(cells, [&](const IVec<dim>& c, std::int64_t ci) {
-    if (type[ci] != CellType::fluid) return;
+  for (std::int64_t ci = first; ci < last; ++ci) {
+    if (type[ci] != CellType::fluid) continue;
+    IVec<dim> c;
+    for (std::int64_t a = 0, rest = ci; a < dim; ++a) {
+      c[a] = static_cast<int>(rest % cells[a]);
+      rest /= cells[a];
+    }
     // Neighbours c + o, o in {-1, 0, 1}^dim (wrapped on periodic axes, where several o may
     // name one cell: their values add), then sorted by cell index.
     row.clear();
@@ -212,7 +223,7 @@ void CellOperator<dim>::for_each_entry(const std::function<void(std::int64_t, st
       for (; e < row.size() && row[e].first == column; ++e) v += row[e].second;
       if (v != 0.0) f(ci, column, v);
     }
-  });
+  }
 }
 
 template struct CellOperator<2>;

@@ -95,6 +95,10 @@ struct CellOperator {
   //! row by row, columns ascending, each column once (for assembly by direct and algebraic
   //! solvers).
   void for_each_entry(const std::function<void(std::int64_t, std::int64_t, double)>& f) const;
+  //! for_each_entry over the rows of the cells with box index in [first, last) only (x
+  //! fastest), so that an assembly can split the rows among threads.
+  void for_each_entry(std::int64_t first, std::int64_t last,
+                      const std::function<void(std::int64_t, std::int64_t, double)>& f) const;
 
   //! rhs of the projection: b_c = -(D u)_c for fluid cells, 0 elsewhere (u per node, x fastest).
   void divergence(const std::vector<Vec<dim>>& u, std::vector<double>& div) const;

@@ -22,6 +22,8 @@
 
 #include <cmath>
 #include <random>
+#include <tuple>
+#include <vector>
 
 using namespace fluid;
 
@@ -242,6 +244,25 @@ int mgpcg_iterations(const CellOperator<dim>& op) {
 }
 
 }  // namespace
+
+TEST_CASE("pressure operator: the entries of a range of rows are the whole operator's") {
+  // Assemblies split the rows among threads (modulated_multigrid.cpp): ranges that cut the box
+  // anywhere, joined in order, must give every entry once, in the whole sweep's order.
+  const CellOperator<3> op = dam_break_problem<3>(12, OperatorKind<3>::node_cell);
+  using Entry = std::tuple<std::int64_t, std::int64_t, double>;
+  std::vector<Entry> whole, joined;
+  op.for_each_entry([&](std::int64_t r, std::int64_t c, double v) { whole.emplace_back(r, c, v); });
+  const std::int64_t n = op.cell_count();
+  const std::int64_t cuts[] = {0, 1, n / 3, n / 3 + 1, n - 7, n};
+  for (std::size_t k = 0; k + 1 < std::size(cuts); ++k)
+    op.for_each_entry(cuts[k], cuts[k + 1], [&](std::int64_t r, std::int64_t c, double v) {
+      CHECK(r >= cuts[k]);
+      CHECK(r < cuts[k + 1]);
+      joined.emplace_back(r, c, v);
+    });
+  REQUIRE(!whole.empty());
+  CHECK(joined == whole);
+}
 
 TEST_CASE("pressure operator: symmetric, positive semi-definite, apply matches its matrix") {
   check_operator<2>(8);
