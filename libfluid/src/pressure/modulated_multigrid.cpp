@@ -87,26 +87,53 @@ struct PatternRows {
   std::vector<double> value;  //!< entry e, pattern k at e * K + k
 };
 
+//! Rows [0, rows) with K values per entry, made in blocks of rows in parallel and joined in
+//! order: fill(first, last, part) appends rows first .. last - 1 to `part` (a row ends with
+//! part.start.push_back). The blocks (about 1 024 rows, at most 64) depend on the row count
+//! only: the same rows on any thread count.
+template <class Fill>
+PatternRows rows_in_blocks(Eigen::Index rows, int K, const Fill& fill) {
+  const Eigen::Index blocks = std::clamp<Eigen::Index>(rows / 1024, 1, 64);
+  std::vector<PatternRows> parts(static_cast<std::size_t>(blocks));
+  tbb::parallel_for(Eigen::Index{0}, blocks, [&](Eigen::Index block) {
+    fill(rows * block / blocks, rows * (block + 1) / blocks, parts[static_cast<std::size_t>(block)]);
+  });
+  // Each block copied in parallel to its place.
+  std::vector<std::size_t> first_row(parts.size() + 1, 0), first_entry(parts.size() + 1, 0);
+  for (std::size_t b = 0; b < parts.size(); ++b) {
+    first_row[b + 1] = first_row[b] + parts[b].start.size() - 1;
+    first_entry[b + 1] = first_entry[b] + parts[b].column.size();
+  }
+  PatternRows joined;
+  joined.start.resize(first_row.back() + 1);
+  joined.column.resize(first_entry.back());
+  joined.value.resize(first_entry.back() * static_cast<std::size_t>(K));
+  tbb::parallel_for(std::size_t{0}, parts.size(), [&](std::size_t b) {
+    const PatternRows& part = parts[b];
+    for (std::size_t r = 1; r < part.start.size(); ++r)  // entry 0: the previous block's end (or 0)
+      joined.start[first_row[b] + r] = static_cast<int>(first_entry[b]) + part.start[r];
+    std::copy(part.column.begin(), part.column.end(), joined.column.begin() + std::ptrdiff_t(first_entry[b]));
+    std::copy(part.value.begin(), part.value.end(), joined.value.begin() + std::ptrdiff_t(first_entry[b] * K));
+  });
+  return joined;
+}
+
 //! Gustavson's product, row by row with a dense accumulator, for K patterns at once: output
 //! row i is the sum over the entries (m, w) of left row i of w * sign_k(m) * (right row m)_k.
 //! `right(m, emit)` calls emit(column, values, stride) for each entry of row m, the value of
 //! pattern k at values[k * stride] (stride 0: one value for all). One pass serves every
 //! pattern. Rows are independent: blocks of rows run in parallel, each with its own
-//! accumulator, and are joined in order (the result does not depend on the thread count).
+//! accumulator (rows_in_blocks).
 template <class Right>
 PatternRows multiply_patterns(const Eigen::SparseMatrix<double, Eigen::RowMajor>& left,
                               const std::vector<Eigen::VectorXd>& signs, Eigen::Index columns, const Right& right) {
   const int K = static_cast<int>(signs.size());
-  const Eigen::Index rows = left.rows();
-  const Eigen::Index blocks = std::clamp<Eigen::Index>(rows / 1024, 1, 64);
-  std::vector<PatternRows> parts(static_cast<std::size_t>(blocks));
-  tbb::parallel_for(Eigen::Index{0}, blocks, [&](Eigen::Index block) {
-    PatternRows& out = parts[static_cast<std::size_t>(block)];
+  return rows_in_blocks(left.rows(), K, [&](Eigen::Index first, Eigen::Index last, PatternRows& out) {
     std::vector<double> accumulator(static_cast<std::size_t>(columns * K), 0.0);
     std::vector<char> seen(static_cast<std::size_t>(columns), 0);
     std::vector<int> touched;
     std::vector<double> weight(static_cast<std::size_t>(K));
-    for (Eigen::Index i = rows * block / blocks; i < rows * (block + 1) / blocks; ++i) {
+    for (Eigen::Index i = first; i < last; ++i) {
       for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator l(left, i); l; ++l) {
         for (int k = 0; k < K; ++k) weight[k] = l.value() * signs[k][l.col()];
         right(l.col(), [&](int j, const double* values, int stride) {
@@ -130,24 +157,6 @@ PatternRows multiply_patterns(const Eigen::SparseMatrix<double, Eigen::RowMajor>
       out.start.push_back(static_cast<int>(out.column.size()));
     }
   });
-  // The blocks' rows joined in order, each block copied in parallel to its place.
-  std::vector<std::size_t> first_row(parts.size() + 1, 0), first_entry(parts.size() + 1, 0);
-  for (std::size_t b = 0; b < parts.size(); ++b) {
-    first_row[b + 1] = first_row[b] + parts[b].start.size() - 1;
-    first_entry[b + 1] = first_entry[b] + parts[b].column.size();
-  }
-  PatternRows joined;
-  joined.start.resize(first_row.back() + 1);
-  joined.column.resize(first_entry.back());
-  joined.value.resize(first_entry.back() * static_cast<std::size_t>(K));
-  tbb::parallel_for(std::size_t{0}, parts.size(), [&](std::size_t b) {
-    const PatternRows& part = parts[b];
-    for (std::size_t r = 1; r < part.start.size(); ++r)  // entry 0: the previous block's end (or 0)
-      joined.start[first_row[b] + r] = static_cast<int>(first_entry[b]) + part.start[r];
-    std::copy(part.column.begin(), part.column.end(), joined.column.begin() + std::ptrdiff_t(first_entry[b]));
-    std::copy(part.value.begin(), part.value.end(), joined.value.begin() + std::ptrdiff_t(first_entry[b] * K));
-  });
-  return joined;
 }
 
 //! The Galerkin operators A_k = P0^T S_k A S_k P0 (R0 = P0^T) of every sign vector s_k.
@@ -252,21 +261,13 @@ typename ModulatedMultigrid<dim>::Matrix ModulatedMultigrid<dim>::fine_matrix(
   // products: serial, the assembly before every solve held back a 16-core solve) and joined in
   // order: the same matrix on any thread count.
   const auto n = static_cast<Eigen::Index>(fluid_cells_.size());
-  const Eigen::Index blocks = std::clamp<Eigen::Index>(n / 1024, 1, 64);
-  struct Part {
-    std::vector<int> start{0}, column;  //!< start: per row of the block, from 0
-    std::vector<double> value;
-  };
-  std::vector<Part> parts(static_cast<std::size_t>(blocks));
-  tbb::parallel_for(Eigen::Index{0}, blocks, [&](Eigen::Index block) {
-    const Eigen::Index first_row = n * block / blocks, last_row = n * (block + 1) / blocks;
+  const PatternRows rows = rows_in_blocks(n, 1, [&](Eigen::Index first_row, Eigen::Index last_row, PatternRows& part) {
     if (first_row == last_row) return;
     const std::int64_t first = fluid_cells_[static_cast<std::size_t>(first_row)];
     const std::int64_t last = last_row < n ? fluid_cells_[static_cast<std::size_t>(last_row)] : op.cell_count();
-    Part& part = parts[static_cast<std::size_t>(block)];
     part.start.reserve(static_cast<std::size_t>(last_row - first_row) + 1);
     op.for_each_entry(first, last, [&](std::int64_t row, std::int64_t col, double v) {
-      const std::int64_t local = compact[row] - first_row;  // the row being filled, or the next
+      const std::int64_t local = compact[row] - first_row;  // the row being filled, or a later one
       assert(local + 1 >= static_cast<std::int64_t>(part.start.size()));
       while (static_cast<std::int64_t>(part.start.size()) <= local)
         part.start.push_back(static_cast<int>(part.column.size()));
@@ -275,17 +276,8 @@ typename ModulatedMultigrid<dim>::Matrix ModulatedMultigrid<dim>::fine_matrix(
     });
     part.start.resize(static_cast<std::size_t>(last_row - first_row) + 1, static_cast<int>(part.column.size()));
   });
-  std::vector<int> start{0}, column;
-  std::vector<double> value;
-  start.reserve(static_cast<std::size_t>(n) + 1);
-  for (const Part& part : parts) {
-    const int offset = static_cast<int>(column.size());
-    for (std::size_t r = 1; r < part.start.size(); ++r) start.push_back(offset + part.start[r]);
-    column.insert(column.end(), part.column.begin(), part.column.end());
-    value.insert(value.end(), part.value.begin(), part.value.end());
-  }
-  return Eigen::Map<const Matrix>(n, n, static_cast<Eigen::Index>(column.size()), start.data(), column.data(),
-                                  value.data());
+  return Eigen::Map<const Matrix>(n, n, static_cast<Eigen::Index>(rows.column.size()), rows.start.data(),
+                                  rows.column.data(), rows.value.data());
 }
 
 template <int dim>
