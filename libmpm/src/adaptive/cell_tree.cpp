@@ -33,12 +33,11 @@ CellTree<dim>::CellTree(const Vec<dim>& origin, const IVec<dim>& base_cells, dou
                    " with " + std::to_string(levels) + " levels exceed the " + std::to_string((1 << kBits) / 2) +
                    " finest cells per axis that a tree can address");
   refined_.resize(levels);
-  for (BlockTable& t : refined_) t.reset(0);
 }
 
 template <int dim>
 bool CellTree<dim>::is_refined(int level, const IVec<dim>& cell) const {
-  return refined_[level].find(key(cell)) >= 0;
+  return refined_[level].contains(cell);
 }
 
 template <int dim>
@@ -63,7 +62,7 @@ void CellTree<dim>::refine(int level, const IVec<dim>& cell) {
     throw InputError("adaptive grid: level-" + std::to_string(level) + " cell (" + where +
                      ") is not a leaf and cannot be refined");
   }
-  refined_[level].insert(key(cell), 1);
+  refined_[level].insert(cell);
 }
 
 template <int dim>
@@ -267,7 +266,7 @@ bool CellTree<dim>::operator==(const CellTree& other) const {
   for (int l = 0; l < levels_; ++l) {
     if (refined_[l].size() != other.refined_[l].size()) return false;
     bool same = true;
-    refined_[l].for_each([&](BlockKey key, int) { same = same && other.refined_[l].find(key) >= 0; });
+    refined_[l].for_each_not_in(other.refined_[l], [&](const IVec<dim>&) { same = false; });
     if (!same) return false;
   }
   return true;
@@ -284,13 +283,7 @@ std::vector<CellId<dim>> CellTree<dim>::refined_difference(const CellTree& other
   std::vector<CellId<dim>> out;
   auto unmatched = [&](const CellTree& a, const CellTree& b) {
     for (int l = 0; l < levels_; ++l)
-      a.refined_[l].for_each([&](BlockKey k, int) {
-        if (b.refined_[l].find(k) >= 0) return;
-        IVec<dim> cell;
-        for (int axis = 0; axis < dim; ++axis)
-          cell[axis] = static_cast<int>((k >> (axis * kBits)) & ((BlockKey{1} << kBits) - 1));
-        out.push_back({l, cell});
-      });
+      a.refined_[l].for_each_not_in(b.refined_[l], [&](const IVec<dim>& cell) { out.push_back({l, cell}); });
   };
   unmatched(*this, other);
   unmatched(other, *this);
@@ -300,7 +293,7 @@ std::vector<CellId<dim>> CellTree<dim>::refined_difference(const CellTree& other
 template <int dim>
 std::size_t CellTree<dim>::memory_bytes() const {
   std::size_t bytes = 0;
-  for (const BlockTable& t : refined_) bytes += t.bytes();
+  for (const CellSet<dim>& s : refined_) bytes += s.bytes();
   return bytes;
 }
 

@@ -4,12 +4,13 @@
 //! dx_n = dx_0 / 2^n. A cell is refined into its 2^dim children; the leaves tile the domain.
 //! Non-graded: a leaf may border leaves any number of levels finer.
 //!
-//! Only refined cells are stored (one hash table per level): a level-0 cell of the domain is
-//! a leaf unless refined, and a child of a refined cell is a leaf unless refined itself. The
-//! memory held follows the refined region, not the domain.
+//! Only refined cells are stored (one CellSet per level: bit masks of bricks of cells in a hash
+//! table): a level-0 cell of the domain is a leaf unless refined, and a child of a refined cell
+//! is a leaf unless refined itself. The memory held follows the refined region, not the domain.
 //!
 //! Coordinates: cell c of level n covers [origin + c dx_n, origin + (c + 1) dx_n). Nodes are
 //! named by their coordinate on the finest lattice (spacing dx_{levels-1}), "lattice points".
+#include <mpm/adaptive/cell_set.h>
 #include <mpm/core/block_table.h>
 #include <mpm/core/types.h>
 
@@ -122,7 +123,7 @@ private:
   IVec<dim> base_cells_ = IVec<dim>::Zero();
   double dx0_ = 1.0;
   int levels_ = 1;
-  std::vector<BlockTable> refined_;  // per level: the keys of its refined cells
+  std::vector<CellSet<dim>> refined_;  // per level: its refined cells
 };
 
 }  // namespace mpm::adaptive

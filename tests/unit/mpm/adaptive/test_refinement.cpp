@@ -11,13 +11,17 @@
 // And on random particles of random types (beyond the finest too) over five levels with a
 // static refinement box: without padding the tree is the one of refining each particle's leaf
 // in turn (the loop the library ran before), and padding changes no transfer level.
+#include <mpm/adaptive/cell_set.h>
 #include <mpm/adaptive/refinement.h>
 
 #include <doctest/doctest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <random>
+#include <set>
+#include <vector>
 
 using namespace mpm;
 using namespace mpm::adaptive;
@@ -188,4 +192,48 @@ TEST_CASE(
   }
   CHECK(padded_2d > 0);  // the random scenes do leave room to pad
   CHECK(padded_3d > 0);
+}
+
+// The tree's per-level cell set (cell_set.h: bit masks of bricks) against std::set on random
+// cells spread over many bricks and clustered in a few: membership, size, iteration and the
+// difference of two sets, in 2D and 3D.
+template <int dim>
+void check_cell_set(std::uint32_t seed) {
+  std::mt19937 rng(seed);
+  const auto key = [](const IVec<dim>& c) { return std::vector<int>(c.data(), c.data() + dim); };
+  for (const int extent : {9, 200}) {  // a few bricks, densely; many, sparsely
+    std::uniform_int_distribution<int> coord(0, extent - 1);
+    CellSet<dim> a, b;
+    std::set<std::vector<int>> ref_a, ref_b;
+    for (int i = 0; i < 3000; ++i) {
+      IVec<dim> c;
+      for (int ax = 0; ax < dim; ++ax) c[ax] = coord(rng);
+      CHECK(a.insert(c) == ref_a.insert(key(c)).second);
+      if (i % 3 == 0) {
+        for (int ax = 0; ax < dim; ++ax) c[ax] = coord(rng);
+        b.insert(c);
+        ref_b.insert(key(c));
+      }
+    }
+    CHECK(a.size() == ref_a.size());
+    std::set<std::vector<int>> seen;
+    a.for_each([&](const IVec<dim>& c) { CHECK(seen.insert(key(c)).second); });
+    CHECK(seen == ref_a);
+    for (int i = 0; i < 3000; ++i) {
+      IVec<dim> c;
+      for (int ax = 0; ax < dim; ++ax) c[ax] = coord(rng) + (i % 2 ? 0 : extent);  // half outside the range
+      CHECK(a.contains(c) == (ref_a.count(key(c)) > 0));
+    }
+    CHECK_FALSE(a.contains(IVec<dim>::Constant(-1)));
+    std::set<std::vector<int>> only_a, expected;
+    a.for_each_not_in(b, [&](const IVec<dim>& c) { only_a.insert(key(c)); });
+    std::set_difference(ref_a.begin(), ref_a.end(), ref_b.begin(), ref_b.end(),
+                        std::inserter(expected, expected.end()));
+    CHECK(only_a == expected);
+  }
+}
+
+TEST_CASE("the tree's cell sets agree with std::set in 2D and 3D") {
+  check_cell_set<2>(7);
+  check_cell_set<3>(11);
 }
