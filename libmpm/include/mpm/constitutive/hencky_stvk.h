@@ -31,6 +31,14 @@ struct HenckyStVK {
   static Vec<dim> principal_strain(const Vec<dim>& sigma) {
     return sigma.unaryExpr([](double x) { return std::log(std::abs(detail::safe_denominator(x))); });
   }
+  //! The singular values sigma_i = exp(eps_i) of a principal Hencky strain (a return map's
+  //! result). libm's exp per component: Eigen's packet exp costs more on three values (one
+  //! two-lane packet and a scalar tail; bench_step's sand 3 % slower, docs/performance.md).
+  static Vec<dim> principal_stretch(const Vec<dim>& eps) {
+    Vec<dim> sigma;
+    for (int a = 0; a < dim; ++a) sigma[a] = std::exp(eps[a]);
+    return sigma;
+  }
 
   //! Principal Kirchhoff stress tau_i = dpsi/deps_i [Pa].
   Vec<dim> principal_kirchhoff(const Vec<dim>& eps) const {

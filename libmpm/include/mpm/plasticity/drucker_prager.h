@@ -240,7 +240,7 @@ public:
       }
     }
     if (rest_packing && dilatant()) *rest_packing *= std::exp(H.sum() - strain.sum());
-    f.sigma = H.array().exp();
+    f.sigma = Hencky::principal_stretch(H);
     Fe = math::scaled_product<dim>(f.U, f.sigma, f.V);
     if (result) *result = f;
     if (log_sigma) *log_sigma = H;

@@ -62,7 +62,7 @@ public:
       return false;
     }
     const Vec<dim> H = eps - y / (std::sqrt(1.5) * 2.0 * elastic_.mu * dev.norm()) * dev;
-    f.sigma = H.array().exp();
+    f.sigma = Hencky::principal_stretch(H);
     Fe = math::scaled_product<dim>(f.U, f.sigma, f.V);
     if (result) *result = f;
     if (log_sigma) *log_sigma = H;
