@@ -7,6 +7,7 @@
 #include <mpm/core/block_table.h>
 #include <mpm/core/types.h>
 
+#include <bit>
 #include <cstdint>
 #include <vector>
 
@@ -42,7 +43,7 @@ public:
   template <class Fn>
   void for_each(Fn&& fn) const {
     for (std::size_t i = 0; i < masks_.size(); ++i)
-      for (std::uint64_t m = masks_[i]; m != 0; m &= m - 1) fn(cell_of(i, __builtin_ctzll(m)));
+      for (std::uint64_t m = masks_[i]; m != 0; m &= m - 1) fn(cell_of(i, std::countr_zero(m)));
   }
   //! Calls fn(cell) for every member of this set that `other` lacks.
   template <class Fn>
@@ -50,7 +51,7 @@ public:
     for (std::size_t i = 0; i < masks_.size(); ++i) {
       const int slot = other.table_.find(key_of(bricks_[i]));
       const std::uint64_t theirs = slot >= 0 ? other.masks_[static_cast<std::size_t>(slot)] : 0;
-      for (std::uint64_t m = masks_[i] & ~theirs; m != 0; m &= m - 1) fn(cell_of(i, __builtin_ctzll(m)));
+      for (std::uint64_t m = masks_[i] & ~theirs; m != 0; m &= m - 1) fn(cell_of(i, std::countr_zero(m)));
     }
   }
   std::size_t bytes() const {

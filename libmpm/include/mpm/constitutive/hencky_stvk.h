@@ -33,7 +33,7 @@ struct HenckyStVK {
   }
   //! The singular values sigma_i = exp(eps_i) of a principal Hencky strain (a return map's
   //! result). libm's exp per component: Eigen's packet exp costs more on three values (one
-  //! two-lane packet and a scalar tail; bench_step's sand 3 % slower, docs/performance.md).
+  //! two-lane packet and a scalar tail; bench_step's sand 1-4 % slower, docs/performance.md).
   static Vec<dim> principal_stretch(const Vec<dim>& eps) {
     Vec<dim> sigma;
     for (int a = 0; a < dim; ++a) sigma[a] = std::exp(eps[a]);
