@@ -268,7 +268,7 @@ void add_ghost_terms(Particles<dim>& P, const AdaptiveGrid<dim>& grid, int group
 
 template <int dim>
 void particles_to_grid(const Particles<dim>& P, const TransferScheme& scheme, AdaptiveGrid<dim>& grid,
-                       const std::vector<Mat<dim>>* S, double impulse_dt) {
+                       std::type_identity_t<ParticleStress<dim>> S, double impulse_dt) {
   MPM_ASSERT(grid.particle_count() == P.size());
   const bool apic = scheme.type == TransferScheme::Type::apic;
   const bool impulse = S && impulse_dt > 0.0;
@@ -280,9 +280,9 @@ void particles_to_grid(const Particles<dim>& P, const TransferScheme& scheme, Ad
   scatter_irregular(P, grid, [&](std::size_t p, int n, Index k, double w, const Vec<dim>& grad, const Vec<dim>& xk) {
     SparseGrid<dim>& g = grid.level(n);
     if (impulse)
-      g.velocity[k] -= impulse_dt * ((*S)[p] * grad);
+      g.velocity[k] -= impulse_dt * (S[p] * grad);
     else if (S)
-      g.force[k] -= (*S)[p] * grad;
+      g.force[k] -= S[p] * grad;
     const double wm = w * P.mass[p];
     g.mass[k] += wm;
     if (apic) {
@@ -401,7 +401,7 @@ std::vector<RealWeight<dim>> real_weights(const AdaptiveGrid<dim>& grid, int n, 
 
 #define MPM_INSTANTIATE(dim)                                                                                    \
   template void particles_to_grid(const Particles<dim>&, const TransferScheme&, AdaptiveGrid<dim>&,             \
-                                  const std::vector<Mat<dim>>*, double);                                        \
+                                  ParticleStress<dim>, double);                                                 \
   template void momentum_to_velocity(AdaptiveGrid<dim>&, const TransferScheme&);                                \
   template void stress_to_grid_forces(const std::vector<Mat<dim>>&, const Particles<dim>&, AdaptiveGrid<dim>&); \
   template void pull_velocities(AdaptiveGrid<dim>&, const TransferScheme&);                                     \

@@ -54,42 +54,42 @@ void add_stress_to_nodes(const std::vector<Mat<dim>>& weighted_stress, const Par
 template <int dim>
 void particles_to_grid(const Particles<dim>& particles, const ParticleBuckets<dim>& buckets, const Kernel& kernel,
                        const TransferScheme& scheme, SparseGrid<dim>& grid,
-                       const std::vector<Mat<dim>>* weighted_stress, double impulse_dt) {
+                       std::type_identity_t<ParticleStress<dim>> stress, double impulse_dt) {
   const BucketGroup<dim> group{&buckets, kernel};
-  particles_to_grid(particles, std::span<const BucketGroup<dim>>(&group, 1), scheme, grid, weighted_stress, impulse_dt);
+  particles_to_grid(particles, std::span<const BucketGroup<dim>>(&group, 1), scheme, grid, stress, impulse_dt);
 }
 
 template <int dim>
 void particles_to_grid(const Particles<dim>& particles, std::span<const BucketGroup<dim>> groups,
                        const TransferScheme& scheme, SparseGrid<dim>& grid,
-                       const std::vector<Mat<dim>>* weighted_stress, double impulse_dt) {
-  MPM_VERIFY(!weighted_stress || weighted_stress->size() == particles.size(), Error,
-             "particles_to_grid: the stresses need one entry per particle");
+                       std::type_identity_t<ParticleStress<dim>> stress, double impulse_dt) {
+  MPM_VERIFY(!stress || stress.count == particles.size(), Error,
+             "particles_to_grid: the stresses (and their weights) need one entry per particle");
   std::fill(grid.mass.begin(), grid.mass.end(), 0.0);
-  const bool impulse = weighted_stress && impulse_dt > 0.0;
+  const bool impulse = stress && impulse_dt > 0.0;
   MPM_VERIFY(!impulse || !scheme.uses_old_velocity(), Error,
              "particles_to_grid: stress impulses in the momentum would enter FLIP's v_old");
   if (impulse) std::vector<Vec<dim>>().swap(grid.force);  // the forces are in the momentum
   std::fill(grid.velocity.begin(), grid.velocity.end(), Vec<dim>::Zero());
-  const bool force_channel = weighted_stress && !impulse;
+  const bool force_channel = stress && !impulse;
   if (force_channel) grid.force.assign(grid.node_storage(), Vec<dim>::Zero());
   const auto run = [&](auto channel_count, const BucketGroup<dim>& group) {
     constexpr std::size_t Ch = decltype(channel_count)::value;
     std::array<ChannelView, Ch> channels;
     channels[0] = scalar_view(grid.mass);
     for (int a = 0; a < dim; ++a) channels[a + 1] = component_view<dim>(grid.velocity, a);
-    const Mat<dim>* S = impulse ? weighted_stress->data() : nullptr;
+    const Mat<dim>* S = impulse ? stress.tau : nullptr;
     if constexpr (Ch > dim + 1) {
       for (int a = 0; a < dim; ++a) channels[dim + 1 + a] = component_view<dim>(grid.force, a);
-      S = weighted_stress->data();
+      S = stress.tau;
     }
     std::visit(
         [&](const auto& k) {
           using K = std::decay_t<decltype(k)>;
           if (scheme.type == TransferScheme::Type::apic)
-            detail::p2g<dim, K, true>(particles, *group.buckets, k, grid, channels, S, impulse_dt);
+            detail::p2g<dim, K, true>(particles, *group.buckets, k, grid, channels, S, impulse_dt, stress.weight);
           else
-            detail::p2g<dim, K, false>(particles, *group.buckets, k, grid, channels, S, impulse_dt);
+            detail::p2g<dim, K, false>(particles, *group.buckets, k, grid, channels, S, impulse_dt, stress.weight);
         },
         group.kernel);
   };
@@ -236,9 +236,9 @@ void stress_to_nodes(const std::vector<Mat<dim>>& weighted_stress, const Particl
 
 #define MPM_INSTANTIATE(dim)                                                                                           \
   template void particles_to_grid(const Particles<dim>&, const ParticleBuckets<dim>&, const Kernel&,                   \
-                                  const TransferScheme&, SparseGrid<dim>&, const std::vector<Mat<dim>>*, double);      \
+                                  const TransferScheme&, SparseGrid<dim>&, ParticleStress<dim>, double);               \
   template void particles_to_grid(const Particles<dim>&, std::span<const BucketGroup<dim>>, const TransferScheme&,     \
-                                  SparseGrid<dim>&, const std::vector<Mat<dim>>*, double);                             \
+                                  SparseGrid<dim>&, ParticleStress<dim>, double);                                      \
   template void stress_to_grid_forces(const std::vector<Mat<dim>>&, const Particles<dim>&,                             \
                                       std::span<const BucketGroup<dim>>, SparseGrid<dim>&);                            \
   template void momentum_to_velocity(SparseGrid<dim>&, const TransferScheme&);                                         \

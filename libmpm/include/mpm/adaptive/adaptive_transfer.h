@@ -18,12 +18,12 @@
 namespace mpm::adaptive {
 
 //! Mass and momentum (in `velocity`, as the uniform P2G) of the real nodes; ghosts pushed and
-//! cleared. With `weighted_stress` the same scatter also forms the forces of
-//! stress_to_grid_forces (one pass over particles and grid, as the uniform P2G), or with
-//! `impulse_dt` > 0 adds them to the momentum as the impulse dt f (mpm::particles_to_grid).
+//! cleared. With `stress` the same scatter also forms the forces of stress_to_grid_forces (one
+//! pass over particles and grid, as the uniform P2G), or with `impulse_dt` > 0 adds them to the
+//! momentum as the impulse dt f (mpm::particles_to_grid).
 template <int dim>
 void particles_to_grid(const Particles<dim>& particles, const TransferScheme& scheme, AdaptiveGrid<dim>& grid,
-                       const std::vector<Mat<dim>>* weighted_stress = nullptr, double impulse_dt = 0.0);
+                       std::type_identity_t<ParticleStress<dim>> stress = {}, double impulse_dt = 0.0);
 
 //! velocity = momentum / mass on every level (velocity_old kept for FLIP).
 template <int dim>

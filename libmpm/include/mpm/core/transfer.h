@@ -15,6 +15,8 @@
 #include <functional>
 #include <span>
 #include <string>
+#include <type_traits>
+#include <vector>
 
 namespace mpm {
 
@@ -38,8 +40,28 @@ struct BucketGroup {
   Kernel kernel;
 };
 
+//! The stresses S_p [N m] a scatter spreads, indexed like the particles: S_p = weight_p tau_p,
+//! or tau_p where no weights are given. The solid's P2G passes the return map's Kirchhoff stress
+//! cache with the weights V_p^0 and so forms no per-particle copy of V_p^0 tau_p (one pass over
+//! the particles less per step, docs/performance.md).
+template <int dim>
+struct ParticleStress {
+  const Mat<dim>* tau = nullptr;
+  const double* weight = nullptr;
+  std::size_t count = 0;  //!< entries of tau and weight (0 when their sizes differ)
+
+  ParticleStress() = default;
+  //! S_p = S[p] (nullptr: no stress). Implicit: a scatter's callers pass &S.
+  ParticleStress(const std::vector<Mat<dim>>* S) : tau(S ? S->data() : nullptr), count(S ? S->size() : 0) {}
+  ParticleStress(const std::vector<Mat<dim>>& stress, const std::vector<double>& weights)
+      : tau(stress.data()), weight(weights.data()), count(stress.size() == weights.size() ? stress.size() : 0) {}
+
+  explicit operator bool() const { return tau != nullptr; }
+  Mat<dim> operator[](std::size_t p) const { return weight ? Mat<dim>(weight[p] * tau[p]) : tau[p]; }
+};
+
 //! Accumulates node mass and momentum (into grid.velocity); zeroes both first. With
-//! `weighted_stress` (S_p per particle, as in stress_to_grid_forces) the same pass also forms
+//! `stress` (S_p per particle, as in stress_to_grid_forces) the same pass also forms
 //! grid.force = - sum_p S_p grad w_ip: one scatter instead of two, with the sums of the two,
 //! bit for bit. With `impulse_dt` > 0 as well, the momentum takes the impulse
 //! -dt sum_p S_p grad w_ip instead and grid.force is released: a grid update's
@@ -48,12 +70,12 @@ struct BucketGroup {
 template <int dim>
 void particles_to_grid(const Particles<dim>& particles, const ParticleBuckets<dim>& buckets, const Kernel& kernel,
                        const TransferScheme& scheme, SparseGrid<dim>& grid,
-                       const std::vector<Mat<dim>>* weighted_stress = nullptr, double impulse_dt = 0.0);
+                       std::type_identity_t<ParticleStress<dim>> stress = {}, double impulse_dt = 0.0);
 //! The same for the particles of several groups, one after the other.
 template <int dim>
 void particles_to_grid(const Particles<dim>& particles, std::span<const BucketGroup<dim>> groups,
                        const TransferScheme& scheme, SparseGrid<dim>& grid,
-                       const std::vector<Mat<dim>>* weighted_stress = nullptr, double impulse_dt = 0.0);
+                       std::type_identity_t<ParticleStress<dim>> stress = {}, double impulse_dt = 0.0);
 
 //! Divides momentum by mass (nodes without mass get zero velocity); keeps a copy in
 //! grid.velocity_old when the scheme needs it.

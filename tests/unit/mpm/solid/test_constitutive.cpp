@@ -518,8 +518,21 @@ namespace {
 // before every step (each stress then comes from F^E, as without the cache) must follow the
 // same trajectory to round-off; the cache must hold tau(F^E) of every plastic particle and
 // nothing for the elastic ones.
+// The second body's material: an elastic jelly by default (no stress cache of its own).
+const std::string elastic_jelly =
+    "{name: jelly, density: 1000, youngs_modulus: 1.0e5, poisson_ratio: 0.3, elasticity: fixed_corotated}";
+// Plastic second bodies: every particle then carries a cached stress, which the p2g scatter
+// reads in place (ParticleStress) with the weights V^0 (von Mises) or V^0 times the snow's
+// hardening of the moduli.
+const std::string hardening_snow =
+    "{name: jelly, density: 1000, youngs_modulus: 1.0e5, poisson_ratio: 0.3, elasticity: fixed_corotated,"
+    " plasticity: {model: snow, critical_compression: 2.5e-3, critical_stretch: 7.5e-4, hardening: 10}}";
+const std::string von_mises_goo =
+    "{name: jelly, density: 1000, youngs_modulus: 1.0e5, poisson_ratio: 0.3, elasticity: hencky_stvk,"
+    " plasticity: {model: von_mises, yield_stress: 300}}";
+
 template <int dim>
-solid::SolidScene<dim> sand_and_jelly() {
+solid::SolidScene<dim> sand_and_jelly(const std::string& jelly = elastic_jelly) {
   const std::string z = dim == 3 ? ", 0.35]" : "]", z0 = dim == 3 ? ", 0.15]" : "]", zd = dim == 3 ? ", 0]" : "]";
   return solid::load_solid_scene<dim>(Config::parse(
       "dim: " + std::to_string(dim) + "\ndomain: {lo: [0, 0" + zd + ", hi: [1, 0.5" + (dim == 3 ? ", 0.5]" : "]") +
@@ -528,7 +541,9 @@ solid::SolidScene<dim> sand_and_jelly() {
       "\nmaterials:\n"
       "  - {name: sand, density: 2650, youngs_modulus: 1.0e6, poisson_ratio: 0.3, elasticity: hencky_stvk,"
       " plasticity: {model: drucker_prager, friction_angle: 30}}\n"
-      "  - {name: jelly, density: 1000, youngs_modulus: 1.0e5, poisson_ratio: 0.3, elasticity: fixed_corotated}\n"
+      "  - " +
+      jelly +
+      "\n"
       "bodies:\n"
       "  - {shape: box, material: sand, lo: [0.1, 0.1" +
       z0 + ", hi: [0.3, 0.4" + z + "}\n  - {shape: box, material: jelly, lo: [0.6, 0.1" + z0 + ", hi: [0.8, 0.25" + z +
@@ -597,9 +612,9 @@ double relative_difference(const std::vector<T>& a, const std::vector<T>& b) {
 // bit where p2g_stress keeps a force channel (FLIP), to round-off (`tolerance`, relative to
 // each channel's largest value) where it adds the forces to the momentum as impulses (APIC).
 template <int dim>
-void check_fused_passes(TransferScheme::Type scheme, double tolerance) {
-  INFO("dim = ", dim, ", flip = ", scheme == TransferScheme::Type::flip);
-  solid::SolidScene<dim> fused = sand_and_jelly<dim>(), separate = sand_and_jelly<dim>();
+void check_fused_passes(TransferScheme::Type scheme, double tolerance, const std::string& jelly = elastic_jelly) {
+  INFO("dim = ", dim, ", flip = ", scheme == TransferScheme::Type::flip, ", second body ", jelly);
+  solid::SolidScene<dim> fused = sand_and_jelly<dim>(jelly), separate = sand_and_jelly<dim>(jelly);
   fused.state.transfer.type = separate.state.transfer.type = scheme;
   Pipeline<MpmState<dim>> a = solid::make_solid_pipeline(fused);
   const std::vector<std::string> names = a.stage_names();
@@ -658,6 +673,15 @@ TEST_CASE("the explicit step's fused passes give the separate stages' particles 
   // Measured after the 60 steps: 3.5e-14 (v), 6.6e-14 (C), 2.1e-13 (plastic) at most.
   check_fused_passes<2>(TransferScheme::Type::apic, 1e-10);
   check_fused_passes<3>(TransferScheme::Type::apic, 1e-10);
+}
+
+TEST_CASE(
+    "all materials plastic: the fused scatter reads the stress cache, the separate stages' particles bit for "
+    "bit (2D and 3D)") {
+  for (const std::string& jelly : {hardening_snow, von_mises_goo}) {
+    check_fused_passes<2>(TransferScheme::Type::flip, 0.0, jelly);
+    check_fused_passes<3>(TransferScheme::Type::flip, 0.0, jelly);
+  }
 }
 
 TEST_CASE("stress cache: one SVD per step, the same trajectory to round-off (2D and 3D)") {

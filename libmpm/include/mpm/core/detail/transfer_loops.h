@@ -281,7 +281,8 @@ template <int Ch, bool gradient = false, int dim, int S, class T, class Lanes>
 template <int dim, class K, bool affine, bool impulse, class PS, class T, std::size_t Ch>
 void p2g_scatter(const PS& P, const ParticleBuckets<dim>& buckets, const K& kernel, const SparseGrid<dim>& grid,
                  const std::array<BasicChannelView<T>, Ch>& channels,
-                 [[maybe_unused]] const Eigen::Matrix<T, dim, dim>* weighted_stress, [[maybe_unused]] T scale) {
+                 [[maybe_unused]] const Eigen::Matrix<T, dim, dim>* weighted_stress, [[maybe_unused]] T scale,
+                 [[maybe_unused]] const T* stress_weight) {
   constexpr bool stress = impulse || Ch == 2 * dim + 1;
   using Node = Eigen::Matrix<T, dim + 1, 1>;
   using MatT = Eigen::Matrix<T, dim, dim>;
@@ -299,14 +300,22 @@ void p2g_scatter(const PS& P, const ParticleBuckets<dim>& buckets, const K& kern
               prefetch(P.v[p]);
               prefetch(P.C[p]);
               prefetch(P.mass[p]);
-              if constexpr (stress) prefetch(weighted_stress[p]);
+              if constexpr (stress) {
+                prefetch(weighted_stress[p]);
+                if (stress_weight) prefetch(stress_weight[p]);
+              }
             },
             [&](std::uint32_t p, int q) {
               st[q].template compute<stress>(kernel, f.cells(P.x[p]), f.origin);
               const T m = P.mass[p];
               c[q][0] << m, m * P.v[p];
               for (int a = 0; a < dim; ++a) c[q][a + 1] << T(0), (m * dx) * P.C[p].col(a);
-              if constexpr (stress) A[q] = scale * weighted_stress[p];
+              if constexpr (stress) {
+                if (stress_weight)
+                  A[q] = scale * (stress_weight[p] * weighted_stress[p]);
+                else
+                  A[q] = scale * weighted_stress[p];
+              }
             },
             [&](std::uint32_t, int q) {
               spread<affine, int(Ch), impulse>(st[q], c[q], patch, stress ? &A[q] : nullptr);
@@ -316,24 +325,27 @@ void p2g_scatter(const PS& P, const ParticleBuckets<dim>& buckets, const K& kern
 
 //! Adds (w m_p, w m_p (v_p + C_p (x_i - x_p))) into channels {mass, momentum_0..dim-1}
 //! (C_p term only when `affine`). With 2 dim + 1 channels, the next dim channels also take the
-//! stress forces -S_p grad w_ip of `weighted_stress` (indexed like the particles) in the same
-//! pass: the sums of each channel are those of a separate scatter, bit for bit. With
-//! `impulse_dt` > 0 (and dim + 1 channels) the momentum takes the impulse -dt S_p grad w_ip
-//! instead: the grid update's v = (p + dt f) / m without a force channel.
+//! stress forces -S_p grad w_ip of `weighted_stress` (indexed like the particles; times
+//! `stress_weight`[p] where given: ParticleStress) in the same pass: the sums of each channel
+//! are those of a separate scatter, bit for bit. With `impulse_dt` > 0 (and dim + 1 channels)
+//! the momentum takes the impulse -dt S_p grad w_ip instead: the grid update's
+//! v = (p + dt f) / m without a force channel.
 template <int dim, class K, bool affine, class PS, class T, std::size_t Ch>
 void p2g(const PS& P, const ParticleBuckets<dim>& buckets, const K& kernel, const SparseGrid<dim>& grid,
          const std::array<BasicChannelView<T>, Ch>& channels,
-         [[maybe_unused]] const Eigen::Matrix<T, dim, dim>* weighted_stress = nullptr, T impulse_dt = 0) {
+         [[maybe_unused]] const Eigen::Matrix<T, dim, dim>* weighted_stress = nullptr, T impulse_dt = 0,
+         const T* stress_weight = nullptr) {
   constexpr bool force_channels = Ch == 2 * dim + 1;
   static_assert(force_channels || Ch == dim + 1);
   if constexpr (!force_channels)
     if (weighted_stress) {
       MPM_VERIFY(impulse_dt > 0, Error, "p2g: stresses without force channels need a time step");
-      p2g_scatter<dim, K, affine, true>(P, buckets, kernel, grid, channels, weighted_stress,
-                                        -impulse_dt / T(grid.dx()));
+      p2g_scatter<dim, K, affine, true>(P, buckets, kernel, grid, channels, weighted_stress, -impulse_dt / T(grid.dx()),
+                                        stress_weight);
       return;
     }
-  p2g_scatter<dim, K, affine, false>(P, buckets, kernel, grid, channels, weighted_stress, -1 / T(grid.dx()));
+  p2g_scatter<dim, K, affine, false>(P, buckets, kernel, grid, channels, weighted_stress, -1 / T(grid.dx()),
+                                     stress_weight);
 }
 
 //! APIC (flip = false): v_p = sum w v_i, C_p = B_p D_p^-1 from `velocity` channels.

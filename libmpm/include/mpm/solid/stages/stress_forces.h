@@ -63,7 +63,8 @@ private:
   std::vector<Material<dim>> materials_;
   bool stress_free_particles_;
   Scatter scatter_;
-  std::vector<Mat<dim>> weighted_stress_;  // V_p^0 tau_p per particle [N m]
+  std::vector<Mat<dim>> weighted_stress_;  // V_p^0 tau_p per particle [N m], unless read from the cache
+  std::vector<double> stress_weight_;      // V_p^0 times the modulus scale, with the cache where it varies
 };
 
 }  // namespace mpm::stages
