@@ -29,6 +29,20 @@ inline std::uint64_t non_finite_bit(double x) {
   return static_cast<std::uint64_t>((bits & exponent) == exponent);
 }
 
+//! non_finite_bit OR-ed over a double or the coefficients of a fixed-size Eigen matrix of
+//! doubles: 1 when any is NaN or infinite.
+template <class T>
+std::uint64_t non_finite_bits(const T& value) {
+  if constexpr (std::is_same_v<T, double>) {
+    return non_finite_bit(value);
+  } else {
+    static_assert(std::is_same_v<typename T::Scalar, double> && T::SizeAtCompileTime > 0);
+    std::uint64_t any = 0;
+    for (int k = 0; k < T::SizeAtCompileTime; ++k) any |= non_finite_bit(value.data()[k]);
+    return any;
+  }
+}
+
 //! Whether all of the n doubles at `values` are finite: their exponent bits tested in blocks,
 //! in parallel, without a branch per value (a check after every stage costs a few per cent of a
 //! step when done value by value on one thread).
@@ -40,19 +54,7 @@ bool all_finite(const double* values, std::size_t n);
 template <class T>
 bool all_finite_at(const std::vector<T>& values, const std::uint32_t* first, const std::uint32_t* last) {
   std::uint64_t any = 0;
-  for (const std::uint32_t* i = first; i != last; ++i) {
-    const double* d;
-    int n;
-    if constexpr (std::is_same_v<T, double>) {
-      d = &values[*i];
-      n = 1;
-    } else {
-      static_assert(std::is_same_v<typename T::Scalar, double> && T::SizeAtCompileTime > 0);
-      d = values[*i].data();
-      n = T::SizeAtCompileTime;
-    }
-    for (int k = 0; k < n; ++k) any |= non_finite_bit(d[k]);
-  }
+  for (const std::uint32_t* i = first; i != last; ++i) any |= non_finite_bits(values[*i]);
   return any == 0;
 }
 

@@ -75,7 +75,6 @@ ParticleGroupUpdate ReturnMap<dim>::bind(MpmState<dim>& s) {
   finite_.store(true);
   return [this, &P, &F, &plastic, cache, packing, dt](const std::uint32_t* first, const std::uint32_t* last) {
     const std::size_t n = static_cast<std::size_t>(last - first);
-    bool stress_finite = true;  // the cached tau written (the p2g scatter reads it from there)
     for (std::size_t m = 0; m < materials_.size(); ++m) {
       std::visit(
           [&](const auto& elastic, const auto& model) {
@@ -90,32 +89,23 @@ ParticleGroupUpdate ReturnMap<dim>::bind(MpmState<dim>& s) {
                     const std::uint32_t p = first[i];
                     project(model, F[p], trial, plastic[p], packing ? &(*packing)[p] : nullptr, dt,
                             cache ? &f : nullptr, cache ? &log_sigma : nullptr);
-                    if (cache) {
+                    if (cache)
                       (*cache)[p] =
                           kirchhoff_after_map<dim, std::decay_t<decltype(elastic)>, Model>(elastic, f, log_sigma);
-                      stress_finite &= (*cache)[p].allFinite();
-                    }
                   });
             }
           },
           materials_[m].elastic, materials_[m].plasticity);
     }
     // F^E tested while in cache; finish() names a particle only when a group found a bad one.
-    if (!all_finite_at(F, first, last) || !stress_finite) finite_.store(false, std::memory_order_relaxed);
+    if (!all_finite_at(F, first, last)) finite_.store(false, std::memory_order_relaxed);
   };
 }
 
 template <int dim>
 void ReturnMap<dim>::finish(MpmState<dim>& s) {
-  if (finite_.load()) return;
-  check_finite(solid::elastic_F(std::as_const(s.particles)), name(), "particle", "elastic deformation gradient F^E");
-  // F^E finite but a mapped stress not: name the particle. An all-NaN entry reads as unknown
-  // (solid_channels.h), which the stress stage recomputes from F^E and tests itself.
-  const std::vector<Mat<dim>>& cache = *solid::stress_cache(std::as_const(s.particles));
-  for (std::size_t p = 0; p < cache.size(); ++p)
-    if (!cache[p].allFinite() && !cache[p].array().isNaN().all())
-      throw NumericalError("stage '" + name() + "': particle " + std::to_string(p) +
-                           " has non-finite Kirchhoff stress");
+  if (!finite_.load())
+    check_finite(solid::elastic_F(std::as_const(s.particles)), name(), "particle", "elastic deformation gradient F^E");
 }
 
 template bool any_plastic(const std::vector<Material<2>>&);

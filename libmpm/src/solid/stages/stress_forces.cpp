@@ -67,13 +67,17 @@ void StressForces<dim>::run(MpmState<dim>& s) {
           using Plasticity = std::decay_t<decltype(plasticity)>;
           const bool cached = cache && !std::is_same_v<Plasticity, plasticity::NoPlasticity>;
           tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.size(), 4096), [&](const auto& r) {
-            // One pass: a known cached stress is taken where it is met (or left where it is),
+            // One pass: a known cached stress is taken where it is met (or tested where it is),
             // the others wait for their SVD.
+            std::uint64_t non_finite = 0;  // of the cached stresses left in place
             const auto needs_svd = [&](std::size_t p) {
               if (P.material[p] != m) return false;
               if (in_cache && weighted) stress_weight_[p] = P.volume0[p] * plasticity.modulus_scale(plastic[p]);
               if (!cached || !solid::known_stress((*cache)[p])) return true;
-              if (!in_cache) stress[p] = weighted_kirchhoff(plasticity, P.volume0[p], (*cache)[p], plastic[p]);
+              if (in_cache)
+                non_finite |= non_finite_bits((*cache)[p]);
+              else
+                stress[p] = weighted_kirchhoff(plasticity, P.volume0[p], (*cache)[p], plastic[p]);
               return false;
             };
             bool ok = true;
@@ -87,11 +91,10 @@ void StressForces<dim>::run(MpmState<dim>& s) {
                     stress[p] = weighted_kirchhoff(model, plasticity, P.volume0[p], f, plastic[p]);
                   }
                 });
-            // In the cache, the known entries were tested where the return map wrote them.
             if (!in_cache)
               for (std::size_t p = r.begin(); p != r.end(); ++p)
                 if (P.material[p] == m) ok &= stress[p].allFinite();
-            if (!ok) finite.store(false, std::memory_order_relaxed);
+            if (!ok || non_finite) finite.store(false, std::memory_order_relaxed);
           });
         },
         materials_[m].elastic, materials_[m].plasticity);
