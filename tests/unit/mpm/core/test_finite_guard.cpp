@@ -42,7 +42,8 @@ struct Scene {
   solid::SolidScene<2> solid;
   std::size_t lone = 0;  //!< index of the lone particle after the sort
 
-  Scene() : solid(make()) {
+  explicit Scene(const std::string& material = "{density: 1000, youngs_modulus: 1.0e5, poisson_ratio: 0.3}")
+      : solid(make(material)) {
     MpmState<2>& s = solid.state;
     s.dt = 1e-4;
     stages::SortParticles<2>().run(s);
@@ -52,14 +53,14 @@ struct Scene {
     while (s.particles.x[lone][0] < 0.7) ++lone;
   }
 
-  static solid::SolidScene<2> make() {
+  static solid::SolidScene<2> make(const std::string& material_yaml) {
     SceneSettings<2> settings;
     settings.domain_lo = Vec<2>::Zero();
     settings.domain_hi = Vec<2>::Ones();
     settings.dx = 0.05;
     settings.kernel = QuadraticBSpline{};
     settings.gravity = Vec<2>(0.0, -9.81);
-    const Config material = Config::parse("{density: 1000, youngs_modulus: 1.0e5, poisson_ratio: 0.3}");
+    const Config material = Config::parse(material_yaml);
     auto scene = solid::make_solid_scene<2>(settings, {parse_material<2>(material)}, {});
     const double volume = geometry::particle_volume<2>(settings.dx, 4);
     solid::add_particles<2>(scene,
@@ -106,6 +107,31 @@ TEST_CASE("a non-finite F stops 'stress_forces' and 'g2p' (the deformation updat
           "stage 'stress_forces': " + expected + "Kirchhoff stress");
     CHECK(numerical_error([&] { stages::GridToParticles<2>(solid::kElasticF).run(s); }) ==
           "stage 'g2p': " + expected + "deformation gradient F");
+  }
+}
+
+TEST_CASE("a non-finite cached stress stops the fused 'p2g_stress' (all materials plastic) naming the particle") {
+  // Every particle of a plastic material carries the return map's stress, which the fused
+  // scatter reads in place (ParticleStress): an entry is tested where the stage meets it. An
+  // entry NaN in its first coefficient reads as unknown and is recomputed from F^E.
+  for (const double bad : {kNaN, kInf}) {
+    Scene scene(
+        "{density: 1000, youngs_modulus: 1.0e5, poisson_ratio: 0.3, elasticity: hencky_stvk,"
+        " plasticity: {model: von_mises, yield_stress: 1e3}}");
+    MpmState<2>& s = scene.solid.state;
+    using Fused = stages::StressForces<2>;
+    Fused p2g_stress(scene.solid.materials, false, Fused::Scatter::with_momentum);
+    std::vector<Mat<2>>& cache = *solid::stress_cache(s.particles);
+    for (Mat<2>& tau : cache) CHECK_FALSE(solid::known_stress(tau));
+    CHECK(numerical_error([&] { p2g_stress.run(s); }).empty());  // the unknown entries filled in place
+    for (const Mat<2>& tau : cache) REQUIRE(solid::known_stress(tau));
+    const std::size_t p = s.particles.size() / 2;
+    cache[p](1, 0) = bad;
+    CHECK(numerical_error([&] { p2g_stress.run(s); }) ==
+          "stage 'p2g_stress': particle " + std::to_string(p) + " has non-finite Kirchhoff stress");
+    cache[p].setConstant(kNaN);  // unknown: recomputed
+    CHECK(numerical_error([&] { p2g_stress.run(s); }).empty());
+    CHECK(cache[p].allFinite());
   }
 }
 
