@@ -93,7 +93,7 @@ void StressForces<dim>::run(MpmState<dim>& s) {
                 });
             if (!in_cache)
               for (std::size_t p = r.begin(); p != r.end(); ++p)
-                if (P.material[p] == m) ok &= stress[p].allFinite();
+                if (P.material[p] == m) non_finite |= non_finite_bits(stress[p]);
             if (!ok || non_finite) finite.store(false, std::memory_order_relaxed);
           });
         },
