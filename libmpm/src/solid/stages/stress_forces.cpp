@@ -69,7 +69,7 @@ void StressForces<dim>::run(MpmState<dim>& s) {
           tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P.size(), 4096), [&](const auto& r) {
             // One pass: a known cached stress is taken where it is met (or tested where it is),
             // the others wait for their SVD.
-            std::uint64_t non_finite = 0;  // of the cached stresses left in place
+            std::uint64_t non_finite = 0;  // of the stresses this range holds
             const auto needs_svd = [&](std::size_t p) {
               if (P.material[p] != m) return false;
               if (in_cache && weighted) stress_weight_[p] = P.volume0[p] * plasticity.modulus_scale(plastic[p]);
@@ -80,21 +80,17 @@ void StressForces<dim>::run(MpmState<dim>& s) {
                 stress[p] = weighted_kirchhoff(plasticity, P.volume0[p], (*cache)[p], plastic[p]);
               return false;
             };
-            bool ok = true;
             math::for_each_svd<dim>(
                 r.begin(), r.end(), [&](std::size_t p) -> const Mat<dim>& { return F[p]; }, needs_svd,
                 [&](std::size_t p, const math::Svd<dim>& f) {
-                  if (in_cache) {
-                    stress[p] = constitutive::isotropic_kirchhoff(model, f);
-                    ok &= stress[p].allFinite();
-                  } else {
-                    stress[p] = weighted_kirchhoff(model, plasticity, P.volume0[p], f, plastic[p]);
-                  }
+                  stress[p] = in_cache ? constitutive::isotropic_kirchhoff(model, f)
+                                       : weighted_kirchhoff(model, plasticity, P.volume0[p], f, plastic[p]);
+                  if (in_cache) non_finite |= non_finite_bits(stress[p]);
                 });
             if (!in_cache)
               for (std::size_t p = r.begin(); p != r.end(); ++p)
                 if (P.material[p] == m) non_finite |= non_finite_bits(stress[p]);
-            if (!ok || non_finite) finite.store(false, std::memory_order_relaxed);
+            if (non_finite) finite.store(false, std::memory_order_relaxed);
           });
         },
         materials_[m].elastic, materials_[m].plasticity);
