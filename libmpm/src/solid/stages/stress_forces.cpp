@@ -60,7 +60,7 @@ void StressForces<dim>::run(MpmState<dim>& s) {
     stress_weight_.resize(P.size());
   else
     std::vector<double>().swap(stress_weight_);
-  std::atomic<bool> finite{true};  // the stresses tested as they are formed, in cache
+  std::atomic<bool> finite{true};  // every stress tested where it is formed or met, in cache
   for (std::size_t m = 0; m < materials_.size(); ++m) {
     std::visit(
         [&](const auto& model, const auto& plasticity) {
@@ -74,10 +74,8 @@ void StressForces<dim>::run(MpmState<dim>& s) {
               if (P.material[p] != m) return false;
               if (in_cache && weighted) stress_weight_[p] = P.volume0[p] * plasticity.modulus_scale(plastic[p]);
               if (!cached || !solid::known_stress((*cache)[p])) return true;
-              if (in_cache)
-                non_finite |= non_finite_bits((*cache)[p]);
-              else
-                stress[p] = weighted_kirchhoff(plasticity, P.volume0[p], (*cache)[p], plastic[p]);
+              if (!in_cache) stress[p] = weighted_kirchhoff(plasticity, P.volume0[p], (*cache)[p], plastic[p]);
+              non_finite |= non_finite_bits(stress[p]);
               return false;
             };
             math::for_each_svd<dim>(
@@ -85,11 +83,8 @@ void StressForces<dim>::run(MpmState<dim>& s) {
                 [&](std::size_t p, const math::Svd<dim>& f) {
                   stress[p] = in_cache ? constitutive::isotropic_kirchhoff(model, f)
                                        : weighted_kirchhoff(model, plasticity, P.volume0[p], f, plastic[p]);
-                  if (in_cache) non_finite |= non_finite_bits(stress[p]);
+                  non_finite |= non_finite_bits(stress[p]);
                 });
-            if (!in_cache)
-              for (std::size_t p = r.begin(); p != r.end(); ++p)
-                if (P.material[p] == m) non_finite |= non_finite_bits(stress[p]);
             if (non_finite) finite.store(false, std::memory_order_relaxed);
           });
         },
