@@ -10,7 +10,8 @@ the uniform/adaptive ratios. Memory held is what the particle and grid fields an
 index tables (particle buckets; an adaptive grid's tree, ghost tables and transfer lists)
 hold, as the apps' summary.json reports it (memory_bytes.*: capacities, not sizes). docs/performance.md has the figures and the command.
 
-    python3 bench/adaptive_table2.py --bin build/apps [--case jello|sand|jello_paper|sand_paper|all] [--repeat N]
+    python3 bench/adaptive_table2.py --bin build/apps [--case jello|sand|jello_paper|sand_paper|sand_paper_every_step|all]
+        [--repeat N]
         [--set KEY=VALUE] [--threads N]
 """
 import argparse
@@ -39,9 +40,11 @@ CASES = {
         "scene": "data/scenes/column_collapse_3d.yaml",
         "uniform": ["column.cells_per_width=40", "time.end=0.01"],
         # The 2D adaptive column's keys (data/scenes/column_collapse_adaptive.yaml): three levels,
-        # fine particles within 3 finest cells of the surface, split within 2, merged beyond 3.
+        # fine particles within 3 finest cells of the surface, split within 2, merged beyond 3;
+        # resampled once the particles may have moved half a finest cell.
         "adaptive": ["adaptive.levels=3", "adaptive.surface_band=0.0075", "adaptive.resample.d_small=0",
-                     "adaptive.resample.d_medium=0.005", "adaptive.resample.d_large=0.0075"],
+                     "adaptive.resample.d_medium=0.005", "adaptive.resample.d_large=0.0075",
+                     "adaptive.resample.max_travel=0.00125"],
     },
 }
 # The same scenes at the paper's size (Table 2: 1.74 M and 1.68 M particles on the uniform grid):
@@ -49,10 +52,12 @@ CASES = {
 # kept in finest cells.
 CASES["jello_paper"] = dict(CASES["jello"], uniform=["grid.dx=0.004166666666666667", "time.end=0.01"],
                             adaptive=["adaptive.levels=3", "adaptive.surface_band=0.016666666666666666"])
+SAND_PAPER_BANDS = ["adaptive.levels=3", "adaptive.surface_band=0.005", "adaptive.resample.d_small=0",
+                    "adaptive.resample.d_medium=0.0033333333333333335", "adaptive.resample.d_large=0.005"]
 CASES["sand_paper"] = dict(CASES["sand"], uniform=["column.cells_per_width=60", "time.end=0.003"],
-                           adaptive=["adaptive.levels=3", "adaptive.surface_band=0.005", "adaptive.resample.d_small=0",
-                                     "adaptive.resample.d_medium=0.0033333333333333335",
-                                     "adaptive.resample.d_large=0.005"])
+                           adaptive=SAND_PAPER_BANDS + ["adaptive.resample.max_travel=0.0008333333333333334"])
+# As the paper's dynamic adaptation: resampled every step.
+CASES["sand_paper_every_step"] = dict(CASES["sand_paper"], adaptive=SAND_PAPER_BANDS)
 
 
 def run(binary, scene, sets, out, extra=()):

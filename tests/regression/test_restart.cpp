@@ -75,6 +75,13 @@ const RestartCase kColumnAdaptive{COLUMN_COLLAPSE_APP,
                                   {"runout", "final_height", "normalized_runout"},
                                   true,
                                   true};
+// Resampled by the particles' travel: the restarted run must carry the travel since the last
+// resampling and resample at the same steps.
+const RestartCase kColumnAdaptiveTravel = [] {
+  RestartCase travel = kColumnAdaptive;
+  travel.sets += " --set adaptive.resample.max_travel=0.0025";
+  return travel;
+}();
 #ifdef JELLO_COLLIDE_APP
 // Every result of jello_collide compares the end with the start of the run: none is final-only.
 const RestartCase kJelloAdaptive{
@@ -374,6 +381,9 @@ TEST_CASE("a run continued from a checkpoint is bit-identical to the uninterrupt
   SUBCASE("solid: column collapse") { check_restart(kColumnCollapse, "column_collapse"); }
   SUBCASE("solid on an adaptive grid with resampling: column collapse") {
     check_restart(kColumnAdaptive, "column_collapse_adaptive");
+  }
+  SUBCASE("solid on an adaptive grid resampled by travel: column collapse") {
+    check_restart(kColumnAdaptiveTravel, "column_collapse_adaptive_travel");
   }
   SUBCASE("solid with particle domains: flatten and recover") { check_restart(kFlattenDomains, "flatten_domains"); }
   SUBCASE("solid with enriched particle domains: flatten and recover") {

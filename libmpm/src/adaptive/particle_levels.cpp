@@ -20,11 +20,12 @@ std::vector<std::uint16_t>& add_level_channel(Particles<dim>& particles, const C
 
 template <int dim>
 LevelledParticles<dim> match_particles_to_leaves(const CellTree<dim>& tree, const std::vector<Vec<dim>>& fine,
-                                                 double fine_volume, int points_per_axis, int surface_steps) {
+                                                 double fine_volume, int points_per_axis, int surface_steps,
+                                                 const LatticeWalls<dim>& walls) {
   LevelledParticles<dim> out;
   std::vector<bool> keep_fine(fine.size(), false);
   if (surface_steps > 0) {
-    const std::vector<int> d = lattice_surface_distance(fine, tree.dx(tree.finest()) / points_per_axis);
+    const std::vector<int> d = lattice_surface_distance(fine, tree.dx(tree.finest()) / points_per_axis, walls);
     for (std::size_t p = 0; p < fine.size(); ++p) keep_fine[p] = d[p] <= surface_steps;
   }
   std::vector<int> leaf_level(fine.size());
@@ -82,9 +83,9 @@ std::vector<int> depth_search(const std::vector<IVec<dim>>& sites, const std::ve
         fn(find(j));
       }
   };
-  for (const int i : unique) {  // the sources: sites with an empty face neighbour
+  for (const int i : unique) {  // the sources: sites with an empty face neighbour (-1; -2: beyond a wall)
     bool surface = false;
-    for_each_neighbour(sites[i], [&](int j) { surface = surface || j < 0; });
+    for_each_neighbour(sites[i], [&](int j) { surface = surface || j == -1; });
     if (surface) {
       depth[i] = 1;
       queue.push_back(i);
@@ -105,7 +106,7 @@ std::vector<int> depth_search(const std::vector<IVec<dim>>& sites, const std::ve
 }  // namespace
 
 template <int dim>
-std::vector<int> manhattan_depth(const std::vector<IVec<dim>>& sites, int max_depth) {
+std::vector<int> manhattan_depth(const std::vector<IVec<dim>>& sites, int max_depth, const LatticeWalls<dim>& walls) {
   if (sites.empty()) return {};
   IVec<dim> lo = sites[0], hi = sites[0];
   for (const IVec<dim>& i : sites) {
@@ -119,7 +120,7 @@ std::vector<int> manhattan_depth(const std::vector<IVec<dim>>& sites, int max_de
     const int cap = box.cap(max_depth);
     std::vector<int> cells(static_cast<std::size_t>(box.cells()), 0);
     for (const IVec<dim>& i : sites) cells[box.flat(i)] = cap;
-    manhattan_transform(box, cells, cap);
+    manhattan_transform(box, cells, cap, walls);
     std::vector<int> depth(sites.size());
     for (std::size_t i = 0; i < sites.size(); ++i) depth[i] = cells[box.flat(sites[i])];  // <= cap <= max_depth + 1
     return depth;
@@ -141,6 +142,7 @@ std::vector<int> manhattan_depth(const std::vector<IVec<dim>>& sites, int max_de
   std::vector<int> depth = depth_search<dim>(
       sites, unique,
       [&](const IVec<dim>& j) {
+        if (walls.beyond(j)) return -2;
         const auto it = id.find(key(j));
         return it == id.end() ? -1 : it->second;
       },
@@ -153,11 +155,16 @@ std::vector<int> manhattan_depth(const std::vector<IVec<dim>>& sites, int max_de
 }
 
 template <int dim>
-void manhattan_transform(const LatticeBox<dim>& box, std::vector<int>& depth, int cap) {
+void manhattan_transform(const LatticeBox<dim>& box, std::vector<int>& depth, int cap, const LatticeWalls<dim>& walls) {
   const std::size_t cells = depth.size();
   MPM_VERIFY(static_cast<double>(cells) == box.cells() && cap < std::numeric_limits<int>::max(), Error,
              "manhattan_transform: one depth per cell of the box and a cap below the largest int");
   const IVec<dim>& extent = box.extent;
+  const IVec<dim> last = box.lo + extent - IVec<dim>::Ones();
+  if (walls.beyond(box.lo) || walls.beyond(last))
+    for_each_in_box<dim>(box.lo, last, [&](const IVec<dim>& i) {
+      if (walls.beyond(i)) depth[box.flat(i)] = cap;
+    });
   constexpr std::size_t chunk = 256;  // lines of a strided axis swept together (one vector loop)
   std::size_t stride = 1;             // cells between neighbours along axis a
   for (int a = 0; a < dim; ++a) {
@@ -180,20 +187,20 @@ void manhattan_transform(const LatticeBox<dim>& box, std::vector<int>& depth, in
 }
 
 template <int dim>
-std::vector<int> lattice_surface_distance(const std::vector<Vec<dim>>& x, double h) {
+std::vector<int> lattice_surface_distance(const std::vector<Vec<dim>>& x, double h, const LatticeWalls<dim>& walls) {
   std::vector<IVec<dim>> sites(x.size());
   for (std::size_t p = 0; p < x.size(); ++p)
     for (int a = 0; a < dim; ++a) sites[p][a] = static_cast<int>(std::floor(x[p][a] / h));
-  return manhattan_depth(sites);
+  return manhattan_depth(sites, std::numeric_limits<int>::max() - 1, walls);
 }
 
-#define MPM_INSTANTIATE(dim)                                                                                    \
-  template std::vector<std::uint16_t>& add_level_channel(Particles<dim>&, const CellTree<dim>&);                \
-  template LevelledParticles<dim> match_particles_to_leaves(const CellTree<dim>&, const std::vector<Vec<dim>>&, \
-                                                            double, int, int);                                  \
-  template std::vector<int> lattice_surface_distance(const std::vector<Vec<dim>>&, double);                     \
-  template std::vector<int> manhattan_depth(const std::vector<IVec<dim>>&, int);                                \
-  template void manhattan_transform(const LatticeBox<dim>&, std::vector<int>&, int);
+#define MPM_INSTANTIATE(dim)                                                                                          \
+  template std::vector<std::uint16_t>& add_level_channel(Particles<dim>&, const CellTree<dim>&);                      \
+  template LevelledParticles<dim> match_particles_to_leaves(const CellTree<dim>&, const std::vector<Vec<dim>>&,       \
+                                                            double, int, int, const LatticeWalls<dim>&);              \
+  template std::vector<int> lattice_surface_distance(const std::vector<Vec<dim>>&, double, const LatticeWalls<dim>&); \
+  template std::vector<int> manhattan_depth(const std::vector<IVec<dim>>&, int, const LatticeWalls<dim>&);            \
+  template void manhattan_transform(const LatticeBox<dim>&, std::vector<int>&, int, const LatticeWalls<dim>&);
 MPM_INSTANTIATE(2)
 MPM_INSTANTIATE(3)
 

@@ -57,6 +57,8 @@ std::optional<RefinementSettings<dim>> parse_refinement(const Config& scene, con
   r.surface_band = cfg->number("surface_band", 0.0, Range::non_negative());
   r.follow_particles = cfg->flag("follow_particles", true);
   r.padding = cfg->flag("padding", true);
+  const std::string walls = cfg->choice("surface_walls", "rough", {"none", "rough", "all"});
+  r.surface_walls = walls == "none" ? SurfaceWalls::none : walls == "all" ? SurfaceWalls::all : SurfaceWalls::rough;
   if (const std::optional<Config> resample = cfg->optional_child("resample")) {
     ResampleSettings rs;
     rs.d_small = resample->number("d_small", 0.0, Range::non_negative());
@@ -69,6 +71,17 @@ std::optional<RefinementSettings<dim>> parse_refinement(const Config& scene, con
     if (!(rs.d_medium < rs.d_large))
       resample->fail("d_large",
                      "must exceed d_medium = " + number_text(rs.d_medium) + " (0 <= d_small < d_medium < d_large)");
+    if (resample->has("max_travel")) {
+      if (rs.every != 1)
+        resample->fail("max_travel", "replaces every = " + std::to_string(rs.every) +
+                                         " (resample by the particles' travel or by steps, not both)");
+      const double bound = 0.5 * (rs.d_medium - rs.d_small);
+      rs.max_travel = resample->number("max_travel", Range::positive());
+      if (!(rs.max_travel <= bound))
+        resample->fail("max_travel", "must lie in (0, (d_medium - d_small) / 2 = " + number_text(bound) +
+                                         "]: a coarse particle may come 2 max_travel nearer the surface "
+                                         "before it is split");
+    }
     if (r.levels < 2) cfg->fail("levels", "resampling needs two levels or more");
     if (!r.follow_particles)
       cfg->fail("follow_particles", "resampling changes the particle types: the grid must follow them (true)");

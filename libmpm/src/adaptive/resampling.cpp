@@ -218,8 +218,8 @@ void merge_particles(Particles<dim>& P, const std::vector<std::size_t>& group,
 
 template <int dim>
 std::vector<double> surface_distance(const CellTree<dim>& tree, const std::vector<Vec<dim>>& x,
-                                     const std::vector<std::uint16_t>& level, int points_per_axis,
-                                     double max_distance) {
+                                     const std::vector<std::uint16_t>& level, int points_per_axis, double max_distance,
+                                     const LatticeWalls<dim>& walls) {
   const double h = tree.dx(tree.finest());
   const Vec<dim>& origin = tree.origin();
   const int max_depth = static_cast<int>(std::min(1e6, std::ceil(max_distance / h))) + 1;
@@ -274,7 +274,7 @@ std::vector<double> surface_distance(const CellTree<dim>& tree, const std::vecto
         for_each_in_box<dim>(first, last, mark);
       }
     });
-    manhattan_transform(box, cells, cap);
+    manhattan_transform(box, cells, cap, walls);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 4096), [&](const auto& r) {
       for (std::size_t p = r.begin(); p != r.end(); ++p)
         d[p] = (cells[box.flat(cell_of(x[p], origin, h))] - 0.5) * h;  // <= cap <= max_depth + 1
@@ -293,21 +293,44 @@ std::vector<double> surface_distance(const CellTree<dim>& tree, const std::vecto
       if (c != sites[p]) sites.push_back(c);
     });
   }
-  const std::vector<int> depth = manhattan_depth(sites, max_depth);
+  const std::vector<int> depth = manhattan_depth(sites, max_depth, walls);
   for (std::size_t p = 0; p < x.size(); ++p) d[p] = (depth[p] - 0.5) * h;
   return d;
 }
 
 template <int dim>
+LatticeWalls<dim> lattice_walls(const geometry::DomainWalls<dim>& walls, SurfaceWalls surface, const Vec<dim>& origin,
+                                double h) {
+  const auto bounds = [&](int axis, geometry::Side side) {  // a closed wall that is no surface
+    const std::optional<geometry::Contact>& c = walls.wall(axis, side);
+    const bool rough = c && (c->type == geometry::ContactType::sticky ||
+                             (c->type == geometry::ContactType::separate && c->friction > 0));
+    return c && surface != SurfaceWalls::all && !(surface == SurfaceWalls::rough && rough);
+  };
+  // The material meets a wall `thickness` inside the domain's face (the nodes' boundary layer).
+  // A cell that straddles the face is inside (it may be empty: a surface).
+  constexpr double slack = 1e-6;  // a face on the lattice, up to round-off
+  LatticeWalls<dim> lattice;
+  for (int a = 0; a < dim; ++a) {
+    if (bounds(a, geometry::Side::lower))
+      lattice.lo[a] = static_cast<int>(std::floor((walls.lo()[a] + walls.thickness() - origin[a]) / h + slack));
+    if (bounds(a, geometry::Side::upper))
+      lattice.hi[a] = static_cast<int>(std::ceil((walls.hi()[a] - walls.thickness() - origin[a]) / h - slack)) - 1;
+  }
+  return lattice;
+}
+
+template <int dim>
 ResampleCounts resample_particles(Particles<dim>& P, const CellTree<dim>& tree, int points_per_axis,
                                   const ResampleSettings& settings, const std::vector<std::string>& deformation,
-                                  std::uint64_t step) {
+                                  std::uint64_t step, const LatticeWalls<dim>& walls) {
   ResampleCounts counts;
   const std::size_t n = P.size();
   const int finest = tree.finest();
   if (n == 0 || finest == 0) return counts;
   std::vector<std::uint16_t>& level = P.template channel<std::uint16_t>(kParticleLevel);
-  const std::vector<double> d = surface_distance(tree, P.x, level, points_per_axis, band(finest) * settings.d_large);
+  const std::vector<double> d =
+      surface_distance(tree, P.x, level, points_per_axis, band(finest) * settings.d_large, walls);
 
   // Candidates by the distance bands.
   std::vector<Slot<dim>> splits, merges;
@@ -401,9 +424,12 @@ ResampleCounts resample_particles(Particles<dim>& P, const CellTree<dim>& tree, 
   template void merge_particles(Particles<dim>&, const std::vector<std::size_t>&, const std::vector<std::string>&, \
                                 std::vector<std::uint8_t>&);                                                       \
   template std::vector<double> surface_distance(const CellTree<dim>&, const std::vector<Vec<dim>>&,                \
-                                                const std::vector<std::uint16_t>&, int, double);                   \
+                                                const std::vector<std::uint16_t>&, int, double,                    \
+                                                const LatticeWalls<dim>&);                                         \
   template ResampleCounts resample_particles(Particles<dim>&, const CellTree<dim>&, int, const ResampleSettings&,  \
-                                             const std::vector<std::string>&, std::uint64_t);
+                                             const std::vector<std::string>&, std::uint64_t,                       \
+                                             const LatticeWalls<dim>&);                                            \
+  template LatticeWalls<dim> lattice_walls(const geometry::DomainWalls<dim>&, SurfaceWalls, const Vec<dim>&, double);
 MPM_INSTANTIATE(2)
 MPM_INSTANTIATE(3)
 

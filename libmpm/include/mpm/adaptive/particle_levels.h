@@ -19,6 +19,19 @@ inline constexpr const char* kParticleLevel = "level";
 template <int dim>
 std::vector<std::uint16_t>& add_level_channel(Particles<dim>& particles, const CellTree<dim>& tree);
 
+//! Where a lattice ends at solid walls: the sites before lo[a] or after hi[a] on axis a lie
+//! beyond a wall and count as full, so a body against a wall has no surface there (the free
+//! surface is where the material meets empty space, not its container). A full site beyond a
+//! wall is its own mirror image's neighbour: for the L1 metric the mirror images of the empty
+//! sites inside are never nearer than the sites themselves, so "full beyond the wall" is the
+//! depth of the body mirrored through the wall. The default has no walls.
+template <int dim>
+struct LatticeWalls {
+  IVec<dim> lo = IVec<dim>::Constant(std::numeric_limits<int>::min());
+  IVec<dim> hi = IVec<dim>::Constant(std::numeric_limits<int>::max());
+  bool beyond(const IVec<dim>& i) const { return (i.array() < lo.array()).any() || (i.array() > hi.array()).any(); }
+};
+
 //! Particles seeded on the finest level's lattice, regrouped to match the leaves: wherever
 //! the full set of fine particles of a level-q sub-cell (spacing dx_q / k, k per axis per
 //! cell) is present and the leaf there is of level <= q, those particles become one particle
@@ -34,19 +47,24 @@ struct LevelledParticles {
 };
 template <int dim>
 LevelledParticles<dim> match_particles_to_leaves(const CellTree<dim>& tree, const std::vector<Vec<dim>>& fine,
-                                                 double fine_volume, int points_per_axis, int surface_steps = 0);
+                                                 double fine_volume, int points_per_axis, int surface_steps = 0,
+                                                 const LatticeWalls<dim>& walls = {});
 
 //! Manhattan distance, in lattice steps of spacing h [m], from each of the particles (on the
-//! lattice x = (i + 1/2) h) to the nearest lattice site that holds none: 1 on the surface.
+//! lattice x = (i + 1/2) h) to the nearest lattice site that holds none and is not beyond
+//! `walls`: 1 on the surface.
 template <int dim>
-std::vector<int> lattice_surface_distance(const std::vector<Vec<dim>>& x, double h);
+std::vector<int> lattice_surface_distance(const std::vector<Vec<dim>>& x, double h,
+                                          const LatticeWalls<dim>& walls = {});
 
 //! Manhattan depth of each of the lattice sites `sites` (repeats allowed) in the set they form:
-//! the fewest face steps to a site outside the set (1 for a site with an empty face neighbour).
-//! Sites deeper than max_depth get max_depth + 1 (the result is capped there).
+//! the fewest face steps to a site outside the set and not beyond `walls` (1 for a site with
+//! such a face neighbour). Sites deeper than max_depth get max_depth + 1 (the result is capped
+//! there).
 template <int dim>
 std::vector<int> manhattan_depth(const std::vector<IVec<dim>>& sites,
-                                 int max_depth = std::numeric_limits<int>::max() - 1);
+                                 int max_depth = std::numeric_limits<int>::max() - 1,
+                                 const LatticeWalls<dim>& walls = {});
 
 //! A dense box of lattice cells around a set of cells lo_cell..hi_cell, with a ring of empty
 //! cells on every side (axis 0 fastest in flat()).
@@ -72,8 +90,9 @@ struct LatticeBox {
 //! manhattan_depth on a LatticeBox: `depth` (one per cell) holds 0 on empty cells and `cap` on
 //! the set's; afterwards each cell holds min(fewest face steps to an empty cell, cap). The L1
 //! metric is separable, so one forward and one backward sweep per axis give it exactly, the
-//! lines of a sweep in parallel.
+//! lines of a sweep in parallel. The cells of the box beyond `walls` are set full first.
 template <int dim>
-void manhattan_transform(const LatticeBox<dim>& box, std::vector<int>& depth, int cap);
+void manhattan_transform(const LatticeBox<dim>& box, std::vector<int>& depth, int cap,
+                         const LatticeWalls<dim>& walls = {});
 
 }  // namespace mpm::adaptive

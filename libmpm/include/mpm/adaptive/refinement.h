@@ -18,6 +18,10 @@
 //!       d_medium: 0.01           #   split coarse particles up to d_medium, merge fine ones
 //!       d_large: 0.02            #   beyond d_large; 0 <= d_small < d_medium < d_large
 //!       every: 1                 #   resample every this many steps, [1, 1000000]
+//!       max_travel: 0.0025       #   or instead once the particles may have travelled this far
+//!                                #   since the last resampling [m], (0, (d_medium - d_small) / 2]
+//!     surface_walls: rough       # closed walls that count as surface for surface_band and the
+//!                                #   resampling: none, rough (sticky or with friction), all
 //!
 //! Without the key a scene is uniform and builds nothing of the adaptive grid.
 #include <mpm/adaptive/cell_tree.h>
@@ -45,7 +49,10 @@ struct RefinementSettings {
   std::vector<RefinementRegion<dim>> regions;
   double surface_band = 0.0;  //!< [m]
   bool follow_particles = true;
-  bool padding = true;                       //!< refine_around_particles' padding
+  bool padding = true;  //!< refine_around_particles' padding
+  //! Which closed walls of the domain count as surface for the surface band and the
+  //! resampling's distance (the material continues through the others).
+  SurfaceWalls surface_walls = SurfaceWalls::rough;
   std::optional<ResampleSettings> resample;  //!< dynamic refinement by particle resampling
   //! Coarsest spacing dx_0 = dx 2^(levels-1) [m] for the finest spacing dx.
   double coarsest_dx(double finest_dx) const { return finest_dx * static_cast<double>(1 << (levels - 1)); }

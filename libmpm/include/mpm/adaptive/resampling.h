@@ -6,7 +6,9 @@
 //! Distances. d is measured on the finest level's cells: a cell is occupied when a particle's
 //! GIMP box (side dx_q / k for a particle of type q, k points per axis) overlaps it; d =
 //! (n - 1/2) dx_finest for the cells n face steps from the nearest empty cell (n = 1 on the
-//! surface). A particle takes the d of the cell it lies in.
+//! surface). A particle takes the d of the cell it lies in. Cells beyond a closed wall that is
+//! no surface (SurfaceWalls below) are full: the free surface is where the material meets
+//! empty space, not a smooth container.
 //!
 //! Rules, for the transition t = 1, 2, ... between level finest - t + 1 and finest - t (t = 1:
 //! finest and next), with the band widths growing as the cells do, s_t = 2^t - 1:
@@ -44,7 +46,9 @@
 //! velocity sum m_i r_i x (v_i - v) is dropped: angular momentum changes by exactly that. A
 //! split followed by the merge of its children returns the parent to round-off.
 #include <mpm/adaptive/cell_tree.h>
+#include <mpm/adaptive/particle_levels.h>
 #include <mpm/core/particles.h>
+#include <mpm/geometry/collider.h>
 
 #include <cstddef>
 #include <cstdint>
@@ -53,11 +57,19 @@
 
 namespace mpm::adaptive {
 
+//! Closed walls refined as a free surface is: none, the rough ones (sticky, or separate with
+//! friction: the shear layer along them wants the fine cells) or all.
+enum class SurfaceWalls { none, rough, all };
+
 struct ResampleSettings {
   double d_small = 0.0;   //!< [m]
   double d_medium = 0.0;  //!< [m]
   double d_large = 0.0;   //!< [m]
   int every = 1;          //!< resample every `every` steps
+  //! > 0: resample instead once the particles may have travelled this far [m] since the last
+  //! resampling (the bound sum over steps of dt max_p |v_p|); at most (d_medium - d_small) / 2,
+  //! so that no coarse particle comes nearer the surface than d_small before it is split.
+  double max_travel = 0.0;
 };
 
 struct ResampleCounts {
@@ -68,10 +80,20 @@ struct ResampleCounts {
 
 //! Manhattan distance [m] of each particle from the free surface, as described above, for
 //! particles of types `level` with k = points_per_axis; cells farther than `max_distance` [m]
-//! inside (the largest threshold in use) get a distance above it.
+//! inside (the largest threshold in use) get a distance above it. The cells beyond `walls`
+//! (on the finest cells of `tree`) are full: a wall is no free surface.
 template <int dim>
 std::vector<double> surface_distance(const CellTree<dim>& tree, const std::vector<Vec<dim>>& x,
-                                     const std::vector<std::uint16_t>& level, int points_per_axis, double max_distance);
+                                     const std::vector<std::uint16_t>& level, int points_per_axis, double max_distance,
+                                     const LatticeWalls<dim>& walls = {});
+
+//! The closed walls of the domain that are no surface by `surface` (all but the rough ones for
+//! SurfaceWalls::rough) on the lattice of spacing h [m] from `origin` (the finest cells of a
+//! tree, or a seeding lattice): each wall where the material meets it, `thickness` inside the
+//! domain's face; open walls bound nothing.
+template <int dim>
+LatticeWalls<dim> lattice_walls(const geometry::DomainWalls<dim>& walls, SurfaceWalls surface, const Vec<dim>& origin,
+                                double h);
 
 //! Splits and merges the particles of P (channel "level") by the rules above; `deformation`
 //! names the Mat channels averaged by average_deformation on merge (the solid's "F"); `step`
@@ -80,7 +102,7 @@ std::vector<double> surface_distance(const CellTree<dim>& tree, const std::vecto
 template <int dim>
 ResampleCounts resample_particles(Particles<dim>& P, const CellTree<dim>& tree, int points_per_axis,
                                   const ResampleSettings& settings, const std::vector<std::string>& deformation,
-                                  std::uint64_t step);
+                                  std::uint64_t step, const LatticeWalls<dim>& walls = {});
 
 //! Splits particle p of type q < finest into 2^dim particles of type q+1, turned by `rotation`
 //! (a proper rotation): p becomes the first child, the others are appended.

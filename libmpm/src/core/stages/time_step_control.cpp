@@ -14,18 +14,22 @@
 namespace mpm::stages {
 
 template <int dim>
-double TimeStepControl<dim>::stable_dt(const MpmState<dim>& s) const {
-  const auto& v = s.particles.v;
-  const double max_speed2 = tbb::parallel_reduce(
+double max_speed(const std::vector<Vec<dim>>& v) {
+  return std::sqrt(tbb::parallel_reduce(
       tbb::blocked_range<std::size_t>(0, v.size(), 16384), 0.0,
       [&](const auto& r, double m) {
         for (std::size_t p = r.begin(); p != r.end(); ++p) m = std::max(m, v[p].squaredNorm());
         return m;
       },
-      [](double a, double b) { return std::max(a, b); });
+      [](double a, double b) { return std::max(a, b); }));
+}
+
+template <int dim>
+double TimeStepControl<dim>::stable_dt(const MpmState<dim>& s) const {
+  const double speed = max_speed(s.particles.v);
   const double dx = finest_dx(s);
   double dt = settings_.max_dt;
-  if (max_speed2 > 0.0) dt = std::min(dt, settings_.cfl * dx / std::sqrt(max_speed2));
+  if (speed > 0.0) dt = std::min(dt, settings_.cfl * dx / speed);
   if (settings_.wave_speed > 0.0) {
     dt = std::min(dt, settings_.wave_cfl * dx / settings_.wave_speed);
     // Enriched particle domains are a Lagrangian mesh: their own Courant bound.
@@ -40,6 +44,8 @@ void TimeStepControl<dim>::run(MpmState<dim>& s) {
   s.dt = std::min(stable_dt(s), s.dt_limit);
 }
 
+template double max_speed(const std::vector<Vec<2>>&);
+template double max_speed(const std::vector<Vec<3>>&);
 template class TimeStepControl<2>;
 template class TimeStepControl<3>;
 

@@ -12,9 +12,12 @@
 //    covering the cells they stand for;
 //  - resampling a block merges deep inside and splits near the surface by the bands and
 //    guards, conserves mass and momentum, is deterministic, and keeps every channel of the
-//    particles it leaves alone.
+//    particles it leaves alone;
+//  - the resample stage with max_travel resamples when the particles may have moved that far
+//    since the last resampling, and at the same steps after a restart from its carried data.
 #include <mpm/adaptive/particle_levels.h>
 #include <mpm/adaptive/resampling.h>
+#include <mpm/core/stages/resample_particles.h>
 
 #include <doctest/doctest.h>
 #include <Eigen/Geometry>
@@ -491,4 +494,100 @@ TEST_CASE_TEMPLATE("Manhattan depth: the dense and the hashed search agree", T, 
     }
     CHECK(deepest >= 2);
   }
+}
+
+TEST_CASE(
+    "the resample stage by travel: when the particles may have moved max_travel, at the same steps after a restart") {
+  constexpr int dim = 2;
+  const CellTree<dim> tree = tree_of<dim>(3, 4, 1.0);  // finest cells h = 0.25
+  const double h = tree.dx(2);
+  adaptive::ResampleSettings settings{0.5 * h, 1.2 * h, 1.6 * h, 1};
+  settings.max_travel = 0.05;
+  MpmState<dim> s;
+  s.adaptive.emplace(tree, 2);
+  s.particles = block<dim>(tree, 2, Vec<dim>::Constant(1.0), Vec<dim>::Constant(3.0));  // merges inside
+  for (Vec<dim>& v : s.particles.v) v = Vec<dim>(-0.9, 1.2);  // 1.5 m/s: 0.015 m per step of 0.01 s
+  stages::ResampleParticles<dim> stage(settings, {"F"});
+  const auto resamplings = [](const stages::ResampleParticles<dim>& st) { return st.diagnostics()[2].value; };
+  // Travel at the start of steps 0, 1, 2, ...: none yet (resample), 0.015, 0.030, 0.045, 0.060 >=
+  // 0.05 (resample), ...: steps 0, 4 and 8 resample.
+  const std::vector<double> expected{1, 1, 1, 1, 2, 2, 2, 2, 3, 3};
+  std::optional<stages::ResampleParticles<dim>> restarted;
+  MpmState<dim> restarted_state;
+  for (int step = 0; step < 10; ++step) {
+    s.step = step;
+    s.dt = step == 0 ? 0.0 : 0.01;  // the last step's dt (none before the first)
+    if (step == 6) {                // a restart here: the carried data and the state as a checkpoint holds them
+      restarted.emplace(settings, std::vector<std::string>{"F"});
+      restarted->restore(stage.carried());
+      restarted_state.particles = s.particles;
+      restarted_state.adaptive.emplace(tree, 2);
+    }
+    stage.run(s);
+    CHECK_MESSAGE(resamplings(stage) == expected[step], "step ", step);
+    if (restarted) {
+      restarted_state.step = s.step;
+      restarted_state.dt = s.dt;
+      restarted->run(restarted_state);
+      CHECK(resamplings(*restarted) == resamplings(stage));
+      CHECK(restarted_state.particles.x == s.particles.x);
+    }
+  }
+  CHECK(stage.diagnostics()[1].value > 0);  // the block did merge
+}
+
+TEST_CASE_TEMPLATE("walls: a body against a wall has no surface there, as if mirrored through it", T,
+                   std::integral_constant<int, 2>, std::integral_constant<int, 3>) {
+  constexpr int dim = T::value;
+  // A cube of 6^dim sites [0, 5]^dim against walls before site 0 on axis 0 and after site 5 on
+  // axis 1; without walls, its mirror image through both: sites [-6, 5] x [0, 11] x [0, 5].
+  std::vector<IVec<dim>> cube, mirrored;
+  for (int i = 0; i < ipow(12, dim); ++i) {
+    IVec<dim> c;
+    for (int a = 0, r = i; a < dim; ++a, r /= 12) c[a] = r % 12;
+    if ((c.array() < 6).all()) cube.push_back(c);
+    c[0] -= 6;
+    if (dim == 2 || c[2] < 6) mirrored.push_back(c);
+  }
+  LatticeWalls<dim> walls;
+  walls.lo[0] = 0;
+  walls.hi[1] = 5;
+  std::vector<IVec<dim>> pair = cube;  // the hashed path: a far copy along axis 0 makes the set sparse
+  for (IVec<dim> c : cube) {
+    c[0] += 50000;
+    pair.push_back(c);
+  }
+  const std::vector<int> dense = manhattan_depth(cube, 1 << 20, walls), open = manhattan_depth(cube),
+                         reference = manhattan_depth(mirrored), hashed = manhattan_depth(pair, 1 << 20, walls);
+  int deeper = 0;
+  for (std::size_t i = 0; i < cube.size(); ++i) {
+    const auto at = std::find(mirrored.begin(), mirrored.end(), cube[i]) - mirrored.begin();
+    CHECK(dense[i] == reference[static_cast<std::size_t>(at)]);
+    CHECK(hashed[i] == dense[i]);
+    CHECK(dense[i] >= open[i]);
+    deeper += dense[i] > open[i];
+  }
+  CHECK(deeper > 0);
+
+  // The domain's walls on a lattice: the material meets a wall `thickness` inside the face.
+  Vec<dim> lo = Vec<dim>::Constant(-0.5), hi = Vec<dim>::Constant(10.5);
+  geometry::DomainWalls<dim> domain(lo, hi, 0.5, geometry::Contact{geometry::ContactType::separate, 0.0});
+  domain.set_wall(1, geometry::Side::lower, geometry::Contact{geometry::ContactType::sticky, 0.0});
+  domain.set_wall(0, geometry::Side::upper, std::nullopt);  // open
+  domain.set_wall(dim - 1, geometry::Side::upper, geometry::Contact{geometry::ContactType::separate, 0.3});
+  const Vec<dim> origin = lo;  // the lattice from the domain's corner, h = 0.25: the walls at 2 and 42
+  const LatticeWalls<dim> rough = lattice_walls(domain, SurfaceWalls::rough, origin, 0.25),
+                          none = lattice_walls(domain, SurfaceWalls::none, origin, 0.25),
+                          all = lattice_walls(domain, SurfaceWalls::all, origin, 0.25);
+  constexpr int unbounded_lo = std::numeric_limits<int>::min(), unbounded_hi = std::numeric_limits<int>::max();
+  CHECK(rough.lo[0] == 2);
+  CHECK(rough.hi[0] == unbounded_hi);        // open
+  CHECK(rough.lo[1] == unbounded_lo);        // sticky: a surface
+  CHECK(rough.hi[dim - 1] == unbounded_hi);  // with friction: a surface
+  if (dim == 3) CHECK(rough.hi[1] == 41);
+  CHECK(none.lo[1] == 2);
+  CHECK(none.hi[dim - 1] == 41);
+  CHECK(none.hi[0] == unbounded_hi);
+  CHECK((all.lo.array() == unbounded_lo).all());
+  CHECK((all.hi.array() == unbounded_hi).all());
 }

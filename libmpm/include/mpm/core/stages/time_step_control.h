@@ -32,6 +32,10 @@ private:
   Settings settings_;
 };
 
+//! max_p |v_p| [m/s] (0 for no particles), in parallel.
+template <int dim>
+double max_speed(const std::vector<Vec<dim>>& v);
+
 //! The scene's time keys (cfl, wave_cfl, max_dt) with the fastest wave the scene's explicit
 //! update must resolve [m/s]: every pipeline builds its time-step settings here.
 template <int dim>
