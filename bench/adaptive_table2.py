@@ -42,9 +42,10 @@ CASES = {
         # The 2D adaptive column's keys (data/scenes/column_collapse_adaptive.yaml): three levels,
         # fine particles within 3 finest cells of the surface, split within 2, merged beyond 3;
         # resampled once the particles may have moved half a finest cell.
+        # The free surface as the paper's criterion: the smooth walls are none (the rough floor is).
         "adaptive": ["adaptive.levels=3", "adaptive.surface_band=0.0075", "adaptive.resample.d_small=0",
                      "adaptive.resample.d_medium=0.005", "adaptive.resample.d_large=0.0075",
-                     "adaptive.resample.max_travel=0.00125"],
+                     "adaptive.resample.max_travel=0.00125", "adaptive.surface_walls=rough"],
     },
 }
 # The same scenes at the paper's size (Table 2: 1.74 M and 1.68 M particles on the uniform grid):
@@ -53,7 +54,8 @@ CASES = {
 CASES["jello_paper"] = dict(CASES["jello"], uniform=["grid.dx=0.004166666666666667", "time.end=0.01"],
                             adaptive=["adaptive.levels=3", "adaptive.surface_band=0.016666666666666666"])
 SAND_PAPER_BANDS = ["adaptive.levels=3", "adaptive.surface_band=0.005", "adaptive.resample.d_small=0",
-                    "adaptive.resample.d_medium=0.0033333333333333335", "adaptive.resample.d_large=0.005"]
+                    "adaptive.resample.d_medium=0.0033333333333333335", "adaptive.resample.d_large=0.005",
+                    "adaptive.surface_walls=rough"]
 CASES["sand_paper"] = dict(CASES["sand"], uniform=["column.cells_per_width=60", "time.end=0.003"],
                            adaptive=SAND_PAPER_BANDS + ["adaptive.resample.max_travel=0.0008333333333333334"])
 # As the paper's dynamic adaptation: resampled every step.

@@ -7,13 +7,16 @@ Figs. 1 and 13), against uniform grids at its finest and at its coarsest spacing
   adaptive        column_collapse_adaptive.yaml: fine particles and cells near the free surface,
                   coarse inside, resampled every step;
   by travel       the same, resampled once the particles may have moved half a finest cell
-                  (adaptive.resample.max_travel).
+                  (adaptive.resample.max_travel);
+  rough walls     the same, resampled every step, the smooth back wall no surface
+                  (adaptive.surface_walls: rough; the sticky floor still is).
 
 Asserted: particles split and merge and mass is conserved to round-off; the adaptive run holds
 fewer particles than the uniform fine one; its deposit is closer to the uniform fine deposit
 than the uniform coarse one is (the app's profile_error with reference_profile set to the fine
 run's profile.csv), and its runout within 10 % of the fine runout. The run by travel resamples
-on fewer than a fifth of the steps, and its deposit and runout hold to the same bounds.
+on fewer than a fifth of the steps, and its deposit and runout hold to the same bounds; so do
+the rough-walls run's, with fewer particles than the default's (every wall a surface).
 
   column_collapse_adaptive.py --app build/apps/column_collapse --scenes data/scenes --work /tmp/cc
       [--cells 20] [--levels 2] [--end 0.6]
@@ -58,6 +61,8 @@ def main():
     travel, travel_rows = run(args.app, args.scenes / "column_collapse_adaptive.yaml", args.work / "travel",
                               adaptive_settings + [f"adaptive.resample.max_travel={dx / 2}"])
     resamplings, steps = float(travel_rows[-1]["resamplings"]), sum(float(r["steps"]) for r in travel_rows)
+    rough, _ = run(args.app, args.scenes / "column_collapse_adaptive.yaml", args.work / "rough",
+                   adaptive_settings + ["adaptive.surface_walls=rough"])
     d_adaptive, d_coarse = adaptive["profile_error"], coarse["profile_error"]
     split, merged = float(rows[-1]["particles_split"]), float(rows[-1]["particles_merged"])
     mass0, mass1 = float(rows[0]["mass"]), float(rows[-1]["mass"])
@@ -69,6 +74,8 @@ def main():
     print(f"by travel: resampled on {resamplings:.0f} of {steps:.0f} steps (every step: {float(rows[-1]['resamplings']):.0f}); "
           f"runout {travel['runout']:.4f} m, profile_error {travel['profile_error']:.4g}, "
           f"particles {travel['particles']:.0f}")
+    print(f"rough walls: runout {rough['runout']:.4f} m, profile_error {rough['profile_error']:.4g}, "
+          f"particles {rough['particles']:.0f}")
     print(f"particles split {split:.0f}, merged {merged:.0f}; mass {mass0!r} -> {mass1!r}; final particles: "
           f"fine {fine['particles']:.0f}, adaptive {adaptive['particles']:.0f}")
     failed = 0
@@ -83,7 +90,13 @@ def main():
                      ("by travel: the profile is closer to the fine one than the coarse profile is",
                       travel["profile_error"] < d_coarse),
                      ("by travel: the runout is within 10 % of the fine runout",
-                      abs(travel["runout"] - fine["runout"]) <= 0.1 * fine["runout"])]:
+                      abs(travel["runout"] - fine["runout"]) <= 0.1 * fine["runout"]),
+                     ("rough walls: fewer particles than with every wall a surface",
+                      rough["particles"] < adaptive["particles"]),
+                     ("rough walls: the profile is closer to the fine one than the coarse profile is",
+                      rough["profile_error"] < d_coarse),
+                     ("rough walls: the runout is within 10 % of the fine runout",
+                      abs(rough["runout"] - fine["runout"]) <= 0.1 * fine["runout"])]:
         print(f"check {what}: {'ok' if ok else 'FAILED'}")
         failed += not ok
     return 1 if failed else 0

@@ -57,7 +57,7 @@ std::optional<RefinementSettings<dim>> parse_refinement(const Config& scene, con
   r.surface_band = cfg->number("surface_band", 0.0, Range::non_negative());
   r.follow_particles = cfg->flag("follow_particles", true);
   r.padding = cfg->flag("padding", true);
-  const std::string walls = cfg->choice("surface_walls", "rough", {"none", "rough", "all"});
+  const std::string walls = cfg->choice("surface_walls", "all", {"none", "rough", "all"});
   r.surface_walls = walls == "none" ? SurfaceWalls::none : walls == "all" ? SurfaceWalls::all : SurfaceWalls::rough;
   if (const std::optional<Config> resample = cfg->optional_child("resample")) {
     ResampleSettings rs;

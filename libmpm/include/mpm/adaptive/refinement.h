@@ -20,7 +20,7 @@
 //!       every: 1                 #   resample every this many steps, [1, 1000000]
 //!       max_travel: 0.0025       #   or instead once the particles may have travelled this far
 //!                                #   since the last resampling [m], (0, (d_medium - d_small) / 2]
-//!     surface_walls: rough       # closed walls that count as surface for surface_band and the
+//!     surface_walls: all         # closed walls that count as surface for surface_band and the
 //!                                #   resampling: none, rough (sticky or with friction), all
 //!
 //! Without the key a scene is uniform and builds nothing of the adaptive grid.
@@ -52,7 +52,7 @@ struct RefinementSettings {
   bool padding = true;  //!< refine_around_particles' padding
   //! Which closed walls of the domain count as surface for the surface band and the
   //! resampling's distance (the material continues through the others).
-  SurfaceWalls surface_walls = SurfaceWalls::rough;
+  SurfaceWalls surface_walls = SurfaceWalls::all;
   std::optional<ResampleSettings> resample;  //!< dynamic refinement by particle resampling
   //! Coarsest spacing dx_0 = dx 2^(levels-1) [m] for the finest spacing dx.
   double coarsest_dx(double finest_dx) const { return finest_dx * static_cast<double>(1 << (levels - 1)); }
