@@ -49,6 +49,16 @@ std::uint16_t material_index(const std::vector<Material<dim>>& materials, const 
   cfg.fail(key, "no material named '" + name + "' (materials: " + known + ")");
 }
 
+namespace {
+//! The scene's closed walls that are no surface by its `adaptive.surface_walls`, on the lattice
+//! of spacing h from `origin` (none without walls).
+template <int dim>
+adaptive::LatticeWalls<dim> walls_no_surface(const SolidScene<dim>& scene, const Vec<dim>& origin, double h) {
+  if (!scene.colliders.walls()) return {};
+  return adaptive::lattice_walls(*scene.colliders.walls(), scene.refinement->surface_walls, origin, h);
+}
+}  // namespace
+
 template <int dim>
 void add_particles(SolidScene<dim>& scene, const std::vector<Vec<dim>>& positions, double volume, std::uint16_t m,
                    const Vec<dim>& velocity, const std::string& where) {
@@ -70,12 +80,9 @@ void add_particles(SolidScene<dim>& scene, const std::vector<Vec<dim>>& position
                      std::to_string(scene.state.adaptive->points_per_axis()) + " per axis), so that the particles' " +
                      "boxes tile the body across levels");
   const int surface_steps = static_cast<int>(std::ceil(scene.refinement->surface_band * k / scene.settings.dx));
-  adaptive::LatticeWalls<dim> walls;  // on the seeding lattice, (i + 1/2) dx / k
-  if (scene.colliders.walls())
-    walls = adaptive::lattice_walls<dim>(*scene.colliders.walls(), scene.refinement->surface_walls, Vec<dim>::Zero(),
-                                         scene.settings.dx / k);
-  const auto levelled =
-      adaptive::match_particles_to_leaves(scene.state.adaptive->tree(), positions, volume, k, surface_steps, walls);
+  const auto levelled = adaptive::match_particles_to_leaves(
+      scene.state.adaptive->tree(), positions, volume, k, surface_steps,
+      walls_no_surface<dim>(scene, Vec<dim>::Zero(), scene.settings.dx / k));  // the seeding lattice, (i + 1/2) dx / k
   P.reserve_more(levelled.x.size());
   std::vector<std::uint16_t>& level = P.template channel<std::uint16_t>(adaptive::kParticleLevel);
   for (std::size_t i = 0; i < levelled.x.size(); ++i) {
@@ -288,13 +295,9 @@ Pipeline<MpmState<dim>> make_solid_pipeline(const SolidScene<dim>& scene) {
   if (scene.refinement && scene.refinement->resample) {
     std::vector<std::string> deformation;
     if (scene.state.particles.has_channel(kElasticF)) deformation.push_back(kElasticF);
-    adaptive::LatticeWalls<dim> walls;  // on the finest cells
-    if (scene.colliders.walls()) {
-      const adaptive::CellTree<dim>& tree = scene.state.adaptive->tree();
-      walls = adaptive::lattice_walls(*scene.colliders.walls(), scene.refinement->surface_walls, tree.origin(),
-                                      tree.dx(tree.finest()));
-    }
-    p.add(std::make_unique<stages::ResampleParticles<dim>>(*scene.refinement->resample, deformation, walls));
+    const adaptive::CellTree<dim>& tree = scene.state.adaptive->tree();  // its finest cells
+    p.add(std::make_unique<stages::ResampleParticles<dim>>(
+        *scene.refinement->resample, deformation, walls_no_surface(scene, tree.origin(), tree.dx(tree.finest()))));
   }
   // Enrichment first: the time step needs the thinnest enriched domain (explicit steps only: an
   // implicit step solves the enriched corners too).
