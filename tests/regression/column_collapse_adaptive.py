@@ -23,26 +23,17 @@ the rough-walls run's, with fewer particles than the default's (every wall a sur
 
 Exit status: 0 all hold, 1 one fails (printed), 2 a run failed.
 """
-import argparse
-import pathlib
 import sys
 
-from app_runs import read_csv, run_app
-
-def run(app, scene, out, overrides):
-    return run_app(app, scene, out, overrides), read_csv(out / "diagnostics.csv")
+from app_runs import parse_scene_app_args, report, run_with_diagnostics as run, scene_app_parser
 
 
 def main():
-    parser = argparse.ArgumentParser()
-    parser.add_argument("--app", required=True)
-    parser.add_argument("--scenes", required=True, type=pathlib.Path)
-    parser.add_argument("--work", required=True, type=pathlib.Path)
+    parser = scene_app_parser()
     parser.add_argument("--cells", type=int, default=20, help="finest cells per column width")
     parser.add_argument("--levels", type=int, default=2)
     parser.add_argument("--end", type=float, default=0.6, help="end time [s]")
-    args = parser.parse_args()
-    args.work.mkdir(parents=True, exist_ok=True)
+    args = parse_scene_app_args(parser)
     coarse_cells = args.cells // 2 ** (args.levels - 1)
     end = [f"time.end={args.end}"]
     fine, _ = run(args.app, args.scenes / "column_collapse.yaml", args.work / "fine",
@@ -78,28 +69,24 @@ def main():
           f"particles {rough['particles']:.0f}")
     print(f"particles split {split:.0f}, merged {merged:.0f}; mass {mass0!r} -> {mass1!r}; final particles: "
           f"fine {fine['particles']:.0f}, adaptive {adaptive['particles']:.0f}")
-    failed = 0
-    for what, ok in [("particles split and merge", split > 0 and merged > 0),
-                     ("mass is conserved to round-off", abs(mass1 - mass0) <= 1e-12 * mass0),
-                     ("the adaptive run holds fewer particles", adaptive["particles"] < fine["particles"]),
-                     ("the adaptive profile is closer to the fine one than the coarse profile is",
-                      d_adaptive < d_coarse),
-                     ("the adaptive runout is within 10 % of the fine runout",
-                      abs(adaptive["runout"] - fine["runout"]) <= 0.1 * fine["runout"]),
-                     ("by travel: resampled on fewer than a fifth of the steps", 0 < resamplings < steps / 5),
-                     ("by travel: the profile is closer to the fine one than the coarse profile is",
-                      travel["profile_error"] < d_coarse),
-                     ("by travel: the runout is within 10 % of the fine runout",
-                      abs(travel["runout"] - fine["runout"]) <= 0.1 * fine["runout"]),
-                     ("rough walls: fewer particles than with every wall a surface",
-                      rough["particles"] < adaptive["particles"]),
-                     ("rough walls: the profile is closer to the fine one than the coarse profile is",
-                      rough["profile_error"] < d_coarse),
-                     ("rough walls: the runout is within 10 % of the fine runout",
-                      abs(rough["runout"] - fine["runout"]) <= 0.1 * fine["runout"])]:
-        print(f"check {what}: {'ok' if ok else 'FAILED'}")
-        failed += not ok
-    return 1 if failed else 0
+    return report([("particles split and merge", split > 0 and merged > 0),
+                   ("mass is conserved to round-off", abs(mass1 - mass0) <= 1e-12 * mass0),
+                   ("the adaptive run holds fewer particles", adaptive["particles"] < fine["particles"]),
+                   ("the adaptive profile is closer to the fine one than the coarse profile is",
+                    d_adaptive < d_coarse),
+                   ("the adaptive runout is within 10 % of the fine runout",
+                    abs(adaptive["runout"] - fine["runout"]) <= 0.1 * fine["runout"]),
+                   ("by travel: resampled on fewer than a fifth of the steps", 0 < resamplings < steps / 5),
+                   ("by travel: the profile is closer to the fine one than the coarse profile is",
+                    travel["profile_error"] < d_coarse),
+                   ("by travel: the runout is within 10 % of the fine runout",
+                    abs(travel["runout"] - fine["runout"]) <= 0.1 * fine["runout"]),
+                   ("rough walls: fewer particles than with every wall a surface",
+                    rough["particles"] < adaptive["particles"]),
+                   ("rough walls: the profile is closer to the fine one than the coarse profile is",
+                    rough["profile_error"] < d_coarse),
+                   ("rough walls: the runout is within 10 % of the fine runout",
+                    abs(rough["runout"] - fine["runout"]) <= 0.1 * fine["runout"])])
 
 
 if __name__ == "__main__":

@@ -11,20 +11,14 @@
 
 Exit status: 0 all hold, 1 one fails (printed), 2 a run failed.
 """
-import argparse
-import pathlib
 import sys
 
-from app_runs import run_app as run
+from app_runs import parse_scene_app_args, report, run_app as run, scene_app_parser
 
 
 def main():
-    parser = argparse.ArgumentParser()
-    parser.add_argument("--app", required=True)
-    parser.add_argument("--scenes", required=True, type=pathlib.Path)
-    parser.add_argument("--work", required=True, type=pathlib.Path)
-    args = parser.parse_args()
-    args.work.mkdir(parents=True, exist_ok=True)
+    parser = scene_app_parser()
+    args = parse_scene_app_args(parser)
     coarse = run(args.app, args.scenes / "goo_slits.yaml", args.work / "coarse", ["grid.dx=0.05"])
     fine = run(args.app, args.scenes / "goo_slits.yaml", args.work / "fine", ["grid.dx=0.0125"])
     adaptive = run(args.app, args.scenes / "goo_slits_adaptive.yaml", args.work / "adaptive", [])
@@ -32,16 +26,12 @@ def main():
                (("coarse", coarse), ("fine", fine), ("adaptive", adaptive))}
     print(f"mass fraction through the plate: {through}; adaptive max_penetration "
           f"{adaptive['max_penetration']:.4g} m")
-    failed = 0
-    for what, ok in [("the uniform coarse grid holds all the goo", through["coarse"] == 0.0),
-                     ("the uniform fine grid lets goo through", through["fine"] > 0.05),
-                     ("the adaptive grid lets goo through like the fine grid (within 0.03)",
-                      abs(through["adaptive"] - through["fine"]) < 0.03),
-                     ("the adaptive goo stays within a fine cell of the plate surface",
-                      adaptive["max_penetration"] < 0.0125)]:
-        print(f"check {what}: {'ok' if ok else 'FAILED'}")
-        failed += not ok
-    return 1 if failed else 0
+    return report([("the uniform coarse grid holds all the goo", through["coarse"] == 0.0),
+                   ("the uniform fine grid lets goo through", through["fine"] > 0.05),
+                   ("the adaptive grid lets goo through like the fine grid (within 0.03)",
+                    abs(through["adaptive"] - through["fine"]) < 0.03),
+                   ("the adaptive goo stays within a fine cell of the plate surface",
+                    adaptive["max_penetration"] < 0.0125)])
 
 
 if __name__ == "__main__":

@@ -18,24 +18,15 @@ half). The run without resampling is reported, not asserted on.
 
 Exit status: 0 all hold, 1 one fails (printed), 2 a run failed.
 """
-import argparse
-import pathlib
 import sys
 
-from app_runs import read_csv, run_app
-
-def run(app, scene, out, overrides):
-    return run_app(app, scene, out, overrides), read_csv(out / "diagnostics.csv")
+from app_runs import parse_scene_app_args, report, run_with_diagnostics as run, scene_app_parser
 
 
 def main():
-    parser = argparse.ArgumentParser()
-    parser.add_argument("--app", required=True)
-    parser.add_argument("--scenes", required=True, type=pathlib.Path)
-    parser.add_argument("--work", required=True, type=pathlib.Path)
+    parser = scene_app_parser()
     parser.add_argument("--set", action="append", default=[], dest="overrides")
-    args = parser.parse_args()
-    args.work.mkdir(parents=True, exist_ok=True)
+    args = parse_scene_app_args(parser)
     scene = args.scenes / "rotating_drum.yaml"
     lines = scene.read_text().splitlines(keepends=True)
     def without(prefixes):
@@ -58,15 +49,11 @@ def main():
     print(f"particles: uniform {uniform['particles']:.0f}, resampling {on['particles']:.0f}, "
           f"none {off['particles']:.0f}; split {on_rows[-1]['particles_split']}, "
           f"merged {on_rows[-1]['particles_merged']}")
-    failed = 0
-    for what, ok in [("the resampled surface stays fine", on["surface_fine_fraction"] >= 0.9),
-                     ("mass is conserved to round-off", abs(mass1 - mass0) <= 1e-12 * mass0),
-                     ("resampling holds fewer particles than the uniform grid", on["particles"] < uniform["particles"]),
-                     ("the repose angle is within 5 degrees of the uniform grid's",
-                      abs(on["repose_angle"] - uniform["repose_angle"]) <= 5.0)]:
-        print(f"check {what}: {'ok' if ok else 'FAILED'}")
-        failed += not ok
-    return 1 if failed else 0
+    return report([("the resampled surface stays fine", on["surface_fine_fraction"] >= 0.9),
+                   ("mass is conserved to round-off", abs(mass1 - mass0) <= 1e-12 * mass0),
+                   ("resampling holds fewer particles than the uniform grid", on["particles"] < uniform["particles"]),
+                   ("the repose angle is within 5 degrees of the uniform grid's",
+                    abs(on["repose_angle"] - uniform["repose_angle"]) <= 5.0)])
 
 
 if __name__ == "__main__":

@@ -5,6 +5,7 @@ list(APPEND MPM_CORE_SOURCES
   src/geometry/collider_config.cpp
   src/geometry/seeding.cpp
   src/geometry/particle_spacing.cpp
+  src/geometry/body_gap.cpp
   src/geometry/body_config.cpp
   src/geometry/flow_boundary_config.cpp
 )

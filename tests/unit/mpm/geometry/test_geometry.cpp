@@ -2,6 +2,7 @@
 // mesh level sets and lattice seeding.
 #include <mpm/core/config.h>
 #include <mpm/core/error.h>
+#include <mpm/geometry/body_gap.h>
 #include <mpm/geometry/collider.h>
 #include <mpm/geometry/collider_config.h>
 #include <mpm/geometry/level_set.h>
@@ -670,4 +671,105 @@ TEST_CASE("particle spacing: a lattice is even, a hole shows, the surface layer 
   // In 3D: 6^3 cells give 4^3 inside.
   const auto cube = seed_box<3>(Vec<3>::Zero(), Vec<3>::Constant(0.6), dx, 8, 0.0, 1);
   CHECK(particle_spacing<3>(cube, Vec<3>::Constant(-1.0), dx).inside_cells == 64);
+}
+
+namespace {
+//! The gap of body_gap.h over every pair, for comparison.
+template <int dim>
+double brute_force_gap(const Particles<dim>& P, std::uint16_t a, std::uint16_t b, const std::vector<Mat<dim>>& F) {
+  double best = std::numeric_limits<double>::infinity();
+  for (std::size_t p = 0; p < P.size(); ++p)
+    for (std::size_t q = 0; q < P.size(); ++q)
+      if (P.material[p] == a && P.material[q] == b) {
+        const Vec<dim> n = (P.x[q] - P.x[p]).normalized();
+        best = std::min(best, (P.x[q] - P.x[p]).norm() -
+                                  0.5 * std::pow(P.volume0[p], 1.0 / dim) * (F[p].transpose() * n).norm() -
+                                  0.5 * std::pow(P.volume0[q], 1.0 / dim) * (F[q].transpose() * n).norm());
+      }
+  return best;
+}
+
+//! Deformation gradients within 30 % of the identity.
+template <int dim>
+std::vector<Mat<dim>> random_F(std::mt19937& rng, std::size_t n) {
+  std::uniform_real_distribution<double> u(-0.3, 0.3);
+  std::vector<Mat<dim>> F(n, Mat<dim>::Identity());
+  for (Mat<dim>& f : F)
+    for (int i = 0; i < dim; ++i)
+      for (int j = 0; j < dim; ++j) f(i, j) += u(rng);
+  return F;
+}
+
+//! Two sparse random clouds of 30 particles each in the same box, of widths 0.005 and 0.04, so
+//! that the closest pair often lies in neighbouring cells of the search and within the reach only
+//! through the particles' widths.
+template <int dim>
+Particles<dim> two_clouds(std::mt19937& rng) {
+  std::uniform_real_distribution<double> u(0.0, 0.3);
+  Particles<dim> P;
+  for (int i = 0; i < 60; ++i) {
+    Vec<dim> x;
+    for (int k = 0; k < dim; ++k) x[k] = u(rng);
+    P.push_back(x, Vec<dim>::Zero(), 1.0, std::pow(i % 3 == 0 ? 0.04 : 0.005, dim), std::uint16_t(i % 2));
+  }
+  return P;
+}
+}  // namespace
+
+TEST_CASE("body gap: lattices side by side, compressed, random clouds against every pair, the reach") {
+  // Lattices of particles 0.01 wide, body b starting 0.013 beyond a's last cube: gap 0.013.
+  Particles<2> P;
+  for (int i = 0; i < 10; ++i)
+    for (int j = 0; j < 10; ++j) {
+      P.push_back(Vec<2>(0.005 + 0.01 * i, 0.005 + 0.01 * j), Vec<2>::Zero(), 1.0, 1e-4, 0);
+      P.push_back(Vec<2>(0.118 + 0.01 * i, 0.005 + 0.01 * j), Vec<2>::Zero(), 1.0, 1e-4, 1);
+    }
+  CHECK(body_gap(P, 0, 1, 0.05) == doctest::Approx(0.013).epsilon(1e-12));
+  CHECK(body_gap(P, 1, 0, 0.05) == doctest::Approx(0.013).epsilon(1e-12));
+  CHECK(body_gap(P, 0, 1, 0.01) == 0.01);  // farther apart than the reach
+  CHECK(body_gap(P, 0, 2, 0.05) == 0.05);  // no body of material 2
+  CHECK_THROWS_AS(body_gap(P, 0, 1, 0.0), InputError);
+  // Two particles 0.04 wide with centres 0.08 apart, diagonally in 3D: a gap of 0.04, within a
+  // reach of 0.05 through their widths only.
+  Particles<3> coarse;
+  coarse.push_back(Vec<3>(0.1, 0.1, 0.1), Vec<3>::Zero(), 1.0, std::pow(0.04, 3), 0);
+  coarse.push_back(Vec<3>(0.1, 0.1, 0.1) + Vec<3>::Ones() * 0.08 / std::sqrt(3.0), Vec<3>::Zero(), 1.0,
+                   std::pow(0.04, 3), 1);
+  CHECK(body_gap(coarse, 0, 1, 0.05) == doctest::Approx(0.04).epsilon(1e-12));
+  // Lattice a compressed to 0.8 along x (centres 0.008 apart, F = diag(0.8, 1)): its last face at
+  // 0.076 + 0.004; b's first at 0.093 - 0.005: a gap of 0.008 with F, 0.007 without.
+  Particles<2> pressed;
+  std::vector<Mat<2>> F;
+  for (int i = 0; i < 10; ++i)
+    for (int j = 0; j < 10; ++j) {
+      pressed.push_back(Vec<2>(0.004 + 0.008 * i, 0.005 + 0.01 * j), Vec<2>::Zero(), 1.0, 1e-4, 0);
+      F.push_back(Vec<2>(0.8, 1.0).asDiagonal());
+      pressed.push_back(Vec<2>(0.093 + 0.01 * i, 0.005 + 0.01 * j), Vec<2>::Zero(), 1.0, 1e-4, 1);
+      F.push_back(Mat<2>::Identity());
+    }
+  CHECK(body_gap(pressed, 0, 1, 0.05, &F) == doctest::Approx(0.008).epsilon(1e-12));
+  CHECK(body_gap(pressed, 0, 1, 0.05) == doctest::Approx(0.007).epsilon(1e-12));
+  // A particle 0.01 wide stretched threefold along x reaches 0.015 towards one 0.04 away: a gap of
+  // 0.02, found within a reach of 0.025 only through the stretch.
+  Particles<2> stretched;
+  stretched.push_back(Vec<2>(0.1, 0.1), Vec<2>::Zero(), 1.0, 1e-4, 0);
+  stretched.push_back(Vec<2>(0.14, 0.1), Vec<2>::Zero(), 1.0, 1e-4, 1);
+  const std::vector<Mat<2>> stretch{Vec<2>(3.0, 1.0).asDiagonal(), Mat<2>::Identity()};
+  CHECK(body_gap(stretched, 0, 1, 0.025, &stretch) == doctest::Approx(0.02).epsilon(1e-12));
+
+  std::mt19937 rng(7);
+  const double reach = 0.05;
+  int within = 0;
+  for (int trial = 0; trial < 200; ++trial) {
+    const Particles<2> P2 = two_clouds<2>(rng);
+    const Particles<3> P3 = two_clouds<3>(rng);
+    CAPTURE(trial);
+    const std::vector<Mat<2>> F2 = random_F<2>(rng, P2.size());
+    const std::vector<Mat<3>> I3(P3.size(), Mat<3>::Identity());
+    const double exact2 = brute_force_gap(P2, 0, 1, F2), exact3 = brute_force_gap(P3, 0, 1, I3);
+    CHECK(body_gap(P2, 0, 1, reach, &F2) == doctest::Approx(std::min(reach, exact2)).epsilon(1e-12));
+    CHECK(body_gap(P3, 1, 0, reach) == doctest::Approx(std::min(reach, exact3)).epsilon(1e-12));
+    within += (exact2 < reach) + (exact3 < reach);
+  }
+  CHECK(within > 100);  // most trials have a pair within reach
 }
