@@ -6,11 +6,11 @@
 // Everything comes from the generic scene keys (materials, bodies, walls). summary.json:
 // momentum_drift (|P(end) - P(0)| / sum m|v(0)|: grid forces are internal, so APIC keeps the
 // total momentum to round-off while the blocks touch no wall), kinetic_energy_ratio
-// (KE(end) / KE(0)), rebound (1 when every body's mean velocity reversed its x sign) and,
-// with two materials or more, min_body_gap: the closest the first two materials' bodies came,
-// over every step, each particle a ball deformed by F^E (geometry/body_gap.h; also a
-// diagnostics column). --check asserts
-// momentum_drift < 1e-9 and rebound.
+// (KE(end) / KE(0)), energy_ratio ((KE + elastic energy)(end) over the same at the start: 1 less
+// the share the transfers dissipated), rebound (1 when every body's mean velocity reversed its x
+// sign) and, with two materials or more, min_body_gap: the closest the first two materials'
+// bodies came, over every step, each particle a ball deformed by F^E (geometry/body_gap.h; also
+// a diagnostics column). --check asserts momentum_drift < 1e-9 and rebound.
 #include <mpm/core/app.h>
 #include <mpm/core/runner.h>
 #include <mpm/geometry/body_gap.h>
@@ -82,6 +82,8 @@ int run(const CommandLine& cl, const Config& scene) {
   scene.reject_unknown_keys();
 
   const Totals<dim> before(solid.state.particles);
+  auto elastic_energy = [&](const MpmState<dim>& s) { return solid::elastic_energy(s, solid.materials); };
+  const double energy_before = before.kinetic + elastic_energy(solid.state);
   auto pipeline = solid::make_solid_pipeline(solid);
   MeasureBodyGap<dim>* gap = nullptr;
   if (solid.materials.size() >= 2) {
@@ -92,16 +94,18 @@ int run(const CommandLine& cl, const Config& scene) {
     pipeline.add(std::move(stage));
   }
   Runner<dim> runner("jello_collide", cl, scene, solid.settings);
-  runner.set_elastic_energy([&](const MpmState<dim>& s) { return solid::elastic_energy(s, solid.materials); });
+  runner.set_elastic_energy(elastic_energy);
   runner.run(solid.state, pipeline);
   const Totals<dim> after(solid.state.particles);
 
   const double drift = (after.momentum - before.momentum).norm() / before.momentum_scale;
   bool rebound = before.mean_vx.size() >= 2;
   for (const auto& [m, v] : before.mean_vx) rebound = rebound && v * after.mean_vx.at(m) < 0.0;
-  std::vector<std::pair<std::string, double>> results{{"momentum_drift", drift},
-                                                      {"kinetic_energy_ratio", after.kinetic / before.kinetic},
-                                                      {"rebound", rebound ? 1.0 : 0.0}};
+  std::vector<std::pair<std::string, double>> results{
+      {"momentum_drift", drift},
+      {"kinetic_energy_ratio", after.kinetic / before.kinetic},
+      {"energy_ratio", (after.kinetic + elastic_energy(solid.state)) / energy_before},
+      {"rebound", rebound ? 1.0 : 0.0}};
   if (gap) results.emplace_back("min_body_gap", gap->min_gap());
   runner.write_summary(results);
   if (cl.check) {

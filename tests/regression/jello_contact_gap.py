@@ -44,6 +44,7 @@ def main():
         r = runs[name]
         print(f"{name:8s}: min_body_gap {r['min_body_gap']:.4g} m ({r['min_body_gap'] / args.dx:.3f} h), "
               f"particles {r['particles']:.0f}, KE(end)/KE(0) {r['kinetic_energy_ratio']:.4f}, "
+              f"(KE + elastic)(end)/(0) {r['energy_ratio']:.4f}, "
               f"momentum_drift {r['momentum_drift']:.2g}, rebound {r['rebound']:.0f}")
     coarse, fine, adaptive = runs["coarse"], runs["fine"], runs["adaptive"]
     checks = [(f"{n}: rebounds, momentum to round-off, the gap column never grows",

@@ -9,6 +9,7 @@
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <vector>
@@ -51,22 +52,28 @@ struct Extent {
   }
 };
 
+//! The extents of bodies a and b, in one pass over the particles.
 template <int dim>
-Extent<dim> extent(const Particles<dim>& P, const std::vector<Mat<dim>>* F, std::uint16_t m) {
+std::array<Extent<dim>, 2> extents(const Particles<dim>& P, const std::vector<Mat<dim>>* F, std::uint16_t a,
+                                   std::uint16_t b) {
+  using Pair = std::array<Extent<dim>, 2>;
   return tbb::parallel_reduce(
-      tbb::blocked_range<std::size_t>(0, P.size(), 4096), Extent<dim>{},
-      [&](const tbb::blocked_range<std::size_t>& range, Extent<dim> e) {
-        for (std::size_t p = range.begin(); p < range.end(); ++p)
-          if (P.material[p] == m) {
-            e.lo = e.lo.cwiseMin(P.x[p]);
-            e.hi = e.hi.cwiseMax(P.x[p]);
-            e.volume = std::max(e.volume, P.volume0[p]);
-            if (F) e.stretch = std::max(e.stretch, stretch_bound<dim>((*F)[p]));
-          }
+      tbb::blocked_range<std::size_t>(0, P.size(), 4096), Pair{},
+      [&](const tbb::blocked_range<std::size_t>& range, Pair e) {
+        for (std::size_t p = range.begin(); p < range.end(); ++p) {
+          const std::uint16_t m = P.material[p];
+          if (m != a && m != b) continue;
+          Extent<dim>& body = e[m == a ? 0 : 1];
+          body.lo = body.lo.cwiseMin(P.x[p]);
+          body.hi = body.hi.cwiseMax(P.x[p]);
+          body.volume = std::max(body.volume, P.volume0[p]);
+          if (F) body.stretch = std::max(body.stretch, stretch_bound<dim>((*F)[p]));
+        }
         return e;
       },
-      [](Extent<dim> e, const Extent<dim>& o) {
-        e.join(o);
+      [](Pair e, const Pair& o) {
+        e[0].join(o[0]);
+        e[1].join(o[1]);
         return e;
       });
 }
@@ -78,7 +85,8 @@ double body_gap(const Particles<dim>& P, std::uint16_t a, std::uint16_t b, doubl
                 const std::vector<Mat<dim>>* F) {
   verify<InputError>(reach > 0.0, "body_gap: the reach must be positive");
   verify<InputError>(!F || F->size() == P.size(), "body_gap: one deformation gradient per particle");
-  const Extent<dim> A = extent(P, F, a), B = extent(P, F, b);
+  verify<InputError>(a != b, "body_gap: the two bodies must be of different materials");
+  const auto [A, B] = extents(P, F, a, b);
   if (A.empty() || B.empty()) return reach;
   // No centres closer than the boxes: no gap below reach unless the boxes come within R.
   const double R = reach + A.r() + B.r();

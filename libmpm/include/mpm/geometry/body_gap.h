@@ -24,7 +24,7 @@
 
 namespace mpm::geometry {
 
-//! g of the particles of material `a` and those of material `b`, or `reach` [m] > 0 when no pair
+//! g of the particles of material `a` and those of material `b` (a != b), or `reach` [m] > 0 when no pair
 //! comes closer than that (also when either body has no particle). `F`: each particle's
 //! deformation gradient (an elastic body's F^E), or nullptr for the undeformed balls (F = I).
 template <int dim>

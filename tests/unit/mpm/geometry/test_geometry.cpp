@@ -729,6 +729,7 @@ TEST_CASE("body gap: lattices side by side, compressed, random clouds against ev
   CHECK(body_gap(P, 0, 1, 0.01) == 0.01);  // farther apart than the reach
   CHECK(body_gap(P, 0, 2, 0.05) == 0.05);  // no body of material 2
   CHECK_THROWS_AS(body_gap(P, 0, 1, 0.0), InputError);
+  CHECK_THROWS_AS(body_gap(P, 1, 1, 0.05), InputError);  // one body against itself
   // Two particles 0.04 wide with centres 0.08 apart, diagonally in 3D: a gap of 0.04, within a
   // reach of 0.05 through their widths only.
   Particles<3> coarse;
