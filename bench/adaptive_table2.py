@@ -12,7 +12,7 @@ body_gap). Memory held is what the particle and grid fields and the grids' index
 summary.json reports it (memory_bytes.*: capacities, not sizes). docs/performance.md has the
 figures and the command.
 
-    python3 bench/adaptive_table2.py --bin build/apps [--case jello|sand|jello_paper|jello_paper_band2|sand_paper|sand_paper_every_step|all]
+    python3 bench/adaptive_table2.py --bin build/apps [--case jello|sand|jello_paper|jello_paper_band2|jello_paper_band1|sand_paper|sand_paper_every_step|all]
         [--repeat N]
         [--set KEY=VALUE] [--threads N]
 """
@@ -57,10 +57,12 @@ CASES = {
 # kept in finest cells.
 CASES["jello_paper"] = dict(CASES["jello"], uniform=["grid.dx=0.004166666666666667", "time.end=0.01"],
                             adaptive=["adaptive.levels=3", "adaptive.surface_band=0.016666666666666666"])
-# A band of 2 finest cells: the 3D contact gap and rebound energy at finest 0.00625 m came out
-# the same as with 4 (docs/accuracy.md, colliding jellos) with 60 % of the particles.
+# Bands of 2 and 1 finest cells: the 3D contact gap at the paper's size came out within 7 % of
+# the band of 4 cells' (docs/accuracy.md, colliding jellos) with 58 % and 35 % of its particles.
 CASES["jello_paper_band2"] = dict(CASES["jello_paper"],
                                   adaptive=["adaptive.levels=3", "adaptive.surface_band=0.008333333333333333"])
+CASES["jello_paper_band1"] = dict(CASES["jello_paper"],
+                                  adaptive=["adaptive.levels=3", "adaptive.surface_band=0.004166666666666667"])
 SAND_PAPER_BANDS = ["adaptive.levels=3", "adaptive.surface_band=0.005", "adaptive.resample.d_small=0",
                     "adaptive.resample.d_medium=0.0033333333333333335", "adaptive.resample.d_large=0.005",
                     "adaptive.surface_walls=rough"]
