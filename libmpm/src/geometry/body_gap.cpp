@@ -78,6 +78,27 @@ std::array<Extent<dim>, 2> extents(const Particles<dim>& P, const std::vector<Ma
       });
 }
 
+//! The particles of a within `by` of b's box, and those of b within `by` of a's, in index order
+//! (blocks in parallel, joined in order).
+template <int dim>
+std::array<std::vector<std::size_t>, 2> near_the_other(const Particles<dim>& P, std::uint16_t a, std::uint16_t b,
+                                                       const Extent<dim>& A, const Extent<dim>& B, double by) {
+  using Lists = std::array<std::vector<std::size_t>, 2>;
+  return tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, P.size(), 4096), Lists{},
+      [&](const tbb::blocked_range<std::size_t>& range, Lists near) {
+        for (std::size_t p = range.begin(); p < range.end(); ++p) {
+          if (P.material[p] == a && B.near(P.x[p], by)) near[0].push_back(p);
+          if (P.material[p] == b && A.near(P.x[p], by)) near[1].push_back(p);
+        }
+        return near;
+      },
+      [](Lists left, const Lists& right) {
+        for (int i = 0; i < 2; ++i) left[i].insert(left[i].end(), right[i].begin(), right[i].end());
+        return left;
+      });
+}
+
 }  // namespace
 
 template <int dim>
@@ -97,11 +118,7 @@ double body_gap(const Particles<dim>& P, std::uint16_t a, std::uint16_t b, doubl
   }
   if (box_distance2 >= R * R) return reach;
 
-  std::vector<std::size_t> a_near, b_near;
-  for (std::size_t p = 0; p < P.size(); ++p) {
-    if (P.material[p] == a && B.near(P.x[p], R)) a_near.push_back(p);
-    if (P.material[p] == b && A.near(P.x[p], R)) b_near.push_back(p);
-  }
+  const auto [a_near, b_near] = near_the_other(P, a, b, A, B, R);
   if (b_near.empty() || a_near.empty()) return reach;
 
   // The radius of particle p's deformed ball along the unit vector n, r0 |F_p^T n|, and a bound
