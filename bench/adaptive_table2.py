@@ -57,7 +57,7 @@ CASES = {
 # kept in finest cells.
 CASES["jello_paper"] = dict(CASES["jello"], uniform=["grid.dx=0.004166666666666667", "time.end=0.01"],
                             adaptive=["adaptive.levels=3", "adaptive.surface_band=0.016666666666666666"])
-# Bands of 2 and 1 finest cells: the 3D contact gap at the paper's size came out within 7 % of
+# Bands of 2 and 1 finest cells: the 3D contact gap at the paper's size came out within 8 % of
 # the band of 4 cells' (docs/accuracy.md, colliding jellos) with 58 % and 35 % of its particles.
 CASES["jello_paper_band2"] = dict(CASES["jello_paper"],
                                   adaptive=["adaptive.levels=3", "adaptive.surface_band=0.008333333333333333"])

@@ -86,7 +86,7 @@ int run(const CommandLine& cl, const Config& scene) {
   const double energy_before = before.kinetic + elastic_energy(solid.state);
   auto pipeline = solid::make_solid_pipeline(solid);
   MeasureBodyGap<dim>* gap = nullptr;
-  if (solid.materials.size() >= 2) {
+  if (solid.materials.size() >= 2 && solid.state.particles.size() > 0) {
     const auto& V = solid.state.particles.volume0;
     const double width = std::pow(*std::max_element(V.begin(), V.end()), 1.0 / dim);
     auto stage = std::make_unique<MeasureBodyGap<dim>>(4.0 * width);

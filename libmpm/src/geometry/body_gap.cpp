@@ -38,6 +38,7 @@ struct Extent {
   Vec<dim> lo = Vec<dim>::Constant(std::numeric_limits<double>::infinity());
   Vec<dim> hi = Vec<dim>::Constant(-std::numeric_limits<double>::infinity());
   double volume = 0.0, stretch = 1.0;
+  bool finite = true;  // every position and F
   bool empty() const { return lo[0] > hi[0]; }
   double r() const { return half_width<dim>(volume) * stretch; }
   void join(const Extent& o) {
@@ -45,6 +46,7 @@ struct Extent {
     hi = hi.cwiseMax(o.hi);
     volume = std::max(volume, o.volume);
     stretch = std::max(stretch, o.stretch);
+    finite = finite && o.finite;
   }
   //! Whether x lies in the box grown by `by` on every side.
   bool near(const Vec<dim>& x, double by) const {
@@ -68,6 +70,7 @@ std::array<Extent<dim>, 2> extents(const Particles<dim>& P, const std::vector<Ma
           body.hi = body.hi.cwiseMax(P.x[p]);
           body.volume = std::max(body.volume, P.volume0[p]);
           if (F) body.stretch = std::max(body.stretch, stretch_bound<dim>((*F)[p]));
+          body.finite = body.finite && P.x[p].allFinite() && (!F || (*F)[p].allFinite());
         }
         return e;
       },
@@ -104,11 +107,12 @@ std::array<std::vector<std::size_t>, 2> near_the_other(const Particles<dim>& P, 
 template <int dim>
 double body_gap(const Particles<dim>& P, std::uint16_t a, std::uint16_t b, double reach,
                 const std::vector<Mat<dim>>* F) {
-  verify<InputError>(reach > 0.0, "body_gap: the reach must be positive");
+  verify<InputError>(reach > 0.0 && std::isfinite(reach), "body_gap: the reach must be positive and finite");
   verify<InputError>(!F || F->size() == P.size(), "body_gap: one deformation gradient per particle");
   verify<InputError>(a != b, "body_gap: the two bodies must be of different materials");
   const auto [A, B] = extents(P, F, a, b);
   if (A.empty() || B.empty()) return reach;
+  verify<NumericalError>(A.finite && B.finite, "body_gap: a particle's position or deformation gradient is not finite");
   // No centres closer than the boxes: no gap below reach unless the boxes come within R.
   const double R = reach + A.r() + B.r();
   double box_distance2 = 0.0;
@@ -171,7 +175,8 @@ double body_gap(const Particles<dim>& P, std::uint16_t a, std::uint16_t b, doubl
   for (int k = 0; k < dim; ++k) n[k] = static_cast<int>(std::floor(size[k] / h)) + 1;
   auto cell_of = [&](const Vec<dim>& x) {
     IVec<dim> c;
-    for (int k = 0; k < dim; ++k) c[k] = static_cast<int>(std::floor((x[k] - box.lo[k]) / h));
+    for (int k = 0; k < dim; ++k)  // clamped before the cast: a search box may reach far beyond the table
+      c[k] = static_cast<int>(std::clamp(std::floor((x[k] - box.lo[k]) / h), -1.0, static_cast<double>(n[k])));
     return c;
   };
   auto key_of = [&](const IVec<dim>& c) {

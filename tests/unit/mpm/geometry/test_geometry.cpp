@@ -730,6 +730,17 @@ TEST_CASE("body gap: lattices side by side, compressed, random clouds against ev
   CHECK(body_gap(P, 0, 2, 0.05) == 0.05);  // no body of material 2
   CHECK_THROWS_AS(body_gap(P, 0, 1, 0.0), InputError);
   CHECK_THROWS_AS(body_gap(P, 1, 1, 0.05), InputError);  // one body against itself
+  CHECK_THROWS_AS(body_gap(P, 0, 1, std::numeric_limits<double>::infinity()), InputError);
+  {
+    Particles<2> broken = P;
+    broken.x[7][1] = std::numeric_limits<double>::quiet_NaN();
+    CHECK_THROWS_AS(body_gap(broken, 0, 1, 0.05), NumericalError);
+    std::vector<Mat<2>> F_broken(broken.size(), Mat<2>::Identity());
+    F_broken[4](0, 1) = std::numeric_limits<double>::infinity();
+    CHECK_THROWS_AS(body_gap(P, 0, 1, 0.05, &F_broken), NumericalError);
+  }
+  // A reach far beyond the table's cells: the search clamps to the table.
+  CHECK(body_gap(P, 0, 1, 1e300) == doctest::Approx(0.013).epsilon(1e-12));
   // Two particles 0.04 wide with centres 0.08 apart, diagonally in 3D: a gap of 0.04, within a
   // reach of 0.05 through their widths only.
   Particles<3> coarse;
