@@ -28,8 +28,15 @@
 //!   is capped at the water's speed u. A morphological factor multiplies q_b so that the bed
 //!   evolves that many times faster than the flow (Roelvink 2006): a scour's time scale is then
 //!   the run's time times the factor.
+//! - optionally, the grains' pick-up and deposition over a step length L (Einstein 1950; Nakagawa &
+//!   Tsujimoto 1980; Phillips & Sutherland 1989): grains are picked up at the rate q_e / L and
+//!   land at q / L, so the flux q relaxes toward the formula's q_e along the transport,
+//!   (e . grad) q = (q_e - q) / L. With L = 0 (the default) q = q_e in every column (local
+//!   equilibrium): the bed answers a change of the current within a cell, so a scour hole's edges
+//!   are as sharp as the grid. L is a length [m] or van Rijn's (1984a) saltation length
+//!   lambda_b = 3 d D*^0.6 T^0.9 of the column's Shields number.
 //! Not modelled: the slope's effect on the threshold (avalanching on slopes is the continuum's
-//! plasticity), suspended load from the bed (pick-up), hiding in mixtures.
+//! plasticity), suspended load lifted above the bed-surface layer, hiding in mixtures.
 #include <coupling/volume_fraction.h>
 #include <mpm/core/sparse_grid.h>
 #include <mpm/core/types.h>
@@ -53,6 +60,9 @@ struct BedLoadLaw {
   double roughness = 2.5;             //!< k_s / d > 0
   double morphological_factor = 1.0;  //!< >= 1: the bed's time over the flow's
   double surface_fraction = 0.3;      //!< n_s that marks the bed surface, in (0, 1)
+  double fluid_viscosity = 1.0e-3;    //!< mu [Pa s] > 0 (van Rijn's D*)
+  double step_length = 0.0;           //!< L [m] >= 0 of the pick-up and deposition (0: q = q_e)
+  bool van_rijn_step = false;         //!< L = saltation_length(theta) of each column instead
 
   //! u_* [m/s] of water of depth-averaged `speed` [m/s] >= 0 and `depth` h [m] over a rough
   //! bed: U / u_* = ln(11 h / k_s) / kappa; requires in_log_layer(h).
@@ -64,7 +74,29 @@ struct BedLoadLaw {
   //! q_b [m^2/s] of grain volume per unit width at Shields number theta (0 below theta_c),
   //! without the morphological factor.
   double flux(double shields) const;
+  //! van Rijn's (1984a) saltation length lambda_b = 3 d D*^0.6 T^0.9 [m], with the particle
+  //! parameter D* = d ((s - 1) g / nu^2)^(1/3) and the transport stage T = (theta - theta_c) /
+  //! theta_c; 0 at or below the threshold.
+  double saltation_length(double shields) const;
+  //! The step length L [m] of a column at Shields number theta (step_length or lambda_b).
+  double step_length_at(double shields) const { return van_rijn_step ? saltation_length(shields) : step_length; }
+  //! Whether the flux relaxes over a step length (else q = q_e in each column).
+  bool picks_up() const { return van_rijn_step || step_length > 0.0; }
 };
+
+//! The bed-load flux of each column where the grains' pick-up (q_e / L) and deposition (q / L)
+//! balance their transport: (e . grad) q = (q_e - q) / L, e the column's unit direction of
+//! transport, discretised upwind on the columns' lattice (the node lattice `counts` without the
+//! axis `up`, spacing dx [m]): q_i (1 + L_i sum_a |e_a| / dx) = q_e,i + (L_i / dx) sum_a |e_a| q_(i - sign(e_a) 1_a).
+//! A column with e = 0 (no bed or no current) carries nothing and passes nothing on; nothing
+//! enters from outside the lattice. L_i = 0 gives q_i = q_e,i. Solved by Gauss-Seidel sweeps in
+//! the 2^(dim-1) orders of the horizontal axes (one sweep is exact where every column's e points
+//! the same way); returns the sweeps it took (at most `max_sweeps`, after which the last iterate
+//! stands). `capacity`, `direction`, `length` and `flux` have one entry per column.
+template <int dim>
+int relax_to_capacity(const mpm::IVec<dim>& counts, int up, double dx, const std::vector<mpm::Vec<dim>>& capacity,
+                      const std::vector<mpm::Vec<dim>>& direction, const std::vector<double>& length,
+                      std::vector<mpm::Vec<dim>>& flux, int max_sweeps = 256);
 
 //! One node of a bed-surface layer: its storage index on each phase grid (fluid -1 where the
 //! fluid grid holds no water there), its column, and the velocities the exchange starts from.
@@ -84,6 +116,7 @@ struct BedLayer {
   int up = 1;  //!< the vertical axis (gravity along -up)
   std::vector<BedLayerNode<dim>> nodes;
   std::vector<mpm::Vec<dim>> stress, drift;
+  std::vector<mpm::Vec<dim>> flux;            //!< q [m^2/s] of grain volume, times the morphological factor
   std::vector<mpm::Vec<dim>> particle_drift;  //!< u_d gathered to each sediment particle [m/s]
   double largest_shields = 0.0;               //!< over the columns [-]
 };

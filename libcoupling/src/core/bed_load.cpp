@@ -2,6 +2,7 @@
 #include <mpm/core/error.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 namespace coupling {
@@ -20,6 +21,15 @@ double BedLoadLaw::friction_velocity(double speed, double depth) const {
 double BedLoadLaw::shields_number(double friction_velocity) const {
   return fluid_density * friction_velocity * friction_velocity /
          ((sediment_density - fluid_density) * gravity * grain_diameter);
+}
+
+double BedLoadLaw::saltation_length(double shields) const {
+  if (!(shields > critical_shields)) return 0.0;
+  const double nu = fluid_viscosity / fluid_density;
+  const double particle_parameter =
+      grain_diameter * std::cbrt((sediment_density / fluid_density - 1.0) * gravity / (nu * nu));
+  const double stage = (shields - critical_shields) / critical_shields;
+  return 3.0 * grain_diameter * std::pow(particle_parameter, 0.6) * std::pow(stage, 0.9);
 }
 
 double BedLoadLaw::flux(double shields) const {
@@ -62,6 +72,11 @@ void find_bed_layer(const BedLoadLaw& law, int up, const mpm::SparseGrid<dim>& f
   layer.nodes.clear();
   layer.stress.assign(top.size(), mpm::Vec<dim>::Zero());
   layer.drift.assign(top.size(), mpm::Vec<dim>::Zero());
+  layer.flux.assign(top.size(), mpm::Vec<dim>::Zero());
+  // With pick-up, per column: the current's direction (zero: no transport), the step length, the
+  // layer's sediment mass and the water's speed over the bed, for the relaxation after the loop.
+  std::vector<mpm::Vec<dim>> direction(law.picks_up() ? top.size() : 0, mpm::Vec<dim>::Zero());
+  std::vector<double> length(direction.size(), 0.0), layer_mass = length, water_speed = length;
   layer.largest_shields = 0.0;
   const double dx = sediment.dx(), width = std::pow(dx, dim - 1);
   const mpm::IVec<dim> step = mpm::IVec<dim>::Unit(up);
@@ -113,8 +128,93 @@ void find_bed_layer(const BedLoadLaw& law, int up, const mpm::SparseGrid<dim>& f
     const mpm::Vec<dim> along = u / speed;
     layer.stress[col] = law.fluid_density * u_star * u_star * along;
     const double q = law.morphological_factor * law.flux(theta);
-    if (q > 0.0 && mass > 0.0) layer.drift[col] = std::min(law.sediment_density * q * width / mass, speed) * along;
+    layer.flux[col] = q * along;
+    if (!law.picks_up()) {
+      if (q > 0.0 && mass > 0.0) layer.drift[col] = std::min(law.sediment_density * q * width / mass, speed) * along;
+      continue;
+    }
+    if (!(mass > 0.0)) continue;
+    direction[col] = along;
+    length[col] = law.step_length_at(theta);
+    layer_mass[col] = mass;
+    water_speed[col] = speed;
   }
+  if (!law.picks_up()) return;
+  const std::vector<mpm::Vec<dim>> capacity = layer.flux;
+  relax_to_capacity(counts, up, dx, capacity, direction, length, layer.flux);
+  // The drift that carries the relaxed flux in the layer's grains, at most the water's speed.
+  for (std::size_t col = 0; col < top.size(); ++col) {
+    const double q = layer.flux[col].norm();
+    if (q > 0.0 && layer_mass[col] > 0.0)
+      layer.drift[col] =
+          std::min(law.sediment_density * q * width / layer_mass[col], water_speed[col]) / q * layer.flux[col];
+  }
+}
+
+template <int dim>
+int relax_to_capacity(const mpm::IVec<dim>& counts, int up, double dx, const std::vector<mpm::Vec<dim>>& capacity,
+                      const std::vector<mpm::Vec<dim>>& direction, const std::vector<double>& length,
+                      std::vector<mpm::Vec<dim>>& flux, int max_sweeps) {
+  // The columns' lattice: the horizontal axes, the first the fastest (as find_bed_layer numbers them).
+  std::array<int, dim - 1> axes{};
+  std::array<std::int64_t, dim - 1> size{}, stride{};
+  std::int64_t columns = 1;
+  for (int a = 0, h = 0; a < dim; ++a) {
+    if (a == up) continue;
+    axes[h] = a;
+    size[h] = counts[a];
+    stride[h] = columns;
+    columns *= counts[a];
+    ++h;
+  }
+  mpm::verify<mpm::Error>(capacity.size() == std::size_t(columns) && direction.size() == capacity.size() &&
+                              length.size() == capacity.size(),
+                          "bed load: one capacity, direction and step length per column");
+  flux.assign(capacity.size(), mpm::Vec<dim>::Zero());
+  double scale = 0.0;
+  for (const mpm::Vec<dim>& q : capacity) scale = std::max(scale, q.norm());
+  if (!(scale > 0.0)) return 0;
+  // One column's update from its upwind neighbours' current fluxes; returns its change.
+  const auto update = [&](std::int64_t col) {
+    const mpm::Vec<dim>& e = direction[std::size_t(col)];
+    if (e.squaredNorm() == 0.0) return 0.0;
+    const double c = length[std::size_t(col)] / dx;
+    mpm::Vec<dim> sum = capacity[std::size_t(col)];
+    double diagonal = 1.0;
+    std::int64_t rest = col;
+    for (int h = dim - 2; h >= 0; --h) {
+      const std::int64_t i = rest / stride[h];
+      rest -= i * stride[h];
+      const double w = c * std::abs(e[axes[h]]);
+      if (w == 0.0) continue;
+      diagonal += w;
+      const std::int64_t upwind = e[axes[h]] > 0.0 ? i - 1 : i + 1;
+      if (upwind >= 0 && upwind < size[h]) sum += w * flux[std::size_t(col + (upwind - i) * stride[h])];
+    }
+    const mpm::Vec<dim> q = sum / diagonal;
+    const double change = (q - flux[std::size_t(col)]).norm();
+    flux[std::size_t(col)] = q;
+    return change;
+  };
+  // Sweep orders: each horizontal axis forwards or backwards (in 2D: left to right, right to left).
+  constexpr int orders = 1 << (dim - 1);
+  for (int sweep = 1; sweep <= max_sweeps; ++sweep) {
+    const int order = (sweep - 1) % orders;
+    double change = 0.0;
+    for (std::int64_t k = 0; k < columns; ++k) {
+      std::int64_t col = 0, rest = k;
+      for (int h = dim - 2; h >= 0; --h) {
+        std::int64_t i = rest / stride[h];
+        rest -= i * stride[h];
+        if (order & (1 << h)) i = size[h] - 1 - i;
+        col += i * stride[h];
+      }
+      change = std::max(change, update(col));
+    }
+    // Converged once a whole cycle of orders changed nothing beyond round-off.
+    if (change <= 1e-14 * scale && sweep >= orders) return sweep;
+  }
+  return max_sweeps;
 }
 
 template <int dim>
@@ -154,11 +254,14 @@ std::size_t limit_bed_shear(const BedLayer<dim>& layer, mpm::SparseGrid<dim>& fl
   return limited;
 }
 
-#define BED_LOAD(dim)                                                                                            \
-  template void find_bed_layer(const BedLoadLaw&, int, const mpm::SparseGrid<dim>&, const mpm::SparseGrid<dim>&, \
-                               const VolumeFractions&, const mpm::geometry::ColliderSet<dim>&, double,           \
-                               BedLayer<dim>&);                                                                  \
-  template std::size_t limit_bed_shear(const BedLayer<dim>&, mpm::SparseGrid<dim>&, mpm::SparseGrid<dim>&, double);
+#define BED_LOAD(dim)                                                                                               \
+  template void find_bed_layer(const BedLoadLaw&, int, const mpm::SparseGrid<dim>&, const mpm::SparseGrid<dim>&,    \
+                               const VolumeFractions&, const mpm::geometry::ColliderSet<dim>&, double,              \
+                               BedLayer<dim>&);                                                                     \
+  template std::size_t limit_bed_shear(const BedLayer<dim>&, mpm::SparseGrid<dim>&, mpm::SparseGrid<dim>&, double); \
+  template int relax_to_capacity(const mpm::IVec<dim>&, int, double, const std::vector<mpm::Vec<dim>>&,             \
+                                 const std::vector<mpm::Vec<dim>>&, const std::vector<double>&,                     \
+                                 std::vector<mpm::Vec<dim>>&, int);
 BED_LOAD(2)
 BED_LOAD(3)
 

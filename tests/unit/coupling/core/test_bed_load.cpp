@@ -288,6 +288,8 @@ TEST_CASE("bed load: the keys' errors name the key and the range") {
   refuses("bed_load: {critical_shields: -0.1}", "bed_load.critical_shields");
   refuses("bed_load: {roughness: 1000}", "bed_load.roughness");
   refuses("bed_load: {exponent: 0}", "bed_load.exponent");
+  refuses("bed_load: {step_length: -0.01}", "bed_load.step_length");
+  refuses("bed_load: {step_length: vanrijn}", "bed_load.step_length");
   const std::string dry = R"(
 dim: 2
 domain: {lo: [0, 0], hi: [0.22, 0.14]}
@@ -320,4 +322,145 @@ TEST_CASE("sediment.hold_until: the bed keeps every particle while held and move
   CHECK(surface_shift(s, x0) > 0.0);  // released: the drift moves the surface downstream
   CHECK_THROWS_WITH_AS(load_coupled_scene<2>(flume("", ", hold_until: -1")), doctest::Contains("sediment.hold_until"),
                        mpm::InputError);
+}
+
+TEST_CASE("bed load pick-up: van Rijn's saltation length") {
+  // d = 0.5 mm quartz in water (nu = 1e-6 m^2/s): D* = d (1.65 g / nu^2)^(1/3) = 12.65; at theta =
+  // 0.26 the transport stage T = (0.26 - 0.047) / 0.047 = 4.53 and lambda_b = 3 d D*^0.6 T^0.9 =
+  // 1.5 mm x 4.58 x 3.90 = 26.8 mm (by hand).
+  const BedLoadLaw law;
+  CHECK(law.saltation_length(0.26) == doctest::Approx(0.0268).epsilon(0.005));
+  CHECK(law.saltation_length(law.critical_shields) == 0.0);
+  CHECK(law.saltation_length(0.02) == 0.0);
+  BedLoadLaw fixed;
+  fixed.step_length = 0.01;
+  CHECK(fixed.picks_up());
+  CHECK(fixed.step_length_at(0.26) == 0.01);
+  CHECK_FALSE(law.picks_up());
+}
+
+TEST_CASE("bed load pick-up: past a drop of the capacity the flux decays as exp(-x / L), at first order") {
+  // A row of columns along x (up = y): capacity Q up to x0, none beyond; the current along +x (and,
+  // mirrored, along -x). Exactly, q(x) = Q exp(-(x - x0) / L) past x0; the upwind balance is first
+  // order in dx / L.
+  const double L = 0.02, Q = 3e-6;
+  std::vector<double> errors;
+  for (const int per_length : {4, 8, 16, 32}) {
+    const double dx = L / per_length;
+    const int n = 24 * per_length, drop = 16 * per_length;
+    double error[2] = {0.0, 0.0};
+    for (const double sign : {1.0, -1.0}) {
+      std::vector<Vec<2>> capacity(std::size_t(n), Vec<2>::Zero()), direction(capacity), flux;
+      const std::vector<double> length(std::size_t(n), L);
+      // Mirrored: column i of the +x row is column n - 1 - i of the -x row.
+      const auto column = [&](int i) { return std::size_t(sign > 0 ? i : n - 1 - i); };
+      for (int i = 0; i < n; ++i) {
+        direction[column(i)] = Vec<2>(sign, 0.0);
+        if (i < drop) capacity[column(i)] = Vec<2>(sign * Q, 0.0);
+      }
+      const int sweeps = relax_to_capacity<2>(mpm::IVec<2>(n, 7), 1, dx, capacity, direction, length, flux);
+      CHECK(sweeps <= 3);                   // the sweep along the current solves; the next two change nothing
+      const double x0 = (drop - 0.5) * dx;  // the drop, half-way between the last column with Q and the next
+      double& e = error[sign > 0 ? 0 : 1];
+      for (int i = drop; i < n; ++i) {
+        CHECK(flux[column(i)][1] == 0.0);
+        e = std::max(e, std::abs(sign * flux[column(i)][0] - Q * std::exp(-(i * dx - x0) / L)) / Q);
+      }
+      // Upstream of the drop the flux has built up from nothing at the row's start: Q within 1e-6
+      // after 16 L.
+      CHECK(sign * flux[column(drop - 1)][0] == doctest::Approx(Q).epsilon(1e-6).scale(0));
+    }
+    CHECK(error[0] == doctest::Approx(error[1]).epsilon(1e-12).scale(0));
+    errors.push_back(error[0]);
+  }
+  const double order = std::log2(errors[2] / errors[3]);
+  MESSAGE("largest error over Q at dx = L/4 .. L/32: " << errors[0] << " " << errors[1] << " " << errors[2] << " "
+                                                       << errors[3] << "; order " << order);
+  CHECK(order > 0.9);
+  CHECK(errors[3] < 0.02);
+  // No step length: the formula's flux in every column.
+  std::vector<Vec<2>> capacity{Vec<2>(1e-6, 0), Vec<2>(0, 0), Vec<2>(2e-6, 0)}, direction(3, Vec<2>(1, 0)), flux;
+  relax_to_capacity<2>(mpm::IVec<2>(3, 5), 1, 0.01, capacity, direction, std::vector<double>(3, 0.0), flux);
+  CHECK(flux == capacity);
+}
+
+TEST_CASE("bed load pick-up: 3D columns, a uniform oblique current and a circulating one") {
+  // 40 x 40 columns (up = y) at dx = 5 mm, L = 1 cm. A current at 45 degrees in x-z over a uniform
+  // capacity: nothing enters at the x_min and z_min edges, so the flux builds up from there, and
+  // is the capacity (to 1e-5) farther than 12 L from both.
+  const int n = 40;
+  const double dx = 0.005;
+  const mpm::IVec<3> counts(n, 9, n);
+  const auto id = [&](int i, int k) { return std::size_t(k * n + i); };  // x fastest, as find_bed_layer
+  const Vec<3> e = Vec<3>(1.0, 0.0, 1.0).normalized();
+  std::vector<Vec<3>> capacity(std::size_t(n * n), 2e-6 * e), direction(capacity.size(), e), flux;
+  std::vector<double> length(capacity.size(), 0.01);
+  CHECK(relax_to_capacity<3>(counts, 1, dx, capacity, direction, length, flux) <= 8);
+  CHECK(flux[id(0, 0)].norm() < 0.5 * 2e-6);
+  for (int k = 25; k < n; ++k)
+    for (int i = 25; i < n; ++i) CHECK((flux[id(i, k)] - 2e-6 * e).norm() < 1e-5 * 2e-6);
+
+  // A current circling the lattice's centre, the capacity growing outwards: the columns feed each
+  // other around the circle, which takes many sweeps; the result balances every column's equation
+  // (checked here from its definition) to round-off.
+  for (int k = 0; k < n; ++k)
+    for (int i = 0; i < n; ++i) {
+      const Vec<3> r((i + 0.5 - n / 2) * dx, 0.0, (k + 0.5 - n / 2) * dx);
+      const Vec<3> t = Vec<3>(-r[2], 0.0, r[0]).normalized();
+      direction[id(i, k)] = t;
+      capacity[id(i, k)] = 1e-4 * r.norm() * t;
+    }
+  const int sweeps = relax_to_capacity<3>(counts, 1, dx, capacity, direction, length, flux);
+  MESSAGE("circulating current: " << sweeps << " sweeps");
+  CHECK(sweeps > 8);
+  CHECK(sweeps < 256);
+  double residual = 0.0;
+  for (int k = 0; k < n; ++k)
+    for (int i = 0; i < n; ++i) {
+      const Vec<3>& t = direction[id(i, k)];
+      const double cx = 0.01 / dx * std::abs(t[0]), cz = 0.01 / dx * std::abs(t[2]);
+      const int iu = t[0] > 0 ? i - 1 : i + 1, ku = t[2] > 0 ? k - 1 : k + 1;
+      Vec<3> balance = (1.0 + cx + cz) * flux[id(i, k)] - capacity[id(i, k)];
+      if (iu >= 0 && iu < n && cx > 0) balance -= cx * flux[id(iu, k)];
+      if (ku >= 0 && ku < n && cz > 0) balance -= cz * flux[id(i, ku)];
+      residual = std::max(residual, balance.norm());
+    }
+  CHECK(residual < 1e-12 * 1e-4 * n * dx);
+}
+
+TEST_CASE("bed load pick-up: in the flume the flux builds up from the clear water over the sill") {
+  // With a step length the first bed columns carry less than the formula (nothing comes over the
+  // upstream sill), the flux reaches the formula's within a few L, and the grains' drift carries
+  // the relaxed flux (the gather is still the P2G's adjoint).
+  CoupledScene<2> scene =
+      load_coupled_scene<2>(flume("bed_load: {critical_shields: 0.01, morphological_factor: 30, step_length: 0.01}"));
+  auto pipeline = make_coupled_pipeline(scene);
+  CoupledState<2>& s = scene.state;
+  mpm::advance(s, pipeline, 0.005);
+  const BedLayer<2>& bed = s.bed;
+  const BedLoadLaw& law = *scene.bed_load;
+  std::vector<double> mass(bed.stress.size(), 0.0);
+  double layer = 0.0, grains = 0.0;
+  for (const BedLayerNode<2>& n : bed.nodes) {
+    mass[std::size_t(n.column)] += s.sediment.grid.mass[n.sediment];
+    layer += s.sediment.grid.mass[n.sediment] * bed.drift[std::size_t(n.column)][0];
+  }
+  for (std::size_t p = 0; p < bed.particle_drift.size(); ++p)
+    grains += s.sediment.particles.mass[p] * bed.particle_drift[p][0];
+  CHECK(grains == doctest::Approx(layer).epsilon(1e-12).scale(0));
+  std::size_t first = bed.stress.size(), building = 0, at_capacity = 0;
+  for (std::size_t c = 0; c < bed.stress.size(); ++c) {
+    if (!(bed.stress[c].norm() > 0.0)) continue;
+    first = std::min(first, c);
+    const double capacity =
+        law.morphological_factor * law.flux(law.shields_number(std::sqrt(bed.stress[c].norm() / law.fluid_density)));
+    // The drift carries the relaxed flux: rho_s q dx = m u_d.
+    CHECK(law.sediment_density * bed.flux[c].norm() * 0.005 ==
+          doctest::Approx(mass[c] * bed.drift[c].norm()).epsilon(1e-12).scale(0));
+    if (c == first) CHECK(bed.flux[c].norm() < 0.5 * capacity);
+    if (c < first + 4) building += bed.flux[c].norm() < 0.95 * capacity;
+    if (c >= first + 20 && c < first + 40) at_capacity += std::abs(bed.flux[c].norm() / capacity - 1.0) < 0.2;
+  }
+  CHECK(building == 4);
+  CHECK(at_capacity >= 18);
 }
