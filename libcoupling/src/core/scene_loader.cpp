@@ -228,8 +228,6 @@ BedLoadLaw parse_bed_load(const mpm::Config& bed, const mpm::Config& scene, cons
   // The grains' step length: a length [m], or van Rijn's saltation length of each column.
   law.van_rijn_step = bed.text("step_length", "0") == "van_rijn";
   if (!law.van_rijn_step) law.step_length = bed.number("step_length", 0.0, Range::non_negative());
-  if (law.van_rijn_step && !(law.fluid_viscosity > 0.0))
-    bed.fail("step_length", "van_rijn needs a viscous fluid (fluid.viscosity > 0): D* = d ((s - 1) g / nu^2)^(1/3)");
   // A bed packed no denser than the surface fraction would never show a surface.
   if (const mpm::Config sand = scene.child("sediment"); sand.has("packing_fraction")) {
     const double packing = sand.number("packing_fraction", Range::open(0.0, 1.0));
