@@ -73,10 +73,10 @@ void find_bed_layer(const BedLoadLaw& law, int up, const mpm::SparseGrid<dim>& f
   layer.stress.assign(top.size(), mpm::Vec<dim>::Zero());
   layer.drift.assign(top.size(), mpm::Vec<dim>::Zero());
   layer.flux.assign(top.size(), mpm::Vec<dim>::Zero());
-  // With pick-up, per column: the current's direction (zero: no transport), the step length, the
-  // layer's sediment mass and the water's speed over the bed, for the relaxation after the loop.
-  std::vector<mpm::Vec<dim>> direction(law.picks_up() ? top.size() : 0, mpm::Vec<dim>::Zero());
-  std::vector<double> length(direction.size(), 0.0), layer_mass = length, water_speed = length;
+  // Per column: the formula's flux q_e and the current's direction (zero: no transport), the step
+  // length, the layer's sediment mass and the water's speed over the bed.
+  std::vector<mpm::Vec<dim>> direction(top.size(), mpm::Vec<dim>::Zero());
+  std::vector<double> capacity(top.size(), 0.0), length = capacity, layer_mass = capacity, water_speed = capacity;
   layer.largest_shields = 0.0;
   const double dx = sediment.dx(), width = std::pow(dx, dim - 1);
   const mpm::IVec<dim> step = mpm::IVec<dim>::Unit(up);
@@ -127,27 +127,24 @@ void find_bed_layer(const BedLoadLaw& law, int up, const mpm::SparseGrid<dim>& f
     layer.largest_shields = std::max(layer.largest_shields, theta);
     const mpm::Vec<dim> along = u / speed;
     layer.stress[col] = law.fluid_density * u_star * u_star * along;
-    const double q = law.morphological_factor * law.flux(theta);
-    layer.flux[col] = q * along;
-    if (!law.picks_up()) {
-      if (q > 0.0 && mass > 0.0) layer.drift[col] = std::min(law.sediment_density * q * width / mass, speed) * along;
-      continue;
-    }
     if (!(mass > 0.0)) continue;
+    capacity[col] = law.morphological_factor * law.flux(theta);
     direction[col] = along;
     length[col] = law.step_length_at(theta);
     layer_mass[col] = mass;
     water_speed[col] = speed;
+    layer.flux[col] = capacity[col] * along;
   }
-  if (!law.picks_up()) return;
-  const std::vector<mpm::Vec<dim>> capacity = layer.flux;
-  relax_to_capacity(counts, up, dx, capacity, direction, length, layer.flux);
-  // The drift that carries the relaxed flux in the layer's grains, at most the water's speed.
+  if (law.picks_up()) {
+    const std::vector<mpm::Vec<dim>> formula = layer.flux;
+    relax_to_capacity(counts, up, dx, formula, direction, length, layer.flux);
+  }
+  // The drift that carries each column's flux in the layer's grains, at most the water's speed.
   for (std::size_t col = 0; col < top.size(); ++col) {
-    const double q = layer.flux[col].norm();
-    if (q > 0.0 && layer_mass[col] > 0.0)
-      layer.drift[col] =
-          std::min(law.sediment_density * q * width / layer_mass[col], water_speed[col]) / q * layer.flux[col];
+    const double q = law.picks_up() ? layer.flux[col].norm() : capacity[col];
+    if (!(q > 0.0)) continue;
+    const mpm::Vec<dim> along = law.picks_up() ? (layer.flux[col] / q).eval() : direction[col];
+    layer.drift[col] = std::min(law.sediment_density * q * width / layer_mass[col], water_speed[col]) * along;
   }
 }
 
@@ -174,22 +171,20 @@ int relax_to_capacity(const mpm::IVec<dim>& counts, int up, double dx, const std
   double scale = 0.0;
   for (const mpm::Vec<dim>& q : capacity) scale = std::max(scale, q.norm());
   if (!(scale > 0.0)) return 0;
-  // One column's update from its upwind neighbours' current fluxes; returns its change.
-  const auto update = [&](std::int64_t col) {
+  // One column's update from its upwind neighbours' current fluxes (its lattice coordinates i);
+  // returns its change.
+  const auto update = [&](std::int64_t col, const std::array<std::int64_t, dim - 1>& i) {
     const mpm::Vec<dim>& e = direction[std::size_t(col)];
     if (e.squaredNorm() == 0.0) return 0.0;
     const double c = length[std::size_t(col)] / dx;
     mpm::Vec<dim> sum = capacity[std::size_t(col)];
     double diagonal = 1.0;
-    std::int64_t rest = col;
-    for (int h = dim - 2; h >= 0; --h) {
-      const std::int64_t i = rest / stride[h];
-      rest -= i * stride[h];
+    for (int h = 0; h < dim - 1; ++h) {
       const double w = c * std::abs(e[axes[h]]);
       if (w == 0.0) continue;
       diagonal += w;
-      const std::int64_t upwind = e[axes[h]] > 0.0 ? i - 1 : i + 1;
-      if (upwind >= 0 && upwind < size[h]) sum += w * flux[std::size_t(col + (upwind - i) * stride[h])];
+      const std::int64_t upwind = e[axes[h]] > 0.0 ? i[h] - 1 : i[h] + 1;
+      if (upwind >= 0 && upwind < size[h]) sum += w * flux[std::size_t(col + (upwind - i[h]) * stride[h])];
     }
     const mpm::Vec<dim> q = sum / diagonal;
     const double change = (q - flux[std::size_t(col)]).norm();
@@ -202,14 +197,15 @@ int relax_to_capacity(const mpm::IVec<dim>& counts, int up, double dx, const std
     const int order = (sweep - 1) % orders;
     double change = 0.0;
     for (std::int64_t k = 0; k < columns; ++k) {
+      std::array<std::int64_t, dim - 1> i{};
       std::int64_t col = 0, rest = k;
       for (int h = dim - 2; h >= 0; --h) {
-        std::int64_t i = rest / stride[h];
-        rest -= i * stride[h];
-        if (order & (1 << h)) i = size[h] - 1 - i;
-        col += i * stride[h];
+        i[h] = rest / stride[h];
+        rest -= i[h] * stride[h];
+        if (order & (1 << h)) i[h] = size[h] - 1 - i[h];
+        col += i[h] * stride[h];
       }
-      change = std::max(change, update(col));
+      change = std::max(change, update(col, i));
     }
     // Converged once a whole cycle of orders changed nothing beyond round-off.
     if (change <= 1e-14 * scale && sweep >= orders) return sweep;
