@@ -23,6 +23,8 @@ CASES = [
     ("sediment.plasticity.critical_packing", r"(critical_packing:)\s*[^\s#]+", r"\1 1.5", ["1.5", "(0, 1)"]),
     ("sediment.min_fluid_fraction", r"(\nsediment:)", r"\1\n  min_fluid_fraction: 1", ["1", "(0, 1)"]),
     ("sediment.switching.dense_above", r"(dense_above:)\s*[^\s#}]+", r"\1 0.1", ["0.1", "(0.2, 1)"]),
+    ("sediment.switching.rouse_number", r"(dense_above:\s*[^\s#}]+)", r"\1, rouse_number: 2",
+     ["2", "only with a bed-load closure"]),
     ("fluid.density", r"(density:)\s*1010", r"\1 -1", ["-1", "> 0"]),
     ("bodies[0].phase", r"(phase:)\s*sediment", r"\1 mud", ["mud", "'fluid'", "'sediment'"]),
     ("periodic", r"(gravity:[^\n]*\nwalls:\n  contact: sticky[^\n]*(?:\n  thickness:[^\n]*)?)", r"\1\n  x_min: open\n  x_max: open\nperiodic: [true, false]",

@@ -48,6 +48,9 @@
 
 namespace coupling {
 
+//! von Karman's constant of the log law [-] (1 / 2.5, as Keulegan's depth-averaged law is quoted).
+inline constexpr double von_karman = 0.4;
+
 //! The transport formula and the wall law with the grains' and the water's constants.
 struct BedLoadLaw {
   double grain_diameter = 5e-4;       //!< d [m] > 0
@@ -120,6 +123,12 @@ struct BedLayer {
   std::vector<mpm::Vec<dim>> particle_drift;  //!< u_d gathered to each sediment particle [m/s]
   double largest_shields = 0.0;               //!< over the columns [-]
 };
+
+//! The column of the node nearest x [m] (the node lattice's columns along the vertical axis
+//! `up`, numbered as find_bed_layer numbers them: the horizontal node coordinates, the first
+//! axis the fastest); -1 where that node lies outside the lattice.
+template <int dim>
+std::int64_t bed_column(const mpm::SparseGrid<dim>& grid, int up, const mpm::Vec<dim>& x);
 
 //! Finds the layer (per column the highest sediment node with n_s >= surface_fraction and the
 //! node above it), the wall stress from the column's depth-averaged water above it and the

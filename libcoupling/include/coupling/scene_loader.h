@@ -15,7 +15,8 @@
 //!     min_fluid_fraction: 0.35 # n_min in (0, 1], volume_fraction.h
 //!     packing_fraction: 0.6    # default phi of the sediment bodies, (0, 1 - n_min]
 //!     switching: {dilute_below: 0.2, dense_above: 0.45}   # optional, continuum only
-//!                              #   (stages/reclassify_sediment.h)
+//!                              #   (stages/reclassify_sediment.h); with bed_load also
+//!                              #   rouse_number: 2.5, the suspension criterion (> 0)
 //!   bodies:
 //!     - phase: sediment        # sediment | fluid
 //!       shape: box             # body_config.h: box | sphere | level_set, particles_per_cell,

@@ -8,14 +8,21 @@
 namespace coupling {
 
 namespace {
-constexpr double kKarman = 0.4;  // 1 / 2.5, as Keulegan's depth-averaged law is quoted
+//! The column id of node coordinates c (bed_column's numbering).
+template <int dim>
+std::int64_t column_id(const mpm::IVec<dim>& counts, int up, const mpm::IVec<dim>& c) {
+  std::int64_t id = 0;
+  for (int a = dim - 1; a >= 0; --a)
+    if (a != up) id = id * counts[a] + c[a];
+  return id;
 }
+}  // namespace
 
 bool BedLoadLaw::in_log_layer(double depth) const { return 11.0 * depth > std::exp(1.0) * roughness * grain_diameter; }
 
 double BedLoadLaw::friction_velocity(double speed, double depth) const {
   mpm::verify<mpm::Error>(in_log_layer(depth), "bed load: a water depth within the roughness height");
-  return kKarman * speed / std::log(11.0 * depth / (roughness * grain_diameter));
+  return von_karman * speed / std::log(11.0 * depth / (roughness * grain_diameter));
 }
 
 double BedLoadLaw::shields_number(double friction_velocity) const {
@@ -40,18 +47,20 @@ double BedLoadLaw::flux(double shields) const {
 }
 
 template <int dim>
+std::int64_t bed_column(const mpm::SparseGrid<dim>& grid, int up, const mpm::Vec<dim>& x) {
+  const mpm::IVec<dim> c = ((x - grid.origin()) / grid.dx()).array().round().template cast<int>();
+  if ((c.array() < 0).any() || (c.array() >= grid.node_counts().array()).any()) return -1;
+  return column_id(grid.node_counts(), up, c);
+}
+
+template <int dim>
 void find_bed_layer(const BedLoadLaw& law, int up, const mpm::SparseGrid<dim>& fluid,
                     const mpm::SparseGrid<dim>& sediment, const VolumeFractions& fractions,
                     const mpm::geometry::ColliderSet<dim>& obstacles, double time, BedLayer<dim>& layer) {
   mpm::verify<mpm::Error>(fractions.sediment.size() == sediment.node_storage(),
                           "bed load: no volume fractions of this step");
   const mpm::IVec<dim>& counts = sediment.node_counts();
-  const auto column_of = [&](const mpm::IVec<dim>& c) {
-    std::int64_t id = 0;
-    for (int a = dim - 1; a >= 0; --a)
-      if (a != up) id = id * counts[a] + c[a];
-    return id;
-  };
+  const auto column_of = [&](const mpm::IVec<dim>& c) { return column_id(counts, up, c); };
   std::int64_t columns = 1;
   for (int a = 0; a < dim; ++a)
     if (a != up) columns *= counts[a];
@@ -257,7 +266,8 @@ std::size_t limit_bed_shear(const BedLayer<dim>& layer, mpm::SparseGrid<dim>& fl
   template std::size_t limit_bed_shear(const BedLayer<dim>&, mpm::SparseGrid<dim>&, mpm::SparseGrid<dim>&, double); \
   template int relax_to_capacity(const mpm::IVec<dim>&, int, double, const std::vector<mpm::Vec<dim>>&,             \
                                  const std::vector<mpm::Vec<dim>>&, const std::vector<double>&,                     \
-                                 std::vector<mpm::Vec<dim>>&, int);
+                                 std::vector<mpm::Vec<dim>>&, int);                                                 \
+  template std::int64_t bed_column(const mpm::SparseGrid<dim>&, int, const mpm::Vec<dim>&);
 BED_LOAD(2)
 BED_LOAD(3)
 

@@ -209,9 +209,20 @@ mpm::Pipeline<CoupledState<dim>> make_coupled_pipeline(const CoupledScene<dim>& 
   if (sandy)  // g2p first, with the deformation update where the solver tracks F
     for (auto& stage : scene.solid_solver->particle_update()) on(Phase::sediment, std::move(stage));
   if (bed_load) p.add(std::make_unique<stages::BedLoadDrift<dim>>(scene.colliders));
-  if (switching)
-    p.add(
-        std::make_unique<stages::ReclassifySediment<dim>>(*scene.sediment->switching, scene.sediment->density, 0, wet));
+  if (switching) {
+    // With a bed-load closure a grain turns discrete only where its column's current suspends
+    // it: u_* >= w_s / (kappa P_c), w_s the drag law's speed of one grain (stages/reclassify_sediment.h).
+    std::optional<double> suspending_stress;
+    if (bed_load) {
+      const BedLoadLaw& law = *scene.bed_load;
+      constexpr double one_grain = 1.0 - 1e-9;  // n_w of a lone grain: the law's terminal velocity
+      const double w_s = drag::settling_velocity(*scene.drag, one_grain, law.sediment_density, law.gravity);
+      const double u_star = w_s / (von_karman * scene.sediment->switching->rouse_number);
+      suspending_stress = law.fluid_density * u_star * u_star;
+    }
+    p.add(std::make_unique<stages::ReclassifySediment<dim>>(*scene.sediment->switching, scene.sediment->density, 0, wet,
+                                                            suspending_stress));
+  }
   return p;
 }
 

@@ -74,6 +74,7 @@ SedimentPhase<dim> parse_sediment_phase(const mpm::Config& sediment) {
     SedimentSwitching t;
     t.dilute_below = keys->number("dilute_below", t.dilute_below, Range::open(0.0, 1.0));
     t.dense_above = keys->number("dense_above", t.dense_above, Range::open(t.dilute_below, 1.0));
+    t.rouse_number = keys->number("rouse_number", t.rouse_number, Range::positive());
     s.switching = t;
   }
   return s;
@@ -277,6 +278,11 @@ CoupledScene<dim> load_coupled_scene(const mpm::Config& scene) {
   out.flow = std::move(flow);
   if (const std::optional<mpm::Config> bed = scene.optional_child("bed_load"))
     out.bed_load = parse_bed_load(*bed, scene, out);
+  if (sand && sand->switching && !out.bed_load)
+    if (const mpm::Config switching = scene.child("sediment").child("switching"); switching.has("rouse_number"))
+      switching.fail("rouse_number",
+                     "accepted only with a bed-load closure (scene key bed_load), whose friction velocity "
+                     "the switch's suspension criterion needs");
 
   // The grain volume fraction of a body leaves the pore fluid at least n_min.
   std::optional<Range> packing;

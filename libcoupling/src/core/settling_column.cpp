@@ -14,34 +14,14 @@ double SettlingColumn::stokes_velocity() const {
   return (sediment_density - fluid_density) * gravity * p.diameter * p.diameter / (18.0 * p.viscosity);
 }
 
-namespace {
-
-//! The root u >= 0 of force(u) = load for a force that grows with u from force(0) = 0
-//! (bisection from [0, guess], the bracket doubled until it holds the root).
-template <class Force>
-double root_of_increasing(const Force& force, double load, double guess) {
-  double lo = 0.0, hi = guess;
-  while (force(hi) < load) hi *= 2.0;
-  for (int i = 0; i < 200; ++i) {
-    const double u = 0.5 * (lo + hi);
-    (force(u) < load ? lo : hi) = u;
-  }
-  return 0.5 * (lo + hi);
-}
-
-}  // namespace
-
 double SettlingColumn::hindered_velocity() const {
-  const double n_s = volume_fraction, n_w = 1.0 - n_s;
-  const double load = n_s * n_w * (sediment_density - fluid_density) * gravity;  // [N/m^3]
-  const auto drag_force = [&](double u) { return drag::beta(drag, n_w, u) * u; };
-  return n_w * root_of_increasing(drag_force, load, stokes_velocity());
+  return drag::settling_velocity(drag, 1.0 - volume_fraction, sediment_density, gravity);
 }
 
 double SettlingColumn::terminal_velocity() const {
   const drag::DragParameters& p = drag::parameters(drag);
   const auto drag_force = [&](double v) { return p.stokes_scale() * drag::schiller_naumann_cd_re(reynolds(v)) * v; };
-  return root_of_increasing(drag_force, (sediment_density - fluid_density) * gravity, stokes_velocity());
+  return drag::root_of_increasing(drag_force, (sediment_density - fluid_density) * gravity, stokes_velocity());
 }
 
 double SettlingColumn::richardson_zaki_velocity() const {

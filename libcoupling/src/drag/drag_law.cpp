@@ -53,4 +53,21 @@ const DragParameters& parameters(const DragLaw& law) {
   return std::visit([](const auto& l) -> const DragParameters& { return l.p; }, law);
 }
 
+double settling_velocity(const DragLaw& law, double n_w, double sediment_density, double gravity) {
+  const DragParameters& p = parameters(law);
+  const double load = (1.0 - n_w) * n_w * (sediment_density - p.density) * gravity;  // [N/m^3]
+  const double stokes = (sediment_density - p.density) * gravity * p.diameter * p.diameter / (18.0 * p.viscosity);
+  return n_w * root_of_increasing([&](double u) { return beta(law, n_w, u) * u; }, load, stokes);
+}
+
+double root_of_increasing(const std::function<double(double)>& force, double load, double guess) {
+  double lo = 0.0, hi = guess;
+  while (force(hi) < load) hi *= 2.0;
+  for (int i = 0; i < 200; ++i) {
+    const double u = 0.5 * (lo + hi);
+    (force(u) < load ? lo : hi) = u;
+  }
+  return 0.5 * (lo + hi);
+}
+
 }  // namespace coupling::drag

@@ -2,7 +2,8 @@
 //   n_s,i  = the coupled step's fraction (wet) or m_s,i / (rho_s dx^dim) (dry),
 //   phi_p  = sum_i w_ip n_s,i at the advected x_p (one step behind the fractions, like every
 //            explicit estimate of the step),
-//   continuum -> discrete if phi_p < phi_low, discrete -> continuum if phi_p > phi_high,
+//   continuum -> discrete if phi_p < phi_low (and, with a bed-load closure, the particle's
+//   column's wall stress reaches the suspending stress), discrete -> continuum if phi_p > phi_high,
 //   F^E = I and plastic = 0 for every particle that is discrete now or was during the step
 //   (g2p moved its F; a new continuum particle starts stress-free), and a
 //   dilatant sand's rest packing unknown (the return map starts it at the critical packing).
@@ -34,18 +35,33 @@ namespace stages {
 
 template <int dim>
 ReclassifySediment<dim>::ReclassifySediment(SedimentSwitching thresholds, double sediment_density,
-                                            std::uint16_t continuum, bool wet)
-    : thresholds_(thresholds), rho_s_(sediment_density), continuum_(continuum), wet_(wet) {
+                                            std::uint16_t continuum, bool wet, std::optional<double> suspending_stress)
+    : thresholds_(thresholds),
+      rho_s_(sediment_density),
+      continuum_(continuum),
+      wet_(wet),
+      suspending_stress_(suspending_stress) {
   mpm::verify<mpm::InputError>(
       thresholds.dilute_below > 0.0 && thresholds.dilute_below < thresholds.dense_above && thresholds.dense_above < 1.0,
       "sediment switching: expected 0 < dilute_below < dense_above < 1 (got " +
           std::to_string(thresholds.dilute_below) + ", " + std::to_string(thresholds.dense_above) + ")");
   mpm::verify<mpm::InputError>(continuum != discrete_grain, "sediment switching: no continuum material");
+  mpm::verify<mpm::InputError>(!suspending_stress || *suspending_stress >= 0.0,
+                               "sediment switching: expected a suspending wall stress >= 0");
 }
 
 template <int dim>
 std::vector<std::string> ReclassifySediment<dim>::reads() const {
-  return {"sediment.particle.x", "sediment.particle.material", wet_ ? "fractions" : "sediment.grid.mass"};
+  std::vector<std::string> r{"sediment.particle.x", "sediment.particle.material",
+                             wet_ ? "fractions" : "sediment.grid.mass"};
+  if (suspending_stress_) r.push_back("bed");
+  return r;
+}
+
+template <int dim>
+std::vector<mpm::Diagnostic> ReclassifySediment<dim>::diagnostics() const {
+  if (!suspending_stress_) return {};
+  return {{"grains_held_as_bed_load", double(held_)}};
 }
 
 template <int dim>
@@ -89,7 +105,15 @@ void ReclassifySediment<dim>::run(CoupledState<dim>& s) {
       },
       s.sediment.kernel);
 
-  to_discrete_ = to_continuum_ = 0;
+  // With a bed-load closure: whether the current of the particle's column can suspend it (a
+  // step without a layer has no current over any bed).
+  const auto suspended = [&](std::size_t p) {
+    if (!suspending_stress_) return true;
+    const std::int64_t col = bed_column(g, s.bed.up, P.x[p]);
+    return col >= 0 && std::size_t(col) < s.bed.stress.size() &&
+           s.bed.stress[std::size_t(col)].norm() >= *suspending_stress_;
+  };
+  to_discrete_ = to_continuum_ = held_ = 0;
   std::vector<mpm::Mat<dim>>& F = mpm::solid::elastic_F(P);
   std::vector<double>& plastic = mpm::solid::plastic_state(P);
   std::vector<mpm::Mat<dim>>* cache = mpm::solid::stress_cache(P);
@@ -100,8 +124,12 @@ void ReclassifySediment<dim>::run(CoupledState<dim>& s) {
       P.material[p] = continuum_;
       ++to_continuum_;
     } else if (!was_discrete && phi_p_[p] < thresholds_.dilute_below) {
-      P.material[p] = discrete_grain;
-      ++to_discrete_;
+      if (suspended(p)) {
+        P.material[p] = discrete_grain;
+        ++to_discrete_;
+      } else {
+        ++held_;
+      }
     }
     if (was_discrete || P.material[p] == discrete_grain) {
       F[p] = mpm::Mat<dim>::Identity();

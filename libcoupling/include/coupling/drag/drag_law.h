@@ -20,6 +20,7 @@
 #include <coupling/drag/stokes.h>
 #include <mpm/core/config.h>
 
+#include <functional>
 #include <string>
 #include <variant>
 #include <vector>
@@ -45,5 +46,16 @@ double beta(const DragLaw& law, double n_w, double slip);
 
 //! The grain and fluid parameters of whichever law `law` holds.
 const DragParameters& parameters(const DragLaw& law);
+
+//! The settling speed [m/s] the law implies for grains of density `sediment_density` [kg/m^3]
+//! at fluid fraction n_w in (0, 1) in a closed column under gravity `gravity` [m/s^2]: the
+//! steady balance n_s n_w (rho_s - rho_w) g = beta(n_w, u) u with the fluid's return flow
+//! n_w v_w + n_s v_s = 0, so the slip is u = v_s / n_w (docs/coupling.md, "Settling"); as
+//! n_w -> 1 the law's single-grain terminal velocity.
+double settling_velocity(const DragLaw& law, double n_w, double sediment_density, double gravity);
+
+//! The root u >= 0 of force(u) = load >= 0 for a force that grows with u from force(0) = 0
+//! (bisection from [0, guess], guess > 0, the bracket doubled until it holds the root).
+double root_of_increasing(const std::function<double(double)>& force, double load, double guess);
 
 }  // namespace coupling::drag

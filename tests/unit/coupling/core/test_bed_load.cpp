@@ -1,11 +1,13 @@
 // The bed-load closure (coupling/bed_load.h): the transport formula and the wall law against the
 // reference's numbers, the layer's exchange limited to the wall stress with momentum conserved,
 // the grains' drift carrying the formula's flux, a bed that the drag of a current no longer
-// strips, and the keys' errors.
+// strips, the switch's suspension criterion (a grain in the current turns discrete only where
+// its column's Rouse number is below the bound), and the keys' errors.
 #include <coupling/bed_load.h>
 #include <coupling/momentum_exchange.h>
 #include <coupling/scene_loader.h>
 #include <coupling/stages/bed_load.h>
+#include <coupling/stages/reclassify_sediment.h>
 #include <doctest/doctest.h>
 #include <mpm/core/advance.h>
 #include <mpm/core/error.h>
@@ -125,6 +127,15 @@ void check_layer_and_limit(const mpm::Config& config, std::size_t columns_expect
     }
   }
   CHECK(columns == columns_expected);
+  // bed_column numbers the columns as the layer does, for any point within half a spacing of
+  // the column's nodes; nothing beyond the lattice.
+  for (const BedLayerNode<dim>& n : layer.nodes) {
+    const Vec<dim> x = s.sediment.grid.node_position(n.sediment);
+    CHECK(bed_column(s.sediment.grid, 1, x) == n.column);
+    CHECK(bed_column(s.sediment.grid, 1, (x + Vec<dim>::Constant(0.49 * s.sediment.grid.dx())).eval()) == n.column);
+    CHECK(bed_column(s.sediment.grid, 1, (x - Vec<dim>::Constant(0.49 * s.sediment.grid.dx())).eval()) == n.column);
+  }
+  CHECK(bed_column(s.sediment.grid, 1, (s.sediment.grid.origin() - Vec<dim>::Constant(0.01)).eval()) == -1);
   const Vec<dim> mid = layer.stress[static_cast<std::size_t>(layer.nodes[layer.nodes.size() / 2].column)];
   CHECK(mid[0] > 0.0);
   CHECK(mid[1] == 0.0);
@@ -290,6 +301,12 @@ TEST_CASE("bed load: the keys' errors name the key and the range") {
   refuses("bed_load: {exponent: 0}", "bed_load.exponent");
   refuses("bed_load: {step_length: -0.01}", "bed_load.step_length");
   refuses("bed_load: {step_length: vanrijn}", "bed_load.step_length");
+  CHECK_THROWS_WITH_AS(load_coupled_scene<2>(flume("bed_load: {}", ", switching: {rouse_number: 0}")),
+                       doctest::Contains("sediment.switching.rouse_number"), mpm::InputError);
+  // The switch's suspension criterion asks the closure for u_*.
+  CHECK_THROWS_WITH_AS(load_coupled_scene<2>(flume("", ", switching: {rouse_number: 2}")),
+                       doctest::Contains("sediment.switching.rouse_number"), mpm::InputError);
+  CHECK_NOTHROW(load_coupled_scene<2>(flume("", ", switching: {}")));
   const std::string dry = R"(
 dim: 2
 domain: {lo: [0, 0], hi: [0.22, 0.14]}
@@ -322,6 +339,36 @@ TEST_CASE("sediment.hold_until: the bed keeps every particle while held and move
   CHECK(surface_shift(s, x0) > 0.0);  // released: the drift moves the surface downstream
   CHECK_THROWS_WITH_AS(load_coupled_scene<2>(flume("", ", hold_until: -1")), doctest::Contains("sediment.hold_until"),
                        mpm::InputError);
+}
+
+TEST_CASE("bed load and switching: the current suspends a grain only where it can") {
+  // One grain (one particle) 2 cm above the bed in the current: phi_p ~ 0.05, far below phi_low.
+  // 0.5 mm sand settles at 7.3 cm/s (Di Felice), so the default criterion (Rouse number 2.5)
+  // needs u_* >= 7.3 cm/s (theta 0.66) in the grain's column, where this current gives about
+  // 2 cm/s: the grain stays in the continuum. With a criterion every current meets (Rouse
+  // number 1e6) it turns discrete at once.
+  const std::string grain =
+      "  - {phase: sediment, shape: box, lo: [0.2, 0.07], hi: [0.2025, 0.0725], packing_fraction: 0.6}\n";
+  const auto after_steps = [&](const std::string& rouse) {
+    CoupledScene<2> scene = load_coupled_scene<2>(flume(grain + "bed_load: {}", ", switching: {" + rouse + "}"));
+    auto pipeline = make_coupled_pipeline(scene);
+    const mpm::Particles<2>& P = scene.state.sediment.particles;
+    const auto it = std::max_element(P.x.begin(), P.x.end(), [](auto& a, auto& b) { return a[1] < b[1]; });
+    const std::size_t p = std::size_t(it - P.x.begin());
+    REQUIRE(P.x[p][1] > 0.07);
+    mpm::advance(scene.state, pipeline, 0.01);
+    const double tau = scene.state.bed.stress[std::size_t(bed_column(scene.state.sediment.grid, 1, P.x[p]))].norm();
+    MESSAGE("switching {" << rouse << "}: the grain's column's wall stress " << tau << " Pa, "
+                          << count_sediment(scene.state).discrete << " discrete");
+    CHECK(tau == doctest::Approx(0.58).epsilon(0.01));
+    return std::pair{P.material[p] == discrete_grain, count_sediment(scene.state).discrete};
+  };
+  CHECK(after_steps("") == std::pair{false, mpm::Index{0}});
+  CHECK(after_steps("rouse_number: 1.0e6") == std::pair{true, mpm::Index{1}});
+  // The bound itself: the column's 0.58 Pa is u_* = 2.41 cm/s, a Rouse number of 0.0729 / (0.4 *
+  // 0.0241) = 7.57 (by hand). A criterion of 7.2 keeps the grain, one of 8.0 suspends it.
+  CHECK(after_steps("rouse_number: 7.2") == std::pair{false, mpm::Index{0}});
+  CHECK(after_steps("rouse_number: 8.0") == std::pair{true, mpm::Index{1}});
 }
 
 TEST_CASE("bed load pick-up: van Rijn's saltation length") {

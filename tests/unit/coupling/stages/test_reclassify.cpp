@@ -3,7 +3,8 @@
 // thresholds and switches across them; a switched particle starts with F = I; in the coupled
 // pipeline a dense bed stays continuum and an isolated grain turns discrete; a bed deposited
 // as discrete grains, dry or under water, does not expand when it turns continuum (the same
-// bed keeping its old F^E would).
+// bed keeping its old F^E would); with a bed-load closure only the grains of columns whose
+// current can suspend them turn discrete.
 #include <coupling/scene_loader.h>
 #include <coupling/stages/on_phase.h>
 #include <coupling/stages/reclassify_sediment.h>
@@ -139,6 +140,42 @@ TEST_CASE("reclassify: phi_p of a uniform block, hysteresis, stress-free start")
     const SedimentCounts n = count_sediment(b.scene.state);
     CHECK(n.continuum + n.discrete == static_cast<mpm::Index>(P.size()));
   }
+}
+
+TEST_CASE("reclassify with a bed-load closure: only the grains of columns whose current suspends them") {
+  // A thin block (phi = 0.1 < phi_low) under a layer whose columns left of x = 0.46875 m (the
+  // nodes x <= 7 dx; a particle's column is its nearest node's) carry just the suspending stress
+  // and the others just less.
+  constexpr double suspending = 5.3;  // [Pa]
+  Block b = block(0.1, 0, Mat<2>::Identity(), 0.0);
+  CoupledState<2>& s = b.scene.state;
+  s.bed.up = 1;
+  const int columns = s.sediment.grid.node_counts()[0];
+  s.bed.stress.assign(std::size_t(columns), Vec<2>::Zero());
+  const double dx = s.sediment.grid.dx(), split = 7.5 * dx;
+  for (int i = 0; i < columns; ++i)
+    s.bed.stress[std::size_t(i)] = (i * dx < split ? 1.0 : 1.0 - 1e-12) * suspending * Vec<2>(0.6, 0.8);
+  stages::ReclassifySediment<2> reclassify(SedimentSwitching{}, kRhoS, 0, false, suspending);
+  reclassify.run(s);
+  const mpm::Particles<2>& P = s.sediment.particles;
+  mpm::Index left = 0, dilute = 0;
+  for (std::size_t p = 0; p < P.size(); ++p) {
+    if (!b.interior[p]) continue;
+    REQUIRE(reclassify.particle_fraction()[p] < SedimentSwitching{}.dilute_below);
+    CHECK(P.material[p] == (P.x[p][0] < split ? discrete_grain : std::uint16_t{0}));
+  }
+  for (std::size_t p = 0; p < P.size(); ++p) {
+    left += P.x[p][0] < split;
+    dilute += reclassify.particle_fraction()[p] < SedimentSwitching{}.dilute_below;
+  }
+  CHECK(left > 0);
+  CHECK(reclassify.to_discrete() == left);
+  CHECK(reclassify.to_discrete() + reclassify.held_as_bed_load() == dilute);
+  CHECK(reclassify.held_as_bed_load() > 0);
+  // A step without a layer has no current: every grain stays in the continuum.
+  Block calm = block(0.1, 0, Mat<2>::Identity(), 0.0);
+  stages::ReclassifySediment<2>(SedimentSwitching{}, kRhoS, 0, false, suspending).run(calm.scene.state);
+  CHECK(count_sediment(calm.scene.state).discrete == 0);
 }
 
 TEST_CASE("reclassify in the dry pipeline: a dense bed stays continuum, an isolated grain turns discrete") {
