@@ -72,6 +72,9 @@ struct BedLoadLaw {
   double friction_velocity(double speed, double depth) const;
   //! Whether h is deep enough for the law: 11 h / k_s > e.
   bool in_log_layer(double depth) const;
+  //! The wall stress [Pa] at which grains settling at `settling_velocity` w_s [m/s] have the
+  //! Rouse number P = w_s / (kappa u_*) = `rouse_number`: rho_w (w_s / (kappa P))^2.
+  double suspending_stress(double settling_velocity, double rouse_number) const;
   //! theta of a friction velocity [m/s].
   double shields_number(double friction_velocity) const;
   //! q_b [m^2/s] of grain volume per unit width at Shields number theta (0 below theta_c),

@@ -25,6 +25,11 @@ double BedLoadLaw::friction_velocity(double speed, double depth) const {
   return von_karman * speed / std::log(11.0 * depth / (roughness * grain_diameter));
 }
 
+double BedLoadLaw::suspending_stress(double settling_velocity, double rouse_number) const {
+  const double u_star = settling_velocity / (von_karman * rouse_number);
+  return fluid_density * u_star * u_star;
+}
+
 double BedLoadLaw::shields_number(double friction_velocity) const {
   return fluid_density * friction_velocity * friction_velocity /
          ((sediment_density - fluid_density) * gravity * grain_diameter);

@@ -215,10 +215,8 @@ mpm::Pipeline<CoupledState<dim>> make_coupled_pipeline(const CoupledScene<dim>& 
     std::optional<double> suspending_stress;
     if (bed_load) {
       const BedLoadLaw& law = *scene.bed_load;
-      constexpr double one_grain = 1.0 - 1e-9;  // n_w of a lone grain: the law's terminal velocity
-      const double w_s = drag::settling_velocity(*scene.drag, one_grain, law.sediment_density, law.gravity);
-      const double u_star = w_s / (von_karman * scene.sediment->switching->rouse_number);
-      suspending_stress = law.fluid_density * u_star * u_star;
+      const double w_s = drag::terminal_velocity(*scene.drag, law.sediment_density, law.gravity);
+      suspending_stress = law.suspending_stress(w_s, scene.sediment->switching->rouse_number);
     }
     p.add(std::make_unique<stages::ReclassifySediment<dim>>(*scene.sediment->switching, scene.sediment->density, 0, wet,
                                                             suspending_stress));

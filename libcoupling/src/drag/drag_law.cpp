@@ -60,9 +60,17 @@ double settling_velocity(const DragLaw& law, double n_w, double sediment_density
   return n_w * root_of_increasing([&](double u) { return beta(law, n_w, u) * u; }, load, stokes);
 }
 
+double terminal_velocity(const DragLaw& law, double sediment_density, double gravity) {
+  return settling_velocity(law, 1.0 - 1e-9, sediment_density, gravity);
+}
+
 double root_of_increasing(const std::function<double(double)>& force, double load, double guess) {
+  mpm::verify<mpm::NumericalError>(guess > 0.0 && load >= 0.0, "root_of_increasing: expected guess > 0, load >= 0");
   double lo = 0.0, hi = guess;
-  while (force(hi) < load) hi *= 2.0;
+  for (int doublings = 0; force(hi) < load; ++doublings) {
+    mpm::verify<mpm::NumericalError>(doublings < 64, "root_of_increasing: the force does not reach the load");
+    hi *= 2.0;
+  }
   for (int i = 0; i < 200; ++i) {
     const double u = 0.5 * (lo + hi);
     (force(u) < load ? lo : hi) = u;

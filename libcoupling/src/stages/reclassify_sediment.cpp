@@ -46,8 +46,9 @@ ReclassifySediment<dim>::ReclassifySediment(SedimentSwitching thresholds, double
       "sediment switching: expected 0 < dilute_below < dense_above < 1 (got " +
           std::to_string(thresholds.dilute_below) + ", " + std::to_string(thresholds.dense_above) + ")");
   mpm::verify<mpm::InputError>(continuum != discrete_grain, "sediment switching: no continuum material");
-  mpm::verify<mpm::InputError>(!suspending_stress || *suspending_stress >= 0.0,
-                               "sediment switching: expected a suspending wall stress >= 0");
+  mpm::verify<mpm::InputError>(!suspending_stress || *suspending_stress > 0.0,
+                               "sediment switching: expected a suspending wall stress > 0 (got " +
+                                   std::to_string(suspending_stress.value_or(0.0)) + " Pa)");
 }
 
 template <int dim>

@@ -54,8 +54,14 @@ const DragParameters& parameters(const DragLaw& law);
 //! n_w -> 1 the law's single-grain terminal velocity.
 double settling_velocity(const DragLaw& law, double n_w, double sediment_density, double gravity);
 
+//! The law's terminal velocity [m/s] of one grain of density `sediment_density` [kg/m^3] in
+//! unbounded fluid: settling_velocity at n_w = 1 - 1e-9 (every law's beta is linear in the
+//! 1 - n_w of the load, so the limit is exact to that n_s).
+double terminal_velocity(const DragLaw& law, double sediment_density, double gravity);
+
 //! The root u >= 0 of force(u) = load >= 0 for a force that grows with u from force(0) = 0
-//! (bisection from [0, guess], guess > 0, the bracket doubled until it holds the root).
+//! (bisection from [0, guess], guess > 0, the bracket doubled until it holds the root; a
+//! NumericalError where 2^64 guess does not reach the load).
 double root_of_increasing(const std::function<double(double)>& force, double load, double guess);
 
 }  // namespace coupling::drag

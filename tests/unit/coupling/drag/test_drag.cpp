@@ -93,20 +93,24 @@ TEST_CASE("hindered settling implied at low Re: v_s / v_Stokes = n_w^2 beta_Stok
     }
 }
 
-TEST_CASE("settling_velocity: a lone grain's terminal velocity, and the Stokes law's hindered speed") {
-  constexpr double rho_s = 2650.0, g = 9.81, lone = 1.0 - 1e-9;
+TEST_CASE("settling_velocity and terminal_velocity: a lone grain, and the Stokes law's hindered speed") {
+  constexpr double rho_s = 2650.0, g = 9.81;
   // Stokes: v = (rho_s - rho_w) g d^2 / (18 mu) = 1650 * 9.81 * 4e-8 / 0.018 = 0.03597 m/s for a
   // lone grain, n_w^2 of it in a suspension (the test above).
   const double stokes = 1650.0 * 9.81 * 4.0e-8 / 0.018;
-  CHECK(settling_velocity(Stokes{kSand}, lone, rho_s, g) == doctest::Approx(stokes).epsilon(1e-8));
+  CHECK(terminal_velocity(Stokes{kSand}, rho_s, g) == doctest::Approx(stokes).epsilon(1e-8));
   CHECK(settling_velocity(Stokes{kSand}, 0.8, rho_s, g) == doctest::Approx(0.64 * stokes).epsilon(1e-12));
   // Di Felice, d = 0.5 mm: Dallavalle's (3/4) Cd rho_w v^2 / d = (rho_s - rho_w) g with
   // Cd = (0.63 + 4.8 / sqrt(Re))^2, Re = rho_w v d / mu, solved by hand: v = 0.0729 m/s.
   const DragParameters sand{5.0e-4, 1.0e-3, 1000.0};
-  const double v = settling_velocity(DiFelice{sand}, lone, rho_s, g);
+  const double v = terminal_velocity(DiFelice{sand}, rho_s, g);
   const double cd = std::pow(0.63 + 4.8 / std::sqrt(1000.0 * v * 5.0e-4 / 1.0e-3), 2.0);
   CHECK(0.75 * cd * 1000.0 * v * v / 5.0e-4 == doctest::Approx(1650.0 * 9.81).epsilon(1e-6));
   CHECK(v == doctest::Approx(0.0729).epsilon(2e-3));
+  // The bisection refuses a force that never reaches the load instead of doubling forever.
+  CHECK(root_of_increasing([](double u) { return u; }, 0.5, 1.0) == doctest::Approx(0.5).epsilon(1e-14));
+  CHECK_THROWS_AS(root_of_increasing([](double u) { return u / (1.0 + u); }, 2.0, 1.0), mpm::NumericalError);
+  CHECK_THROWS_AS(root_of_increasing([](double u) { return u; }, 1.0, 0.0), mpm::NumericalError);
 }
 
 TEST_CASE("beta is finite and non-negative, zero without sediment, and nondecreasing in slip") {
