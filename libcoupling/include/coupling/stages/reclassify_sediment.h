@@ -49,10 +49,10 @@ struct SedimentSwitching {
   //! a deposited grain joins the continuum once another row covers it.
   double dense_above = 0.45;
   //! P_c: the Rouse number below which a column's current suspends its grains (scenes with a
-  //! bed-load closure only). 2.5 is the usual bound between bed load and suspended load
-  //! (Rouse 1937; Julien 2010, "Erosion and Sedimentation", 2nd ed., sec. 10.2): above it the
-  //! suspended grains stay within the bed layer; u_* = w_s at P = 2.5, Bagnold's (1966)
-  //! criterion for suspension.
+  //! bed-load closure only). 2.5 is the usual bound between bed load and suspended load (the
+  //! Rouse profile's exponent, Rouse 1937; bed load above 2.5, half suspended at 1.2-2.5, e.g.
+  //! Whipple 2004, MIT 12.163 notes "Essentials of Sediment Transport"); u_* = w_s at P = 2.5,
+  //! Bagnold's (1966) criterion for suspension.
   double rouse_number = 2.5;
 };
 
