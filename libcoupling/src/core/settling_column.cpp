@@ -10,8 +10,7 @@
 namespace coupling {
 
 double SettlingColumn::stokes_velocity() const {
-  const drag::DragParameters& p = drag::parameters(drag);
-  return (sediment_density - fluid_density) * gravity * p.diameter * p.diameter / (18.0 * p.viscosity);
+  return drag::parameters(drag).stokes_velocity(sediment_density, gravity);
 }
 
 double SettlingColumn::hindered_velocity() const {

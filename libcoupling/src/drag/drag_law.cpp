@@ -56,8 +56,8 @@ const DragParameters& parameters(const DragLaw& law) {
 double settling_velocity(const DragLaw& law, double n_w, double sediment_density, double gravity) {
   const DragParameters& p = parameters(law);
   const double load = (1.0 - n_w) * n_w * (sediment_density - p.density) * gravity;  // [N/m^3]
-  const double stokes = (sediment_density - p.density) * gravity * p.diameter * p.diameter / (18.0 * p.viscosity);
-  return n_w * root_of_increasing([&](double u) { return beta(law, n_w, u) * u; }, load, stokes);
+  return n_w * root_of_increasing([&](double u) { return beta(law, n_w, u) * u; }, load,
+                                  p.stokes_velocity(sediment_density, gravity));
 }
 
 double terminal_velocity(const DragLaw& law, double sediment_density, double gravity) {

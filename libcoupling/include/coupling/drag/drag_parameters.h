@@ -24,6 +24,11 @@ struct DragParameters {
   double reynolds(double n_w, double slip) const { return n_w * density * slip * diameter / viscosity; }
   //! (3/4) mu / d^2 [kg/(m^3 s)]: beta = stokes_scale() n_s Cd Re (see above).
   double stokes_scale() const { return 0.75 * viscosity / (diameter * diameter); }
+  //! Stokes's terminal velocity (rho_s - rho_w) |g| d^2 / (18 mu) [m/s] of one grain of density
+  //! rho_s [kg/m^3] under gravity |g| [m/s^2].
+  double stokes_velocity(double sediment_density, double gravity) const {
+    return (sediment_density - density) * gravity * diameter * diameter / (18.0 * viscosity);
+  }
 };
 
 }  // namespace coupling::drag
